@@ -1,0 +1,1 @@
+"""Astronomy core on ERFA: time scales, sidereal time, frames, refraction."""

@@ -1,0 +1,1 @@
+"""The scopelink command line."""

@@ -1,0 +1,1 @@
+"""Byte links: serial ports, TCP, pseudo-terminals and in-memory pairs, with optional wire pacing."""

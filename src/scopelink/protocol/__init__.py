@@ -1,0 +1,1 @@
+"""Sans-IO protocol codecs: bytes <-> typed messages, no I/O and no clock."""
