@@ -1,0 +1,1 @@
+"""The protocol-neutral Mount API that every front end uses."""

@@ -1,0 +1,29 @@
+"""Errors the Mount API raises. Each says what happened and what to do."""
+
+
+class MountError(Exception):
+    """Base of every error a mount operation raises."""
+
+
+class NotSupportedError(MountError):
+    """This mount or firmware cannot do that (front ends answer 'not implemented')."""
+
+
+class NotConnectedError(MountError):
+    """The mount is not connected."""
+
+
+class LimitError(MountError):
+    """The request would move the mount below the horizon or past a limit; nothing was sent."""
+
+
+class ParkedError(MountError):
+    """The mount is parked; unpark it first."""
+
+
+class InvalidValueError(MountError, ValueError):
+    """A coordinate, rate or duration outside its valid range."""
+
+
+class DeviceError(MountError):
+    """The device did not answer, or answered something that makes no sense."""

@@ -1,0 +1,98 @@
+"""Values that cross the Mount API: what a mount can do, who it is, and where it points."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from datetime import datetime
+
+
+class AlignmentMode(enum.Enum):
+    """Mechanical geometry, named as ASCOM names them."""
+
+    ALT_AZ = "altaz"
+    POLAR = "polar"  # fork or single-arm equatorial: no meridian flip
+    GERMAN_POLAR = "german-polar"
+
+
+class PierSide(enum.Enum):
+    """ASCOM's pointing state: EAST is the normal state (counterweight down, tube looking west)."""
+
+    EAST = "east"
+    WEST = "west"
+    UNKNOWN = "unknown"
+
+
+class TrackingMode(enum.Enum):
+    OFF = "off"
+    SIDEREAL = "sidereal"
+    LUNAR = "lunar"
+    SOLAR = "solar"
+    ALT_AZ = "altaz"  # sidereal motion followed on both axes of an alt-az mount
+    PEC = "pec"  # sidereal with periodic error correction played back
+
+
+class MountAxis(enum.Enum):
+    PRIMARY = 0  # RA / azimuth
+    SECONDARY = 1  # Dec / altitude
+
+
+class GuideDirection(enum.Enum):
+    NORTH = "north"
+    SOUTH = "south"
+    EAST = "east"
+    WEST = "west"
+
+
+@dataclass(frozen=True, slots=True)
+class Identity:
+    """Who answered on the link."""
+
+    protocol: str  # "synscan", "skytracker", "simulator"
+    model: str
+    firmware: str = ""
+    link: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Capabilities:
+    """What this mount, with this firmware, can do. Front ends answer 'not implemented' otherwise."""
+
+    alignment_mode: AlignmentMode
+    can_goto: bool = False
+    can_goto_altaz: bool = False
+    can_sync: bool = False
+    can_park: bool = False
+    can_set_park: bool = False
+    can_pulse_guide: bool = False
+    can_move_axis: tuple[bool, bool] = (False, False)
+    max_axis_rate_deg_s: float = 0.0
+    tracking_modes: frozenset[TrackingMode] = frozenset({TrackingMode.OFF})
+    can_set_site: bool = False
+    can_set_time: bool = False
+    can_report_pier_side: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class MountState:
+    """One consistent snapshot of the mount, stamped with when it was read.
+
+    Coordinates are ``None`` until the mount has reported them; RA/Dec are J2000 (the frame both device
+    protocols use) and of date; Alt/Az are observed (refracted) for the configured site.
+    """
+
+    read_at: datetime
+    connected: bool = False
+    ra_j2000_hours: float | None = None
+    dec_j2000_deg: float | None = None
+    ra_of_date_hours: float | None = None
+    dec_of_date_deg: float | None = None
+    alt_deg: float | None = None
+    az_deg: float | None = None
+    pier_side: PierSide = PierSide.UNKNOWN
+    slewing: bool = False
+    tracking: TrackingMode = TrackingMode.OFF
+    parked: bool = False
+    aligned: bool = False
+    pulse_guiding: bool = False
+    problems: tuple[str, ...] = field(default=())
