@@ -1,0 +1,77 @@
+"""Imports point down the layer list only (docs/architecture.md)."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE_ROOT = Path(__file__).resolve().parent.parent / "src" / "scopelink"
+
+# Lower number = lower layer. A module may import its own layer or any lower one.
+LAYER_OF = {
+    "protocol": 1,
+    "astro": 2,
+    "links": 3,
+    "mount": 4,
+    "decode": 3,
+    "drivers": 5,
+    "sim": 5,
+    "servers": 6,
+    "web": 7,
+    "cli": 7,
+}
+# What the sans-IO layer must never touch: it has no I/O and no clock.
+FORBIDDEN_IN_PROTOCOL = {"asyncio", "socket", "time", "serial", "select", "threading", "os"}
+
+
+def _modules() -> list[Path]:
+    return sorted(p for p in PACKAGE_ROOT.rglob("*.py"))
+
+
+def _subpackage(path: Path) -> str | None:
+    rel = path.relative_to(PACKAGE_ROOT)
+    if len(rel.parts) == 1:
+        return None if rel.stem == "__init__" else rel.stem
+    return rel.parts[0]
+
+
+def _imported_names(tree: ast.AST, path: Path) -> list[tuple[int, str]]:
+    names: list[tuple[int, str]] = []
+    package_parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).parent.parts]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.extend((node.lineno, alias.name) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package_parts[: len(package_parts) - node.level + 1]
+                module = ".".join([*base, node.module] if node.module else base)
+            else:
+                module = node.module or ""
+            names.append((node.lineno, module))
+    return names
+
+
+def test_every_subpackage_has_a_layer() -> None:
+    unknown = {_subpackage(p) for p in _modules()} - set(LAYER_OF) - {None, "__main__"}
+    assert not unknown, f"add these to LAYER_OF and docs/architecture.md: {sorted(unknown)}"
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE_ROOT)))
+def test_imports_point_down(path: Path) -> None:
+    own = _subpackage(path)
+    if own is None or own == "__main__":
+        return
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for lineno, name in _imported_names(tree, path):
+        parts = name.split(".")
+        if parts[0] == "scopelink" and len(parts) > 1:
+            target = parts[1]
+            assert LAYER_OF.get(target, 99) <= LAYER_OF[own], (
+                f"{path.name}:{lineno} ({own}) imports {name} from a higher layer"
+            )
+        if own == "protocol":
+            assert parts[0] not in FORBIDDEN_IN_PROTOCOL, (
+                f"{path.name}:{lineno}: the sans-IO protocol layer imports {name}"
+            )
