@@ -1,1 +1,36 @@
-"""Byte links: serial ports, TCP, pseudo-terminals and in-memory pairs, with optional wire pacing."""
+"""Byte links: serial ports, TCP, pseudo-terminals and in-memory pairs, with optional wire pacing.
+
+Every link is a :class:`Link`: ``await read(n)``, ``await write(data)``, ``await close()``.
+Set the ``scopelink.links.trace`` logger to DEBUG to see every byte in hex.
+"""
+
+from scopelink.links.base import Link, LinkClosedError, LinkError, LinkOpenError, LinkSpecError
+from scopelink.links.memory import MemoryLink, memory_pair
+from scopelink.links.pacing import PacedLink, paced
+from scopelink.links.pty import LineSettings, PtyLink, open_pty
+from scopelink.links.serial import SerialLink, open_serial
+from scopelink.links.tcp import ConnectionHandler, TcpLink, TcpServer, open_tcp, serve_tcp
+from scopelink.links.url import open_link
+
+__all__ = [
+    "ConnectionHandler",
+    "LineSettings",
+    "Link",
+    "LinkClosedError",
+    "LinkError",
+    "LinkOpenError",
+    "LinkSpecError",
+    "MemoryLink",
+    "PacedLink",
+    "PtyLink",
+    "SerialLink",
+    "TcpLink",
+    "TcpServer",
+    "memory_pair",
+    "open_link",
+    "open_pty",
+    "open_serial",
+    "open_tcp",
+    "paced",
+    "serve_tcp",
+]

@@ -1,0 +1,143 @@
+"""The byte-stream interface every link implements, and the errors links raise.
+
+A link moves bytes and nothing else: no framing, no timeouts of its own. Callers bound waits with
+``asyncio.timeout``; every ``read`` is cancellation-safe (a cancelled read loses no bytes), so a
+driver can time out a reply and resynchronise with :meth:`Link.drain_input`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from abc import ABC, abstractmethod
+from types import TracebackType
+from typing import Self
+
+from scopelink.links.trace import trace_transfer
+
+DEFAULT_READ_SIZE = 4096
+
+
+class LinkError(Exception):
+    """Base class of every error a link raises."""
+
+
+class LinkClosedError(LinkError):
+    """The link was closed by us, or the other end went away (EOF, hang-up, unplugged)."""
+
+
+class LinkOpenError(LinkError):
+    """A link could not be opened; the message names the port and says what to try."""
+
+    def __init__(self, port: str, reason: str, hint: str = "") -> None:
+        self.port = port
+        self.reason = reason
+        self.hint = hint
+        message = f"cannot open {port}: {reason}"
+        super().__init__(f"{message} — {hint}" if hint else message)
+
+
+class LinkSpecError(LinkError, ValueError):
+    """A link specification string (see :func:`scopelink.links.open_link`) is malformed."""
+
+
+class Link(ABC):
+    """An open, bidirectional byte stream: serial port, TCP connection, pty or in-memory pipe.
+
+    Subclasses implement ``_read_some``, ``_write_all`` and ``_close_transport``; this class adds
+    the closed state, the hex trace of every transfer and the input-draining helper once for all.
+    """
+
+    def __init__(self, name: str) -> None:
+        self._name = name
+        self._closed = False
+
+    @property
+    def name(self) -> str:
+        """Human-readable identity used in logs and errors, e.g. ``/dev/ttyUSB0``."""
+        return self._name
+
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`close` was called or the other end was seen to go away."""
+        return self._closed
+
+    async def read(self, max_bytes: int = DEFAULT_READ_SIZE) -> bytes:
+        """Wait for at least one byte and return up to ``max_bytes`` bytes.
+
+        Raises :class:`LinkClosedError` when the link is closed or the other end has gone.
+        """
+        if max_bytes < 1:
+            raise ValueError(f"max_bytes must be at least 1, not {max_bytes}")
+        self._raise_if_closed()
+        try:
+            data = await self._read_some(max_bytes)
+        except LinkClosedError:
+            self._closed = True
+            raise
+        trace_transfer("<--", self._name, data)
+        return data
+
+    async def write(self, data: bytes) -> None:
+        """Send ``data``; return once it is handed to the OS (or the wire pacing allows)."""
+        self._raise_if_closed()
+        if not data:
+            return
+        trace_transfer("-->", self._name, data)
+        try:
+            await self._write_all(bytes(data))
+        except LinkClosedError:
+            self._closed = True
+            raise
+
+    async def close(self) -> None:
+        """Release the link (idempotent); pending and later reads and writes then raise."""
+        self._closed = True
+        await self._close_transport()
+
+    async def drain_input(self, quiet_seconds: float = 0.05, max_seconds: float = 2.0) -> bytes:
+        """Read and discard input until the line has been quiet for ``quiet_seconds``.
+
+        Returns the discarded bytes (for logging). Gives up after ``max_seconds`` on a line that
+        never falls silent. Used by drivers to resynchronise after a timeout.
+        """
+        loop = asyncio.get_running_loop()
+        give_up_at = loop.time() + max_seconds
+        discarded = bytearray()
+        while (remaining := give_up_at - loop.time()) > 0:
+            try:
+                async with asyncio.timeout(min(quiet_seconds, remaining)):
+                    discarded += await self.read()
+            except TimeoutError:
+                break
+        return bytes(discarded)
+
+    async def __aenter__(self) -> Self:
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return f"<{type(self).__name__} {self._name!r} {state}>"
+
+    def _raise_if_closed(self) -> None:
+        if self._closed:
+            raise LinkClosedError(f"{self._name} is closed")
+
+    @abstractmethod
+    async def _read_some(self, max_bytes: int) -> bytes:
+        """Wait for 1..max_bytes bytes; cancellation-safe; LinkClosedError at end of stream."""
+
+    @abstractmethod
+    async def _write_all(self, data: bytes) -> None:
+        """Hand every byte of non-empty ``data`` over; LinkClosedError if the other end is gone."""
+
+    @abstractmethod
+    async def _close_transport(self) -> None:
+        """Release resources and wake pending reads with LinkClosedError. Called once or more."""

@@ -1,0 +1,100 @@
+"""Non-blocking reads and writes on a file descriptor (tty, pty master, socket) on the event loop.
+
+Waits for readiness with ``loop.add_reader``/``add_writer`` and then does one non-blocking
+``os.read``/``os.write``, so the event loop never blocks and a cancelled read loses nothing:
+unread bytes stay in the kernel.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import errno
+import os
+from collections.abc import Callable
+
+from scopelink.links.base import LinkClosedError
+
+# errno values meaning the device or peer went away rather than "try again".
+_GONE_ERRNOS = frozenset(
+    {errno.EIO, errno.ENXIO, errno.ENODEV, errno.EPIPE, errno.ECONNRESET, errno.ENOTCONN}
+)
+
+
+class FdStream:
+    """Async byte I/O on a descriptor that the caller owns and closes after ``close``."""
+
+    def __init__(self, fd: int, name: str) -> None:
+        os.set_blocking(fd, False)
+        self._fd = fd
+        self._name = name
+        self._loop = asyncio.get_running_loop()
+        self._waiters: set[asyncio.Future[None]] = set()
+        self._closed = False
+
+    async def read(self, max_bytes: int) -> bytes:
+        """Wait for 1..max_bytes bytes; LinkClosedError on EOF, hang-up or close."""
+        while True:
+            self._raise_if_closed()
+            try:
+                data = os.read(self._fd, max_bytes)
+            except BlockingIOError:
+                await self._wait_ready(self._loop.add_reader, self._loop.remove_reader)
+                continue
+            except OSError as exc:
+                raise self._gone_error(exc) from exc
+            if not data:
+                raise LinkClosedError(f"{self._name}: end of stream")
+            return data
+
+    async def write(self, data: bytes) -> None:
+        """Write all of ``data``, waiting for buffer space as needed."""
+        view = memoryview(data)
+        while view:
+            self._raise_if_closed()
+            try:
+                written = os.write(self._fd, view)
+            except BlockingIOError:
+                await self._wait_ready(self._loop.add_writer, self._loop.remove_writer)
+                continue
+            except OSError as exc:
+                raise self._gone_error(exc) from exc
+            view = view[written:]
+
+    def close(self) -> None:
+        """Stop using the descriptor; pending reads and writes raise LinkClosedError."""
+        self._closed = True
+        # Unregister now: the owner closes the fd next and its number may be reused at once.
+        self._loop.remove_reader(self._fd)
+        self._loop.remove_writer(self._fd)
+        for waiter in self._waiters:
+            if not waiter.done():
+                waiter.set_exception(LinkClosedError(f"{self._name} is closed"))
+
+    async def _wait_ready(
+        self,
+        add: Callable[..., object],
+        remove: Callable[[int], bool],
+    ) -> None:
+        waiter: asyncio.Future[None] = self._loop.create_future()
+        add(self._fd, _resolve, waiter)
+        self._waiters.add(waiter)
+        try:
+            await waiter
+        finally:
+            self._waiters.discard(waiter)
+            if not self._closed:
+                remove(self._fd)
+
+    def _raise_if_closed(self) -> None:
+        if self._closed:
+            raise LinkClosedError(f"{self._name} is closed")
+
+    def _gone_error(self, exc: OSError) -> LinkClosedError:
+        if exc.errno in _GONE_ERRNOS:
+            return LinkClosedError(f"{self._name}: device or peer gone ({exc.strerror})")
+        return LinkClosedError(f"{self._name}: I/O error ({exc})")
+
+
+def _resolve(waiter: asyncio.Future[None]) -> None:
+    if not waiter.done():
+        waiter.set_result(None)

@@ -1,0 +1,68 @@
+"""Wire pacing: make writes over any link leave at a serial line's rate (e.g. 9600 baud 8N2).
+
+Links without UART timing (TCP bridges, ptys, memory pairs) deliver a burst at once; a device like
+the Sky Tracker's unbuffered PC port loses characters that come faster than 11 bit-times apart.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+
+from scopelink.links.base import Link
+
+# A write starting within this long after the previous one's last byte continues its schedule:
+# it absorbs the event loop's timer overshoot (about 1 ms) so back-to-back writes do not drift.
+# An idle line earns no more credit than this.
+CONTINUATION_SLACK_SECONDS = 0.005
+
+
+class PacedLink(Link):
+    """A link whose writes leave one byte every ``bits_per_byte / baudrate`` seconds.
+
+    Byte ``k`` of a burst is handed to the inner link when its last bit would have left a real
+    UART, on an absolute schedule of the monotonic clock, so timer jitter never accumulates.
+    Reads pass straight through. Closing it closes the inner link.
+    """
+
+    def __init__(self, inner: Link, baudrate: int, bits_per_byte: int) -> None:
+        if baudrate <= 0 or bits_per_byte <= 0:
+            raise ValueError(
+                f"baudrate and bits_per_byte must be positive: {baudrate}, {bits_per_byte}"
+            )
+        super().__init__(inner.name)
+        self.inner = inner
+        self.baudrate = baudrate
+        self.bits_per_byte = bits_per_byte
+        self.byte_seconds = bits_per_byte / baudrate
+        self._line_free_at = -math.inf
+        self._write_lock = asyncio.Lock()
+
+    async def _read_some(self, max_bytes: int) -> bytes:
+        # The inner link's hooks, not its public methods: the trace is logged once, by this link.
+        return await self.inner._read_some(max_bytes)
+
+    async def _write_all(self, data: bytes) -> None:
+        async with self._write_lock:
+            now = time.monotonic()
+            continues = now - self._line_free_at <= CONTINUATION_SLACK_SECONDS
+            start = self._line_free_at if continues else now
+            sent = 0
+            while sent < len(data):
+                due = min(len(data), math.floor((time.monotonic() - start) / self.byte_seconds))
+                if due > sent:
+                    await self.inner._write_all(data[sent:due])
+                    sent = due
+                else:
+                    next_due_at = start + (sent + 1) * self.byte_seconds
+                    await asyncio.sleep(next_due_at - time.monotonic())
+            self._line_free_at = start + len(data) * self.byte_seconds
+
+    async def _close_transport(self) -> None:
+        await self.inner.close()
+
+
+def paced(link: Link, baudrate: int = 9600, bits_per_byte: int = 10) -> PacedLink:
+    """Wrap ``link`` so writes leave at ``baudrate``; 8N1 is 10 bits per byte, 8N2 is 11."""
+    return PacedLink(link, baudrate, bits_per_byte)
