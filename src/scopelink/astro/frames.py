@@ -1,0 +1,116 @@
+"""J2000 (ICRS) <-> of-date equatorial coordinates.
+
+*Apparent of date* is the position on the true equator and equinox of date as seen from the
+geocentre: IAU 2006/2000A precession-nutation, annual aberration and light deflection by the Sun,
+no proper motion or parallax (the catalogue position is taken at the date). This is "JNow" for
+LX200-style clients. ERFA works in CIRS (RA from the celestial intermediate origin); the
+equinox-based RA is RA_CIRS - EO, with EO the equation of the origins (``erfa.eo06a``).
+
+*Mean of date* is the mean equator and equinox of date (frame bias and IAU 2006 precession
+only, no nutation and no aberration): what a precession-only client means by "of date".
+"""
+
+from __future__ import annotations
+
+from typing import overload
+
+import erfa
+import numpy as np
+import numpy.typing as npt
+
+from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
+from scopelink.astro.timescales import ScalarTime, TimeLike, tt_pair
+
+__all__ = [
+    "apparent_to_j2000",
+    "j2000_to_apparent",
+    "j2000_to_mean_of_date",
+    "mean_of_date_to_j2000",
+]
+
+_RADIANS_PER_HOUR = np.pi / 12.0
+
+
+def radec_radians(ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """RA hours and Dec degrees as radians."""
+    return as_float_array(ra_hours) * _RADIANS_PER_HOUR, np.radians(as_float_array(dec_deg))
+
+
+def radec_public(
+    ra_rad: npt.ArrayLike, dec_rad: npt.ArrayLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Radians as (RA hours in [0, 24), Dec degrees), floats for single positions."""
+    hours = np.mod(as_float_array(ra_rad) / _RADIANS_PER_HOUR, 24.0)
+    hours = np.where(hours >= 24.0, 0.0, hours)
+    return scalar_or_array(hours), scalar_or_array(np.degrees(as_float_array(dec_rad)))
+
+
+@overload
+def j2000_to_apparent(ra_hours: float, dec_deg: float, t: ScalarTime) -> tuple[float, float]: ...
+@overload
+def j2000_to_apparent(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def j2000_to_apparent(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """J2000 (ICRS) RA/Dec -> apparent RA/Dec of date (true equator and equinox)."""
+    astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+    ra, dec = radec_radians(ra_hours, dec_deg)
+    cirs_ra, cirs_dec = erfa.atciqz(ra, dec, astrom)
+    return radec_public(cirs_ra - equation_of_origins, cirs_dec)
+
+
+@overload
+def apparent_to_j2000(ra_hours: float, dec_deg: float, t: ScalarTime) -> tuple[float, float]: ...
+@overload
+def apparent_to_j2000(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def apparent_to_j2000(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Apparent RA/Dec of date (true equator and equinox) -> J2000 (ICRS) RA/Dec."""
+    astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+    ra, dec = radec_radians(ra_hours, dec_deg)
+    icrs_ra, icrs_dec = erfa.aticq(ra + equation_of_origins, dec, astrom)
+    return radec_public(icrs_ra, icrs_dec)
+
+
+def _rotate(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike, *, inverse: bool
+) -> tuple[FloatOrArray, FloatOrArray]:
+    bias_precession = erfa.pmat06(*tt_pair(t))
+    vector = erfa.s2c(*radec_radians(ra_hours, dec_deg))
+    rotated = erfa.trxp(bias_precession, vector) if inverse else erfa.rxp(bias_precession, vector)
+    return radec_public(*erfa.c2s(rotated))
+
+
+@overload
+def j2000_to_mean_of_date(
+    ra_hours: float, dec_deg: float, t: ScalarTime
+) -> tuple[float, float]: ...
+@overload
+def j2000_to_mean_of_date(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def j2000_to_mean_of_date(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """J2000 (ICRS) RA/Dec -> mean RA/Dec of date (bias + precession, no nutation/aberration)."""
+    return _rotate(ra_hours, dec_deg, t, inverse=False)
+
+
+@overload
+def mean_of_date_to_j2000(
+    ra_hours: float, dec_deg: float, t: ScalarTime
+) -> tuple[float, float]: ...
+@overload
+def mean_of_date_to_j2000(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def mean_of_date_to_j2000(
+    ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Mean RA/Dec of date -> J2000 (ICRS) RA/Dec: the exact inverse rotation."""
+    return _rotate(ra_hours, dec_deg, t, inverse=True)

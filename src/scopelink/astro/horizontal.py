@@ -1,0 +1,220 @@
+"""Equatorial <-> horizontal coordinates for a :class:`~scopelink.astro.site.Site`.
+
+Azimuth is in degrees [0, 360), North = 0, East = 90 (ERFA's convention); altitude in degrees.
+*Observed* alt/az include atmospheric refraction for the site's air (none when its pressure is
+0); they are what a level alt-az mount points at. ERFA carries the geometry (precession-nutation,
+aberration, light deflection, Earth rotation, diurnal aberration, parallax-free topocentric
+direction) with its own refraction switched off; :mod:`scopelink.astro.refraction` then adds
+refraction to the altitude (``refract``) or removes it (``unrefract``). Polar motion is neglected
+(below 0.5 arcsec).
+"""
+
+from __future__ import annotations
+
+from typing import Any, overload
+
+import erfa
+import numpy as np
+import numpy.typing as npt
+
+from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
+from scopelink.astro.angles import wrap_degrees, wrap_hour_angle
+from scopelink.astro.frames import radec_public, radec_radians
+from scopelink.astro.refraction import RefractionModel
+from scopelink.astro.site import Site
+from scopelink.astro.timescales import ScalarTime, TimeLike, check_ut1_minus_utc, utc_pair
+
+__all__ = [
+    "altaz_to_hadec",
+    "apparent_to_observed",
+    "hadec_to_altaz",
+    "j2000_to_observed",
+    "observed_to_apparent",
+    "observed_to_j2000",
+]
+
+_HOURS_PER_RADIAN = 12.0 / np.pi
+
+
+def _observer(t: TimeLike, site: Site, ut1_minus_utc_s: float) -> tuple[Any, FloatArray]:
+    """ERFA's star-independent context for ``site`` at ``t`` (refraction off) and EO."""
+    check_ut1_minus_utc(ut1_minus_utc_s)
+    astrom, equation_of_origins = erfa.apco13(
+        *utc_pair(t),
+        ut1_minus_utc_s,
+        np.radians(site.longitude_deg),
+        np.radians(site.latitude_deg),
+        site.elevation_m,
+        0.0,  # polar motion x
+        0.0,  # polar motion y
+        0.0,  # pressure: ERFA refraction off, ours is applied to the altitude below
+        site.temperature_c,
+        site.relative_humidity,
+        site.wavelength_um,
+    )
+    return astrom, as_float_array(equation_of_origins)
+
+
+def _observed_from_cirs(
+    cirs_ra: FloatArray, cirs_dec: FloatArray, astrom: Any, site: Site
+) -> tuple[FloatOrArray, FloatOrArray]:
+    azimuth, zenith_distance, *_ = erfa.atioq(cirs_ra, cirs_dec, astrom)
+    true_altitude = 90.0 - np.degrees(zenith_distance)
+    altitude = RefractionModel.for_site(site).refract(true_altitude)
+    return scalar_or_array(altitude), wrap_degrees(np.degrees(azimuth))
+
+
+def _cirs_from_observed(
+    alt_deg: npt.ArrayLike, az_deg: npt.ArrayLike, astrom: Any, site: Site
+) -> tuple[FloatArray, FloatArray]:
+    true_altitude = RefractionModel.for_site(site).unrefract(alt_deg)
+    zenith_distance = np.radians(90.0 - true_altitude)
+    cirs_ra, cirs_dec = erfa.atoiq("A", np.radians(as_float_array(az_deg)), zenith_distance, astrom)
+    return as_float_array(cirs_ra), as_float_array(cirs_dec)
+
+
+@overload
+def j2000_to_observed(
+    ra_hours: float, dec_deg: float, t: ScalarTime, site: Site, *, ut1_minus_utc_s: float = 0.0
+) -> tuple[float, float]: ...
+@overload
+def j2000_to_observed(
+    ra_hours: npt.ArrayLike,
+    dec_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def j2000_to_observed(
+    ra_hours: npt.ArrayLike,
+    dec_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """J2000 (ICRS) RA/Dec -> observed (altitude, azimuth) in degrees at ``site``."""
+    astrom, _ = _observer(t, site, ut1_minus_utc_s)
+    cirs_ra, cirs_dec = erfa.atciqz(*radec_radians(ra_hours, dec_deg), astrom)
+    return _observed_from_cirs(cirs_ra, cirs_dec, astrom, site)
+
+
+@overload
+def observed_to_j2000(
+    alt_deg: float, az_deg: float, t: ScalarTime, site: Site, *, ut1_minus_utc_s: float = 0.0
+) -> tuple[float, float]: ...
+@overload
+def observed_to_j2000(
+    alt_deg: npt.ArrayLike,
+    az_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def observed_to_j2000(
+    alt_deg: npt.ArrayLike,
+    az_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Observed (altitude, azimuth) in degrees at ``site`` -> J2000 (ICRS) (RA hours, Dec deg)."""
+    astrom, _ = _observer(t, site, ut1_minus_utc_s)
+    cirs_ra, cirs_dec = _cirs_from_observed(alt_deg, az_deg, astrom, site)
+    return radec_public(*erfa.aticq(cirs_ra, cirs_dec, astrom))
+
+
+@overload
+def apparent_to_observed(
+    ra_hours: float, dec_deg: float, t: ScalarTime, site: Site, *, ut1_minus_utc_s: float = 0.0
+) -> tuple[float, float]: ...
+@overload
+def apparent_to_observed(
+    ra_hours: npt.ArrayLike,
+    dec_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def apparent_to_observed(
+    ra_hours: npt.ArrayLike,
+    dec_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Apparent RA/Dec of date -> observed (altitude, azimuth) in degrees at ``site``."""
+    astrom, equation_of_origins = _observer(t, site, ut1_minus_utc_s)
+    ra, dec = radec_radians(ra_hours, dec_deg)
+    return _observed_from_cirs(ra + equation_of_origins, dec, astrom, site)
+
+
+@overload
+def observed_to_apparent(
+    alt_deg: float, az_deg: float, t: ScalarTime, site: Site, *, ut1_minus_utc_s: float = 0.0
+) -> tuple[float, float]: ...
+@overload
+def observed_to_apparent(
+    alt_deg: npt.ArrayLike,
+    az_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def observed_to_apparent(
+    alt_deg: npt.ArrayLike,
+    az_deg: npt.ArrayLike,
+    t: TimeLike,
+    site: Site,
+    *,
+    ut1_minus_utc_s: float = 0.0,
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Observed (altitude, azimuth) in degrees at ``site`` -> apparent RA/Dec of date."""
+    astrom, equation_of_origins = _observer(t, site, ut1_minus_utc_s)
+    cirs_ra, cirs_dec = _cirs_from_observed(alt_deg, az_deg, astrom, site)
+    return radec_public(cirs_ra - equation_of_origins, cirs_dec)
+
+
+@overload
+def hadec_to_altaz(ha_hours: float, dec_deg: float, latitude_deg: float) -> tuple[float, float]: ...
+@overload
+def hadec_to_altaz(
+    ha_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, latitude_deg: npt.ArrayLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def hadec_to_altaz(
+    ha_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, latitude_deg: npt.ArrayLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """Hour angle/Dec -> (altitude, azimuth) in degrees: pure rotation, no refraction."""
+    azimuth, elevation = erfa.hd2ae(
+        as_float_array(ha_hours) / _HOURS_PER_RADIAN,
+        np.radians(as_float_array(dec_deg)),
+        np.radians(as_float_array(latitude_deg)),
+    )
+    return scalar_or_array(np.degrees(elevation)), wrap_degrees(np.degrees(azimuth))
+
+
+@overload
+def altaz_to_hadec(alt_deg: float, az_deg: float, latitude_deg: float) -> tuple[float, float]: ...
+@overload
+def altaz_to_hadec(
+    alt_deg: npt.ArrayLike, az_deg: npt.ArrayLike, latitude_deg: npt.ArrayLike
+) -> tuple[FloatOrArray, FloatOrArray]: ...
+def altaz_to_hadec(
+    alt_deg: npt.ArrayLike, az_deg: npt.ArrayLike, latitude_deg: npt.ArrayLike
+) -> tuple[FloatOrArray, FloatOrArray]:
+    """(Altitude, azimuth) in degrees -> (hour angle in [-12, 12) h, Dec degrees): pure rotation."""
+    hour_angle, declination = erfa.ae2hd(
+        np.radians(as_float_array(az_deg)),
+        np.radians(as_float_array(alt_deg)),
+        np.radians(as_float_array(latitude_deg)),
+    )
+    return (
+        wrap_hour_angle(as_float_array(hour_angle) * _HOURS_PER_RADIAN),
+        scalar_or_array(np.degrees(declination)),
+    )

@@ -1,0 +1,140 @@
+"""Atmospheric refraction: observed (refracted) <-> true (unrefracted) altitude.
+
+The refraction R(h) is a function of the *observed* altitude h:
+
+- above 6°, ERFA's model R = A tan z + B tan³ z with z = 90° - h and (A, B) from
+  ``erfa.refco`` for the site's pressure, temperature, humidity and wavelength;
+- below 5°, Bennett's formula R = cot(h + 7.31 / (h + 4.4)) arcmin, scaled by
+  (P / 1010 hPa) (283 K / T), which stays finite and smooth to the horizon; it is evaluated at
+  max(h, -1°), so R is constant (finite) below -1°;
+- between 5° and 6° a smoothstep blend of the two, so R is continuous, smooth and decreasing.
+
+Unrefracting is explicit (true = observed - R(observed)); refracting solves
+observed - R(observed) = true by fixed-point iteration to 1e-12 degrees, so the two are exact
+inverses of each other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import overload
+
+import erfa
+import numpy as np
+import numpy.typing as npt
+
+from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
+from scopelink.astro.site import Site
+
+__all__ = [
+    "BLEND_HIGH_DEG",
+    "BLEND_LOW_DEG",
+    "LOWEST_MODELLED_DEG",
+    "RefractionModel",
+    "observed_altitude_deg",
+    "refraction_deg",
+    "true_altitude_deg",
+]
+
+BLEND_LOW_DEG = 5.0
+"""Below this observed altitude only the horizon formula (Bennett) is used."""
+BLEND_HIGH_DEG = 6.0
+"""Above this observed altitude only ERFA's A tan z + B tan³ z model is used."""
+LOWEST_MODELLED_DEG = -1.0
+"""Below this observed altitude the refraction is held at its value here."""
+
+_CONVERGED_DEG = 1e-12
+_MAX_ITERATIONS = 100
+
+
+@dataclass(frozen=True, slots=True)
+class RefractionModel:
+    """Refraction constants for one set of air conditions.
+
+    ``a_rad`` and ``b_rad`` are ERFA's A and B; ``horizon_scale`` multiplies Bennett's formula.
+    All three are zero when refraction is off.
+    """
+
+    a_rad: float
+    b_rad: float
+    horizon_scale: float
+
+    @classmethod
+    def for_site(cls, site: Site) -> RefractionModel:
+        """The refraction constants for ``site``'s air (zero if its pressure is 0)."""
+        pressure = site.effective_pressure_hpa
+        if pressure <= 0.0:
+            return cls(0.0, 0.0, 0.0)
+        a_rad, b_rad = erfa.refco(
+            pressure, site.temperature_c, site.relative_humidity, site.wavelength_um
+        )
+        horizon_scale = (pressure / 1010.0) * (283.0 / (273.0 + site.temperature_c))
+        return cls(float(a_rad), float(b_rad), horizon_scale)
+
+    def amount_deg(self, observed_alt_deg: npt.ArrayLike) -> FloatArray:
+        """Refraction in degrees (observed minus true altitude) at an observed altitude."""
+        altitude = as_float_array(observed_alt_deg)
+        weight = _smoothstep((altitude - BLEND_LOW_DEG) / (BLEND_HIGH_DEG - BLEND_LOW_DEG))
+        # Each formula is evaluated only inside its own range; the clamps avoid tan z -> inf.
+        erfa_altitude = np.radians(np.clip(altitude, BLEND_LOW_DEG, 90.0))
+        tan_z = np.cos(erfa_altitude) / np.sin(erfa_altitude)
+        erfa_rad = (self.a_rad + self.b_rad * tan_z * tan_z) * tan_z
+        horizon_altitude = np.clip(altitude, LOWEST_MODELLED_DEG, BLEND_HIGH_DEG)
+        bennett_arcmin = 1.0 / np.tan(
+            np.radians(horizon_altitude + 7.31 / (horizon_altitude + 4.4))
+        )
+        horizon_deg = self.horizon_scale * bennett_arcmin / 60.0
+        amount: FloatArray = weight * np.degrees(erfa_rad) + (1.0 - weight) * horizon_deg
+        return amount
+
+    def unrefract(self, observed_alt_deg: npt.ArrayLike) -> FloatArray:
+        """True (geometric) altitude for an observed altitude."""
+        observed = as_float_array(observed_alt_deg)
+        true: FloatArray = observed - self.amount_deg(observed)
+        return true
+
+    def refract(self, true_alt_deg: npt.ArrayLike) -> FloatArray:
+        """Observed altitude for a true altitude: the exact inverse of :meth:`unrefract`."""
+        true = as_float_array(true_alt_deg)
+        observed = true + self.amount_deg(true)
+        # A contraction: |dR/dh| < 0.3 everywhere, so each step gains at least half a digit.
+        for _ in range(_MAX_ITERATIONS):
+            updated = true + self.amount_deg(observed)
+            step = np.abs(updated - observed)
+            observed = updated
+            if not np.any(step > _CONVERGED_DEG):
+                break
+        return observed
+
+
+def _smoothstep(x: FloatArray) -> FloatArray:
+    clipped = np.clip(x, 0.0, 1.0)
+    smooth: FloatArray = clipped * clipped * (3.0 - 2.0 * clipped)
+    return smooth
+
+
+@overload
+def refraction_deg(observed_alt_deg: float, site: Site) -> float: ...
+@overload
+def refraction_deg(observed_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray: ...
+def refraction_deg(observed_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray:
+    """Refraction in degrees at an observed altitude for ``site``'s air (0 if pressure is 0)."""
+    return scalar_or_array(RefractionModel.for_site(site).amount_deg(observed_alt_deg))
+
+
+@overload
+def observed_altitude_deg(true_alt_deg: float, site: Site) -> float: ...
+@overload
+def observed_altitude_deg(true_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray: ...
+def observed_altitude_deg(true_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray:
+    """Observed (refracted) altitude in degrees for a true altitude."""
+    return scalar_or_array(RefractionModel.for_site(site).refract(true_alt_deg))
+
+
+@overload
+def true_altitude_deg(observed_alt_deg: float, site: Site) -> float: ...
+@overload
+def true_altitude_deg(observed_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray: ...
+def true_altitude_deg(observed_alt_deg: npt.ArrayLike, site: Site) -> FloatOrArray:
+    """True (unrefracted) altitude in degrees for an observed altitude."""
+    return scalar_or_array(RefractionModel.for_site(site).unrefract(observed_alt_deg))
