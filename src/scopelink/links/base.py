@@ -77,6 +77,17 @@ class Link(ABC):
         trace_transfer("<--", self._name, data)
         return data
 
+    async def read_exactly(self, count: int) -> bytes:
+        """Wait for exactly ``count`` bytes, e.g. a fixed-length reply.
+
+        Unlike :meth:`read`, a cancelled call loses the bytes it had already received:
+        after a timeout, resynchronise with :meth:`drain_input`.
+        """
+        received = bytearray()
+        while len(received) < count:
+            received += await self.read(count - len(received))
+        return bytes(received)
+
     async def write(self, data: bytes) -> None:
         """Send ``data``; return once it is handed to the OS (or the wire pacing allows)."""
         self._raise_if_closed()

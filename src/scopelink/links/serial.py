@@ -54,7 +54,8 @@ class _DescriptorSerialLink(SerialLink):
 
     async def _close_transport(self) -> None:
         self._stream.close()
-        self.port.close()
+        # Off the loop: pyserial's socket:// close sleeps 0.3 s "to give the server some time".
+        await asyncio.to_thread(self.port.close)
 
 
 class _ThreadedSerialLink(SerialLink):
