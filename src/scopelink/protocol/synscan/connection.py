@@ -1,0 +1,185 @@
+"""SynScan connections in the style of h11: bring your own I/O, feed bytes in, take events out.
+
+`SynScanClientConnection` is the PC side (a driver): one command in flight, its reply parsed by
+shape. `SynScanServerConnection` is the hand-control side (an emulator or bridge): commands framed
+by length, replies checked against the command they answer."""
+
+from __future__ import annotations
+
+from collections import deque
+from enum import Enum
+
+from scopelink.protocol.synscan.angles import HASH
+from scopelink.protocol.synscan.commands import CommandParser, encode_command
+from scopelink.protocol.synscan.events import (
+    NEED_DATA,
+    ClientError,
+    LocalProtocolError,
+    MalformedReply,
+    NeedData,
+    ServerError,
+    UnexpectedData,
+)
+from scopelink.protocol.synscan.messages import AnyCommand, AnyReply, Echo
+from scopelink.protocol.synscan.replies import (
+    Mismatch,
+    encode_reply,
+    reply_fits,
+    scan_reply,
+)
+
+
+class ClientState(Enum):
+    """Where the client connection stands."""
+
+    IDLE = "idle"
+    """No command in flight; `send` may be called."""
+    AWAITING_REPLY = "awaiting reply"
+    """One command sent, its reply not complete yet."""
+    ERROR = "error"
+    """A reply did not fit; call `reset` (and resynchronise) before sending again."""
+
+
+class SynScanClientConnection:
+    """The PC side of a SynScan link: one command in flight, its reply read by exact length and
+    shape.
+
+    After `reset` (the driver timed out or saw a malformed reply) the connection is resynchronising:
+    while the first `Echo` sent after it waits for its reply, bytes before the echoed byte + ``#``
+    are reported as `UnexpectedData` instead of failing the reply, so late replies to earlier
+    commands drain."""
+
+    def __init__(self) -> None:
+        self._buffer = bytearray()
+        self._in_flight: AnyCommand | None = None
+        self._state = ClientState.IDLE
+        self._resynchronising = False
+
+    @property
+    def state(self) -> ClientState:
+        """The current state."""
+        return self._state
+
+    @property
+    def in_flight(self) -> AnyCommand | None:
+        """The command whose reply is awaited, if any."""
+        return self._in_flight
+
+    def send(self, command: AnyCommand) -> bytes:
+        """The bytes to write for ``command``; it becomes the command in flight."""
+        if self._state is not ClientState.IDLE:
+            raise LocalProtocolError(
+                f"cannot send {command.describe()!r} while {self._state.value}"
+                + (f" ({self._in_flight.describe()!r})" if self._in_flight else "; call reset()")
+            )
+        data = encode_command(command)
+        self._in_flight = command
+        self._state = ClientState.AWAITING_REPLY
+        return data
+
+    def receive_data(self, data: bytes) -> None:
+        """Append bytes read from the link."""
+        self._buffer += data
+
+    def next_event(self) -> AnyReply | ClientError | NeedData:
+        """The reply to the command in flight, an error event, or `NEED_DATA`."""
+        if not self._buffer:
+            return NEED_DATA
+        if self._in_flight is None:
+            return UnexpectedData(self._take(len(self._buffer)))
+        command = self._in_flight
+        if self._resynchronising and isinstance(command, Echo):
+            skip = _bytes_before_echo(self._buffer, command.value)
+            if skip:
+                return UnexpectedData(self._take(skip))
+        result = scan_reply(command, self._buffer)
+        if result is NEED_DATA:
+            return NEED_DATA
+        self._in_flight = None
+        if isinstance(result, Mismatch):
+            self._state = ClientState.ERROR
+            return MalformedReply(
+                command, self._take(result.index + 1), result.index, result.reason
+            )
+        self._take(result.length)
+        self._state = ClientState.IDLE
+        self._resynchronising = False
+        return result.reply
+
+    def reset(self) -> bytes:
+        """Forget the command in flight and drop buffered bytes (returned); start
+        resynchronising."""
+        self._in_flight = None
+        self._state = ClientState.IDLE
+        self._resynchronising = True
+        return self._take(len(self._buffer))
+
+    def _take(self, count: int) -> bytes:
+        taken = bytes(self._buffer[:count])
+        del self._buffer[:count]
+        return taken
+
+
+def _bytes_before_echo(buffer: bytearray, value: int) -> int:
+    """How many leading bytes cannot begin the echo reply ``value #``."""
+    for index, byte in enumerate(buffer):
+        if byte == value and (index + 1 == len(buffer) or buffer[index + 1] == HASH):
+            return index
+    return len(buffer)
+
+
+class SynScanServerConnection:
+    """The hand-control side of a SynScan link: commands framed by length, replies answered in
+    order.
+
+    Every command `next_event` returns awaits a reply: `send` encodes it after checking that it is a
+    reply that command can have; `skip_reply` leaves a command unanswered (a device that ignores it,
+    or an injected fault)."""
+
+    def __init__(self) -> None:
+        self._parser = CommandParser()
+        self._unanswered: deque[AnyCommand] = deque()
+
+    @property
+    def parser(self) -> CommandParser:
+        """The underlying parser (stream offsets, pending bytes)."""
+        return self._parser
+
+    @property
+    def unanswered(self) -> tuple[AnyCommand, ...]:
+        """Commands returned by `next_event` and not yet answered, oldest first."""
+        return tuple(self._unanswered)
+
+    def receive_data(self, data: bytes) -> None:
+        """Append bytes read from the link."""
+        self._parser.receive_data(data)
+
+    def next_event(self) -> AnyCommand | ServerError | NeedData:
+        """The next command, an error event, or `NEED_DATA`; never raises."""
+        event = self._parser.next_event()
+        if not isinstance(event, ServerError) and event is not NEED_DATA:
+            self._unanswered.append(event)
+        return event
+
+    def discard_partial(self) -> bytes:
+        """Drop and return an incomplete frame (the I/O layer calls it after an inter-byte
+        timeout)."""
+        return self._parser.discard_partial()
+
+    def send(self, reply: AnyReply) -> bytes:
+        """The bytes that answer the oldest unanswered command with ``reply``."""
+        if not self._unanswered:
+            raise LocalProtocolError(f"no command awaits a reply; cannot send {reply.describe()!r}")
+        command = self._unanswered[0]
+        if not reply_fits(command, reply):
+            raise LocalProtocolError(
+                f"{type(reply).__name__} {reply.describe()!r} cannot answer {command.describe()!r}"
+            )
+        self._unanswered.popleft()
+        return encode_reply(reply)
+
+    def skip_reply(self) -> AnyCommand:
+        """Leave the oldest unanswered command without a reply; returns it."""
+        if not self._unanswered:
+            raise LocalProtocolError("no command awaits a reply")
+        return self._unanswered.popleft()
