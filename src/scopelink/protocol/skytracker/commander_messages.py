@@ -25,7 +25,7 @@ STORED_SLOTS = range(59)
 """``L00``-``L58``: store in the Sky Commander's non-volatile memory; not made current."""
 
 POSITION_REPLY_SIZE = 16
-_POSITION_FIELDS = re.compile(rb" *([^\s\x00]+) +([^\s\x00]+) *\x00?")
+_POSITION_FIELDS = re.compile(rb" *([^\s\x00]+) +([^\s\x00]+)[ \x00]*")
 _LOAD_LINE = re.compile(rb"L(\d\d) +(\S+) +(\S+) *\r")
 
 
