@@ -1,1 +1,45 @@
 """The protocol-neutral Mount API that every front end uses."""
+
+from scopelink.mount.base import MAX_PULSE_GUIDE_MS, Mount, utc_now
+from scopelink.mount.errors import (
+    DeviceError,
+    InvalidValueError,
+    LimitError,
+    MountError,
+    NotConnectedError,
+    NotSupportedError,
+    ParkedError,
+)
+from scopelink.mount.limits import Limits
+from scopelink.mount.types import (
+    AlignmentMode,
+    Capabilities,
+    GuideDirection,
+    Identity,
+    MountAxis,
+    MountState,
+    PierSide,
+    TrackingMode,
+)
+
+__all__ = [
+    "MAX_PULSE_GUIDE_MS",
+    "AlignmentMode",
+    "Capabilities",
+    "DeviceError",
+    "GuideDirection",
+    "Identity",
+    "InvalidValueError",
+    "LimitError",
+    "Limits",
+    "Mount",
+    "MountAxis",
+    "MountError",
+    "MountState",
+    "NotConnectedError",
+    "NotSupportedError",
+    "ParkedError",
+    "PierSide",
+    "TrackingMode",
+    "utc_now",
+]

@@ -1,10 +1,26 @@
-"""Values that cross the Mount API: what a mount can do, who it is, and where it points."""
+"""Values that cross the Mount API: what a mount can do, who it is, and where it points.
+
+``PierSide`` is the astro layer's (ASCOM values), re-exported here for front ends.
+"""
 
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
 from datetime import datetime
+
+from scopelink.astro import PierSide
+
+__all__ = [
+    "AlignmentMode",
+    "Capabilities",
+    "GuideDirection",
+    "Identity",
+    "MountAxis",
+    "MountState",
+    "PierSide",
+    "TrackingMode",
+]
 
 
 class AlignmentMode(enum.Enum):
@@ -13,14 +29,6 @@ class AlignmentMode(enum.Enum):
     ALT_AZ = "altaz"
     POLAR = "polar"  # fork or single-arm equatorial: no meridian flip
     GERMAN_POLAR = "german-polar"
-
-
-class PierSide(enum.Enum):
-    """ASCOM's pointing state: EAST is the normal state (counterweight down, tube looking west)."""
-
-    EAST = "east"
-    WEST = "west"
-    UNKNOWN = "unknown"
 
 
 class TrackingMode(enum.Enum):
@@ -56,7 +64,7 @@ class Identity:
 
 @dataclass(frozen=True, slots=True)
 class Capabilities:
-    """What this mount, with this firmware, can do. Front ends answer 'not implemented' otherwise."""
+    """What this mount, with this firmware, can do; front ends say 'not implemented' otherwise."""
 
     alignment_mode: AlignmentMode
     can_goto: bool = False
@@ -77,8 +85,8 @@ class Capabilities:
 class MountState:
     """One consistent snapshot of the mount, stamped with when it was read.
 
-    Coordinates are ``None`` until the mount has reported them; RA/Dec are J2000 (the frame both device
-    protocols use) and of date; Alt/Az are observed (refracted) for the configured site.
+    Coordinates are ``None`` until the mount has reported them; RA/Dec are J2000 (the frame both
+    device protocols use) and of date; Alt/Az are observed (refracted) for the configured site.
     """
 
     read_at: datetime

@@ -1,0 +1,252 @@
+"""The protocol-neutral Mount: every front end drives a mount through this class alone.
+
+Public methods validate their arguments and check the configured limits *before* the
+protocol-specific implementation runs, so no subclass can forget a check: a motion that would leave
+the allowed sky raises :class:`LimitError` and nothing reaches the link. Subclasses implement the
+underscore methods they support; the rest raise :class:`NotSupportedError`, which front ends report
+as "not implemented".
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from datetime import UTC, datetime
+
+from scopelink.astro import Site, j2000_to_observed
+from scopelink.mount.errors import (
+    InvalidValueError,
+    NotConnectedError,
+    NotSupportedError,
+    ParkedError,
+)
+from scopelink.mount.limits import Limits
+from scopelink.mount.types import (
+    Capabilities,
+    GuideDirection,
+    Identity,
+    MountAxis,
+    MountState,
+    TrackingMode,
+)
+
+__all__ = ["MAX_PULSE_GUIDE_MS", "Mount", "utc_now"]
+
+MAX_PULSE_GUIDE_MS = 60_000
+"""Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
+
+
+def utc_now() -> datetime:
+    """The PC's clock in UTC: the default time source of a real mount."""
+    return datetime.now(UTC)
+
+
+def _check_ra_dec(ra_hours: float, dec_deg: float) -> None:
+    if not (math.isfinite(ra_hours) and 0.0 <= ra_hours < 24.0):
+        raise InvalidValueError(f"right ascension {ra_hours} h must lie in [0, 24)")
+    if not (math.isfinite(dec_deg) and -90.0 <= dec_deg <= 90.0):
+        raise InvalidValueError(f"declination {dec_deg}° must lie in [-90, +90]")
+
+
+def _check_alt_az(alt_deg: float, az_deg: float) -> None:
+    if not (math.isfinite(alt_deg) and -90.0 <= alt_deg <= 90.0):
+        raise InvalidValueError(f"altitude {alt_deg}° must lie in [-90, +90]")
+    if not (math.isfinite(az_deg) and 0.0 <= az_deg < 360.0):
+        raise InvalidValueError(f"azimuth {az_deg}° must lie in [0, 360)")
+
+
+class Mount(ABC):
+    """A telescope mount, whatever protocol (or simulation) is behind it."""
+
+    def __init__(
+        self,
+        *,
+        site: Site,
+        limits: Limits | None = None,
+        clock: Callable[[], datetime] = utc_now,
+    ) -> None:
+        self._site = site
+        self._limits = limits or Limits()
+        self._clock = clock
+        self._state = MountState(read_at=clock())
+
+    # --- who, what, where -------------------------------------------------------------------------
+
+    @property
+    @abstractmethod
+    def capabilities(self) -> Capabilities:
+        """What this mount can do."""
+
+    @property
+    @abstractmethod
+    def identity(self) -> Identity:
+        """Who answered on the link."""
+
+    @property
+    def site(self) -> Site:
+        return self._site
+
+    @property
+    def limits(self) -> Limits:
+        return self._limits
+
+    @limits.setter
+    def limits(self, limits: Limits) -> None:
+        self._limits = limits
+
+    def now(self) -> datetime:
+        """The mount's notion of the current UTC time (a simulated mount may run its own clock)."""
+        return self._clock()
+
+    @property
+    def state(self) -> MountState:
+        """The last known state, without waiting on the wire."""
+        return self._state
+
+    def _publish(self, state: MountState) -> None:
+        self._state = state
+
+    # --- connection ------------------------------------------------------------------------------
+
+    @abstractmethod
+    async def connect(self) -> None:
+        """Open the link and identify the device."""
+
+    @abstractmethod
+    async def disconnect(self) -> None:
+        """Stop using the device and close the link; motion is stopped where the protocol allows."""
+
+    @abstractmethod
+    async def refresh(self) -> MountState:
+        """Read the device now and return (and cache) a fresh state."""
+
+    def _require_connected(self) -> None:
+        if not self._state.connected:
+            raise NotConnectedError(f"{self.identity.model or 'the mount'} is not connected")
+
+    def _require_unparked(self) -> None:
+        self._require_connected()
+        if self._state.parked:
+            raise ParkedError("the mount is parked: unpark it before moving it")
+
+    # --- checked motion: validate, check limits, then delegate ---------------------------------
+
+    def observed_altaz(self, ra_j2000_hours: float, dec_j2000_deg: float) -> tuple[float, float]:
+        """Observed (refracted) altitude and azimuth of a J2000 position now, at this site."""
+        return j2000_to_observed(ra_j2000_hours, dec_j2000_deg, self.now(), self._site)
+
+    async def goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """Start a slew to a J2000 position; returns once the slew has started."""
+        _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
+        self._require_unparked()
+        alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+        self._limits.check_altaz(alt, az)
+        await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+
+    async def goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        """Start a slew to an observed altitude and azimuth; returns once the slew has started."""
+        _check_alt_az(alt_deg, az_deg)
+        self._require_unparked()
+        self._limits.check_altaz(alt_deg, az_deg)
+        await self._goto_horizontal(alt_deg, az_deg)
+
+    async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """Tell the mount it is pointing at this J2000 position."""
+        _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
+        self._require_unparked()
+        await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+
+    async def abort(self) -> None:
+        """Stop every motion now (tracking keeps its setting where the protocol allows)."""
+        self._require_connected()
+        await self._abort()
+
+    async def move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """Turn one axis at a signed rate (degrees per second); 0 stops it."""
+        self._require_unparked()
+        limit = self.capabilities.max_axis_rate_deg_s
+        if not self.capabilities.can_move_axis[axis.value]:
+            raise NotSupportedError(
+                f"this mount cannot move its {axis.name.lower()} axis at a rate"
+            )
+        if not (math.isfinite(rate_deg_s) and abs(rate_deg_s) <= limit):
+            raise InvalidValueError(f"axis rate {rate_deg_s}°/s must lie within ±{limit}°/s")
+        await self._move_axis(axis, rate_deg_s)
+
+    async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        """Nudge the mount at the guide rate for ``duration_ms`` milliseconds."""
+        self._require_unparked()
+        if not 0 <= duration_ms <= MAX_PULSE_GUIDE_MS:
+            raise InvalidValueError(
+                f"guide pulse {duration_ms} ms must lie in [0, {MAX_PULSE_GUIDE_MS}]"
+            )
+        await self._pulse_guide(direction, duration_ms)
+
+    async def set_tracking(self, mode: TrackingMode) -> None:
+        """Start tracking in ``mode`` or stop it with ``TrackingMode.OFF``."""
+        self._require_connected()
+        if mode not in self.capabilities.tracking_modes:
+            supported = ", ".join(sorted(m.value for m in self.capabilities.tracking_modes))
+            raise NotSupportedError(
+                f"tracking mode {mode.value!r} is not supported (use {supported})"
+            )
+        if mode is not TrackingMode.OFF:
+            self._require_unparked()
+        await self._set_tracking(mode)
+
+    async def park(self) -> None:
+        """Move to the park position, stop tracking and refuse motion until unparked."""
+        self._require_connected()
+        await self._park()
+
+    async def unpark(self) -> None:
+        self._require_connected()
+        await self._unpark()
+
+    async def set_site(self, site: Site) -> None:
+        """Use ``site`` from now on, and tell the device where supported."""
+        await self._set_site(site)
+        self._site = site
+
+    async def set_time(self, utc: datetime) -> None:
+        """Tell the device the time (an aware datetime)."""
+        if utc.tzinfo is None:
+            raise InvalidValueError("the time must carry a time zone (use UTC)")
+        self._require_connected()
+        await self._set_time(utc)
+
+    # --- protocol-specific parts: override what the device supports ----------------------------
+
+    async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        raise NotSupportedError("this mount cannot go to equatorial coordinates")
+
+    async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        raise NotSupportedError("this mount cannot go to horizontal coordinates")
+
+    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        raise NotSupportedError("this mount cannot sync")
+
+    async def _abort(self) -> None:
+        raise NotSupportedError("this mount cannot abort a slew")
+
+    async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
+        raise NotSupportedError("this mount cannot move an axis at a rate")
+
+    async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        raise NotSupportedError("this mount cannot pulse-guide")
+
+    async def _set_tracking(self, mode: TrackingMode) -> None:
+        raise NotSupportedError("this mount cannot change tracking")
+
+    async def _park(self) -> None:
+        raise NotSupportedError("this mount cannot park")
+
+    async def _unpark(self) -> None:
+        raise NotSupportedError("this mount cannot unpark")
+
+    async def _set_site(self, site: Site) -> None:  # noqa: B027 - optional hook, no-op by default
+        """Devices that store no site keep the default: the site is used on the PC side only."""
+
+    async def _set_time(self, utc: datetime) -> None:
+        raise NotSupportedError("this mount keeps no time")

@@ -1,0 +1,70 @@
+"""Where the mount may point: the horizon and limits every motion command is checked against."""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from dataclasses import dataclass, field
+
+from scopelink.mount.errors import InvalidValueError, LimitError
+
+__all__ = ["Limits"]
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """The sky the mount may point at, in observed (refracted) altitude and azimuth.
+
+    ``horizon_deg`` is the lowest altitude allowed everywhere; ``horizon_profile`` optionally
+    raises it by azimuth (pairs of azimuth and altitude, linearly interpolated, wrapping through
+    north) for trees and houses. ``max_altitude_deg`` keeps alt-az mounts out of the zenith, where
+    the azimuth speed diverges.
+    """
+
+    horizon_deg: float = 0.0
+    max_altitude_deg: float = 90.0
+    horizon_profile: tuple[tuple[float, float], ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not -10.0 <= self.horizon_deg <= 89.0:
+            raise InvalidValueError(f"horizon {self.horizon_deg}° must lie between -10° and 89°")
+        if not self.horizon_deg < self.max_altitude_deg <= 90.0:
+            raise InvalidValueError(
+                f"maximum altitude {self.max_altitude_deg}° must lie above the horizon "
+                f"({self.horizon_deg}°) and at most 90°"
+            )
+        for az, alt in self.horizon_profile:
+            if not (0.0 <= az < 360.0 and -10.0 <= alt <= 89.0):
+                raise InvalidValueError(f"horizon profile point ({az}°, {alt}°) is out of range")
+        azimuths = [az for az, _ in self.horizon_profile]
+        if azimuths != sorted(set(azimuths)):
+            raise InvalidValueError("horizon profile azimuths must be increasing and distinct")
+
+    def horizon_at(self, az_deg: float) -> float:
+        """The lowest allowed altitude towards azimuth ``az_deg`` (degrees, north 0, east 90)."""
+        if not self.horizon_profile:
+            return self.horizon_deg
+        az = az_deg % 360.0
+        points = self.horizon_profile
+        # Interpolate between neighbours, wrapping from the last point through north to the first.
+        index = bisect_right([p[0] for p in points], az)
+        (az0, alt0) = points[index - 1] if index > 0 else (points[-1][0] - 360.0, points[-1][1])
+        (az1, alt1) = points[index] if index < len(points) else (points[0][0] + 360.0, points[0][1])
+        profile = alt0 if az1 == az0 else alt0 + (alt1 - alt0) * (az - az0) / (az1 - az0)
+        return max(self.horizon_deg, profile)
+
+    def check_altaz(self, alt_deg: float, az_deg: float, *, what: str = "target") -> None:
+        """Raise :class:`LimitError` unless (``alt_deg``, ``az_deg``) may be pointed at."""
+        if not (math.isfinite(alt_deg) and math.isfinite(az_deg)):
+            raise InvalidValueError(f"{what} position is not a number")
+        floor = self.horizon_at(az_deg)
+        if alt_deg < floor:
+            raise LimitError(
+                f"{what} is at altitude {alt_deg:.2f}° (azimuth {az_deg % 360.0:.1f}°), below the "
+                f"configured horizon of {floor:.2f}°: nothing was sent to the mount"
+            )
+        if alt_deg > self.max_altitude_deg:
+            raise LimitError(
+                f"{what} is at altitude {alt_deg:.2f}°, above the configured limit of "
+                f"{self.max_altitude_deg:.2f}°: nothing was sent to the mount"
+            )
