@@ -97,7 +97,7 @@ class RefractionModel:
         """Observed altitude for a true altitude: the exact inverse of :meth:`unrefract`."""
         true = as_float_array(true_alt_deg)
         observed = true + self.amount_deg(true)
-        # A contraction: |dR/dh| < 0.3 everywhere, so each step gains at least half a digit.
+        # A contraction: |dR/dh| < 0.5 for any air a Site allows, so each step halves the error.
         for _ in range(_MAX_ITERATIONS):
             updated = true + self.amount_deg(observed)
             step = np.abs(updated - observed)
