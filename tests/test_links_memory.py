@@ -93,7 +93,8 @@ async def test_drain_input_gives_up_on_a_line_that_never_falls_silent() -> None:
     finally:
         babbler.cancel()
     assert 0.2 <= elapsed < 0.5
-    assert discarded and set(discarded) == {0}
+    assert len(discarded) >= 10
+    assert set(discarded) == {0}
 
 
 async def test_context_manager_closes_and_zero_byte_reads_are_refused() -> None:

@@ -57,12 +57,15 @@ async def test_opening_and_closing_never_stall_the_event_loop() -> None:
 
 async def test_socket_url_reports_the_server_hanging_up() -> None:
     async def hang_up(link: Link) -> None:
+        # Answer first: pyserial discards input that arrives while it opens the port.
+        await link.read()
         await link.write(b"#")
 
     async with (
         await serve_tcp(hang_up) as server,
         await open_serial(f"socket://127.0.0.1:{server.port}") as link,
     ):
+        await link.write(b"?")
         assert await asyncio.wait_for(link.read(), 2.0) == b"#"
         with pytest.raises(LinkClosedError):
             await asyncio.wait_for(link.read(), 2.0)

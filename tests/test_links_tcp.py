@@ -52,7 +52,10 @@ async def test_client_read_after_server_hangs_up_raises_link_closed() -> None:
     async def say_bye(link: Link) -> None:
         await link.write(b"bye")
 
-    async with await serve_tcp(say_bye) as server, await open_tcp("127.0.0.1", server.port) as client:
+    async with (
+        await serve_tcp(say_bye) as server,
+        await open_tcp("127.0.0.1", server.port) as client,
+    ):
         assert await client.read_exactly(3) == b"bye"
         with pytest.raises(LinkClosedError, match="closed by the peer"):
             await asyncio.wait_for(client.read(), 2.0)

@@ -1,0 +1,117 @@
+"""Wire pacing: measured throughput over memory and TCP links matches the line rate."""
+
+import asyncio
+import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+import pytest
+
+from scopelink.links import Link, memory_pair, open_tcp, paced, serve_tcp
+
+BAUD = 9600
+
+
+@asynccontextmanager
+async def memory_link_pair() -> AsyncIterator[tuple[Link, Link]]:
+    sender, receiver = memory_pair()
+    async with sender, receiver:
+        yield sender, receiver
+
+
+@asynccontextmanager
+async def tcp_link_pair() -> AsyncIterator[tuple[Link, Link]]:
+    accepted: asyncio.Queue[Link] = asyncio.Queue()
+    done = asyncio.Event()
+
+    async def hand_over(link: Link) -> None:
+        await accepted.put(link)
+        await done.wait()
+
+    async with (
+        await serve_tcp(hand_over) as server,
+        await open_tcp("127.0.0.1", server.port) as sender,
+    ):
+        receiver = await asyncio.wait_for(accepted.get(), 2.0)
+        yield sender, receiver
+        done.set()
+
+
+PAIRS = {"memory": memory_link_pair, "tcp": tcp_link_pair}
+
+
+async def receive(link: Link, count: int, arrivals: list[tuple[float, int]]) -> None:
+    """Read ``count`` bytes, noting (time, bytes so far) at each arrival."""
+    total = 0
+    while total < count:
+        total += len(await link.read())
+        arrivals.append((time.monotonic(), total))
+
+
+@pytest.mark.parametrize("bits_per_byte", [10, 11])
+@pytest.mark.parametrize("pair", sorted(PAIRS))
+async def test_a_burst_leaves_at_the_line_rate(pair: str, bits_per_byte: int) -> None:
+    count = 800
+    byte_seconds = bits_per_byte / BAUD
+    async with PAIRS[pair]() as (sender, receiver):
+        line = paced(sender, BAUD, bits_per_byte)
+        arrivals: list[tuple[float, int]] = []
+        reader = asyncio.create_task(receive(receiver, count, arrivals))
+        started = time.monotonic()
+        await line.write(bytes(range(256)) * 3 + bytes(32))
+        written = time.monotonic()
+        await asyncio.wait_for(reader, 5.0)
+    expected = count * byte_seconds
+    assert written - started == pytest.approx(expected, rel=0.02)
+    assert arrivals[-1][0] - started == pytest.approx(expected, rel=0.02)
+    # Never early: byte k may arrive only once k + 1 byte-times have passed.
+    for arrived_at, so_far in arrivals:
+        assert arrived_at - started >= so_far * byte_seconds - 1e-4
+
+
+async def test_back_to_back_small_writes_do_not_drift() -> None:
+    byte_seconds = 10 / BAUD
+    async with memory_link_pair() as (sender, receiver):
+        line = paced(sender, BAUD, 10)
+        reader = asyncio.create_task(receive(receiver, 800, []))
+        started = time.monotonic()
+        for _ in range(400):
+            await line.write(b":j")
+        elapsed = time.monotonic() - started
+        await reader
+    assert elapsed == pytest.approx(800 * byte_seconds, rel=0.02)
+
+
+async def test_an_idle_line_banks_no_credit() -> None:
+    byte_seconds = 11 / BAUD
+    async with memory_link_pair() as (sender, receiver):
+        line = paced(sender, BAUD, 11)
+        await line.write(b"Q")
+        await asyncio.sleep(0.3)  # idle long enough to have "earned" 260 bytes
+        reader = asyncio.create_task(receive(receiver, 1 + 400, []))
+        started = time.monotonic()
+        await line.write(b"R" * 400)
+        elapsed = time.monotonic() - started
+        await reader
+    assert elapsed == pytest.approx(400 * byte_seconds, rel=0.02)
+
+
+async def test_concurrent_writers_queue_rather_than_interleave() -> None:
+    async with memory_link_pair() as (sender, receiver):
+        line = paced(sender, 96000, 10)
+        await asyncio.gather(line.write(b"a" * 50), line.write(b"b" * 50))
+        received = await receiver.read_exactly(100)
+    assert received in (b"a" * 50 + b"b" * 50, b"b" * 50 + b"a" * 50)
+
+
+async def test_paced_link_keeps_the_name_reads_through_and_closes_the_inner_link() -> None:
+    sender, receiver = memory_pair(("pc", "scope"))
+    line = paced(sender, BAUD, 11)
+    assert line.name == "pc"
+    assert (line.baudrate, line.bits_per_byte) == (BAUD, 11)
+    await receiver.write(b"A")
+    assert await line.read() == b"A"
+    await line.close()
+    assert sender.closed
+    with pytest.raises(ValueError, match="positive"):
+        paced(receiver, 0, 10)
