@@ -112,7 +112,9 @@ def test_parse_never_raises_anything_but_value_error(text: str) -> None:
     st.sampled_from(STYLES),
 )
 @settings(max_examples=300, deadline=None)
-def test_hours_format_then_parse_round_trip(hours: float, decimals: int, style: SexagesimalStyle) -> None:
+def test_hours_format_then_parse_round_trip(
+    hours: float, decimals: int, style: SexagesimalStyle
+) -> None:
     back = parse_hours(format_hours(hours, decimals=decimals, style=style))
     error_s = abs(wrap_hour_angle(back - hours)) * 3600
     assert error_s <= 0.5 * 10**-decimals + 1e-9

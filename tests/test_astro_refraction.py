@@ -35,7 +35,9 @@ sites = st.builds(
 
 def test_erfa_refco_example() -> None:
     # SOFA/ERFA t_refco: 800 hPa, 10 °C, 90 % humidity, 0.4 µm.
-    site = Site(0.0, 0.0, pressure_hpa=800, temperature_c=10, relative_humidity=0.9, wavelength_um=0.4)
+    site = Site(
+        0.0, 0.0, pressure_hpa=800, temperature_c=10, relative_humidity=0.9, wavelength_um=0.4
+    )
     model = RefractionModel.for_site(site)
     assert model.a_rad == pytest.approx(0.2264949956241415009e-3, abs=1e-15)
     assert model.b_rad == pytest.approx(-0.2598658261729343970e-6, abs=1e-18)
@@ -82,7 +84,7 @@ def test_continuous_and_decreasing_from_minus_one_to_zenith(site: Site) -> None:
     assert np.max(np.abs(steps)) <= 0.5 * (altitudes[1] - altitudes[0])
     # Across each blend edge the left and right limits agree.
     for edge in (BLEND_LOW_DEG, BLEND_HIGH_DEG):
-        below, above = refraction_deg(np.array([edge - 1e-9, edge + 1e-9]), site)
+        below, above = np.asarray(refraction_deg(np.array([edge - 1e-9, edge + 1e-9]), site))
         assert abs(below - above) < 1e-9
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any, Protocol, TypeAlias, runtime_checkable
+from typing import Any, Protocol, TypeAlias, overload, runtime_checkable
 
 import erfa
 import numpy as np
@@ -172,14 +172,32 @@ def check_ut1_minus_utc(ut1_minus_utc_s: float) -> None:
         )
 
 
+def _atomic_pair(t: TimeLike) -> tuple[str, FloatArray, FloatArray] | None:
+    """(scale, jd1, jd2) when ``t`` is already in TAI or TT: no leap-second table needed."""
+    if isinstance(t, SupportsJulianDate) and not isinstance(t, tuple | datetime):
+        scale = str(t.scale).lower()
+        if scale in ("tai", "tt"):
+            jd1, jd2 = np.broadcast_arrays(as_float_array(t.jd1), as_float_array(t.jd2))
+            return scale, jd1, jd2
+    return None
+
+
 def tai_pair(t: TimeLike) -> tuple[FloatArray, FloatArray]:
     """TAI two-part Julian date of ``t`` as float arrays."""
-    tai1, tai2 = erfa.utctai(*utc_pair(t))
+    atomic = _atomic_pair(t)
+    if atomic is None:
+        tai1, tai2 = erfa.utctai(*utc_pair(t))
+    else:
+        scale, jd1, jd2 = atomic
+        tai1, tai2 = erfa.tttai(jd1, jd2) if scale == "tt" else (jd1, jd2)
     return as_float_array(tai1), as_float_array(tai2)
 
 
 def tt_pair(t: TimeLike) -> tuple[FloatArray, FloatArray]:
     """TT two-part Julian date of ``t`` as float arrays."""
+    atomic = _atomic_pair(t)
+    if atomic is not None and atomic[0] == "tt":
+        return atomic[1], atomic[2]
     tt1, tt2 = erfa.taitt(*tai_pair(t))
     return as_float_array(tt1), as_float_array(tt2)
 
@@ -195,21 +213,37 @@ def _public(pair: tuple[FloatArray, FloatArray]) -> tuple[FloatOrArray, FloatOrA
     return scalar_or_array(pair[0]), scalar_or_array(pair[1])
 
 
+@overload
+def utc_jd(t: ScalarTime) -> tuple[float, float]: ...
+@overload
+def utc_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]: ...
 def utc_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]:
     """UTC two-part quasi Julian date (ERFA convention) of ``t``."""
     return _public(utc_pair(t))
 
 
+@overload
+def tai_jd(t: ScalarTime) -> tuple[float, float]: ...
+@overload
+def tai_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]: ...
 def tai_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]:
     """TAI two-part Julian date of ``t``."""
     return _public(tai_pair(t))
 
 
+@overload
+def tt_jd(t: ScalarTime) -> tuple[float, float]: ...
+@overload
+def tt_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]: ...
 def tt_jd(t: TimeLike) -> tuple[FloatOrArray, FloatOrArray]:
     """TT two-part Julian date of ``t`` (TT = TAI + 32.184 s)."""
     return _public(tt_pair(t))
 
 
+@overload
+def ut1_jd(t: ScalarTime, ut1_minus_utc_s: float = 0.0) -> tuple[float, float]: ...
+@overload
+def ut1_jd(t: TimeLike, ut1_minus_utc_s: float = 0.0) -> tuple[FloatOrArray, FloatOrArray]: ...
 def ut1_jd(t: TimeLike, ut1_minus_utc_s: float = 0.0) -> tuple[FloatOrArray, FloatOrArray]:
     """UT1 two-part Julian date of ``t``, given DUT1 = UT1 - UTC in seconds (|DUT1| <= 0.9)."""
     return _public(ut1_pair(t, ut1_minus_utc_s))
