@@ -47,6 +47,7 @@ from scopelink.protocol.skytracker import (
 
 from .test_skytracker_support import (
     calfloat_values,
+    canonical_calfloat_bytes,
     chunk_cuts,
     drain,
     feed,
@@ -312,9 +313,20 @@ def test_replies_round_trip_server_to_client(data: st.DataObject) -> None:
     client.send(command)
     wire = reply.encode() if isinstance(reply, BusAnswer) else TrackerServer().send(reply)
     assert len(wire) == command.reply.size
-    client.receive_data(wire)
-    assert drain(client) == [reply]
+    assert feed(client, wire, range(len(wire))) == [reply]  # one byte at a time
     assert reply.describe()
+
+
+@given(st.sampled_from([StatusReply, CalibrationReply, VersionReply, GuideSpeedReply]), st.data())
+def test_reply_bytes_decode_and_re_encode_identically(
+    reply_type: type[Reply], data: st.DataObject
+) -> None:
+    wire = data.draw(st.binary(min_size=reply_type.size, max_size=reply_type.size))
+    if reply_type is CalibrationReply:
+        wire = data.draw(canonical_calfloat_bytes) + data.draw(canonical_calfloat_bytes)
+    elif reply_type is VersionReply:
+        wire = bytes(b & 0x7F for b in wire)
+    assert reply_type.decode(wire).encode() == wire
 
 
 @given(st.lists(tracker_commands, max_size=12), st.data())
