@@ -70,7 +70,8 @@ def test_erfa_atoc13_example_j2000_to_observed() -> None:
 
 def test_erfa_atoi13_example_observed_to_apparent() -> None:
     # t_atoi13 "A": the same observed direction -> CIRS
-    # (2.710121574448138676, 0.1729371839116608781) rad; with EO = -0.003020548354802412839 rad (t_atco13) the equinox-based RA is RA_CIRS - EO.
+    # (2.710121574448138676, 0.1729371839116608781) rad. With EO = -0.003020548354802412839 rad
+    # (t_atco13) the equinox-based RA is RA_CIRS - EO.
     azimuth, zenith_distance = 0.09233952224794989993, 1.407758704513722461
     ra, dec = observed_to_apparent(
         90 - math.degrees(zenith_distance),
