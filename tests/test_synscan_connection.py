@@ -159,6 +159,15 @@ def test_bytes_without_a_command_in_flight_are_unexpected() -> None:
     assert client.next_event() is NEED_DATA
 
 
+def test_bytes_received_before_a_send_are_not_its_reply() -> None:
+    client = SynScanClientConnection()
+    client.receive_data(b"\x05")
+    client.send(GetModel())
+    client.receive_data(b"\x06#")
+    assert client.next_event() == UnexpectedData(b"\x05")
+    assert client.next_event() == Model(6)
+
+
 def test_failed_passthrough_is_a_reply_not_an_error() -> None:
     client = SynScanClientConnection()
     client.send(FixedRateSlew(Axis.AZM_RA, True, 4))

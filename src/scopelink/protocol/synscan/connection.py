@@ -44,6 +44,9 @@ class SynScanClientConnection:
     """The PC side of a SynScan link: one command in flight, its reply read by exact length and
     shape.
 
+    Bytes received before a command is sent are never read as its reply: `next_event` reports them
+    as `UnexpectedData` first.
+
     After `reset` (the driver timed out or saw a malformed reply) the connection is resynchronising:
     while the first `Echo` sent after it waits for its reply, bytes before the echoed byte + ``#``
     are reported as `UnexpectedData` instead of failing the reply, so late replies to earlier
@@ -54,6 +57,7 @@ class SynScanClientConnection:
         self._in_flight: AnyCommand | None = None
         self._state = ClientState.IDLE
         self._resynchronising = False
+        self._stale = b""
 
     @property
     def state(self) -> ClientState:
@@ -73,6 +77,9 @@ class SynScanClientConnection:
                 + (f" ({self._in_flight.describe()!r})" if self._in_flight else "; call reset()")
             )
         data = encode_command(command)
+        if self._buffer:
+            # these bytes arrived before the command was written, so they cannot be its reply
+            self._stale += self._take(len(self._buffer))
         self._in_flight = command
         self._state = ClientState.AWAITING_REPLY
         return data
@@ -83,6 +90,9 @@ class SynScanClientConnection:
 
     def next_event(self) -> AnyReply | ClientError | NeedData:
         """The reply to the command in flight, an error event, or `NEED_DATA`."""
+        if self._stale:
+            stale, self._stale = self._stale, b""
+            return UnexpectedData(stale)
         if not self._buffer:
             return NEED_DATA
         if self._in_flight is None:
@@ -112,7 +122,8 @@ class SynScanClientConnection:
         self._in_flight = None
         self._state = ClientState.IDLE
         self._resynchronising = True
-        return self._take(len(self._buffer))
+        dropped, self._stale = self._stale + self._take(len(self._buffer)), b""
+        return dropped
 
     def _take(self, count: int) -> bytes:
         taken = bytes(self._buffer[:count])
