@@ -24,7 +24,7 @@ EXIT_USAGE = 2
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="scopelink",
-        description="PC control, emulation and bridging of SynScan and Sky Tracker telescope mounts.",
+        description="Control, emulate and bridge SynScan and Sky Tracker telescope mounts.",
     )
     parser.add_argument("--version", action="version", version=f"scopelink {__version__}")
     parser.add_argument(
