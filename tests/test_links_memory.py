@@ -16,6 +16,14 @@ async def test_bytes_flow_both_ways() -> None:
     assert (pc.name, mount.name) == ("pc", "mount")
 
 
+async def test_any_bytes_like_object_can_be_written_and_empty_writes_send_nothing() -> None:
+    a, b = memory_pair()
+    await a.write(b"")
+    await a.write(bytearray(b"ab"))
+    await a.write(memoryview(b"xcd")[1:])
+    assert await b.read() == b"abcd"
+
+
 async def test_read_returns_at_most_max_bytes_and_keeps_the_rest() -> None:
     a, b = memory_pair()
     await a.write(b"abcdef")

@@ -88,14 +88,15 @@ class Link(ABC):
             received += await self.read(count - len(received))
         return bytes(received)
 
-    async def write(self, data: bytes) -> None:
+    async def write(self, data: bytes | bytearray | memoryview) -> None:
         """Send ``data``; return once it is handed to the OS (or the wire pacing allows)."""
         self._raise_if_closed()
-        if not data:
+        payload = bytes(data)
+        if not payload:
             return
-        trace_transfer("-->", self._name, data)
+        trace_transfer("-->", self._name, payload)
         try:
-            await self._write_all(bytes(data))
+            await self._write_all(payload)
         except LinkClosedError:
             self._closed = True
             raise
