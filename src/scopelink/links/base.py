@@ -58,7 +58,10 @@ class Link(ABC):
 
     @property
     def closed(self) -> bool:
-        """True once :meth:`close` was called or the other end was seen to go away."""
+        """True once :meth:`close` was called or the other end was seen to go away.
+
+        Either way the link's resources are released; calling :meth:`close` again is harmless.
+        """
         return self._closed
 
     async def read(self, max_bytes: int = DEFAULT_READ_SIZE) -> bytes:
@@ -72,7 +75,7 @@ class Link(ABC):
         try:
             data = await self._read_some(max_bytes)
         except LinkClosedError:
-            self._closed = True
+            await self._release_after_end()
             raise
         trace_transfer("<--", self._name, data)
         return data
@@ -98,7 +101,7 @@ class Link(ABC):
         try:
             await self._write_all(payload)
         except LinkClosedError:
-            self._closed = True
+            await self._release_after_end()
             raise
 
     async def close(self) -> None:
@@ -137,6 +140,11 @@ class Link(ABC):
     def __repr__(self) -> str:
         state = "closed" if self._closed else "open"
         return f"<{type(self).__name__} {self._name!r} {state}>"
+
+    async def _release_after_end(self) -> None:
+        """The stream ended under us: nothing more can pass, so free the resources now."""
+        self._closed = True
+        await self._close_transport()
 
     def _raise_if_closed(self) -> None:
         if self._closed:
