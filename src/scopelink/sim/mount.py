@@ -1,0 +1,566 @@
+"""The simulated mount: a :class:`~scopelink.mount.Mount` made of two :class:`Axis` and a clock.
+
+Nothing runs in the background. Every command plans the axes' motion from "now" in closed form
+(slews, ramps, tracking that follows the target through ``astro``, guide pulses, and a stop where
+continuous motion would cross the horizon or a mechanical limit), and every reading evaluates
+that plan at the clock's current time. So a stepped clock advanced by a test, or a clock running
+x1000, gives exactly the same positions. See ``docs/simulator.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from datetime import datetime
+
+from scopelink.astro import (
+    PierSide,
+    Site,
+    angular_separation_deg,
+    j2000_to_apparent,
+    j2000_to_observed,
+    observed_to_j2000,
+)
+from scopelink.mount import (
+    Capabilities,
+    GuideDirection,
+    Identity,
+    Limits,
+    Mount,
+    MountAxis,
+    MountState,
+    TrackingMode,
+)
+from scopelink.mount.types import AlignmentMode
+from scopelink.sim.axis import Axis, Trajectory
+from scopelink.sim.clock import SimClock
+from scopelink.sim.geometry import Geometry, geometry_for
+from scopelink.sim.models import EQ6, MountModel
+from scopelink.sim.tracking import SkyPath, SkyTarget, ra_drift_hours_per_s
+
+__all__ = ["LimitStop", "SimulatedMount"]
+
+_FOREVER = math.inf
+_TRACKING_LOOKAHEAD_S = 86400.0
+"""How far ahead tracking is checked against the horizon and the mechanical limits."""
+_SEARCH_STEP_DEG = 2.0
+"""Largest motion between two checks of the limits (a crossing is then found by bisection)."""
+_SEARCH_MAX_STEP_S = 900.0
+_SEARCH_RAMP_STEP_S = 0.1
+_SEARCH_RESOLUTION_S = 1e-6
+_LANDING_TOLERANCE_S = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class LimitStop:
+    """Motion stopped (or scheduled to stop) by the physics at elapsed time ``at_s``."""
+
+    at_s: float
+    reason: str
+
+
+class SimulatedMount(Mount):
+    """A simulated mount of a given :class:`MountModel`.
+
+    ``clock`` defaults to a real-time :class:`SimClock`; tests pass ``SimClock.stepped(...)``.
+    ``home`` are the counters at power-on (default: the geometry's home: counterweight down at
+    the pole, or level pointing north); ``park_position`` defaults to ``home``. ``aligned``
+    is what the mount reports before any sync (the simulation is always physically perfect).
+    """
+
+    def __init__(
+        self,
+        model: MountModel = EQ6,
+        *,
+        site: Site,
+        clock: SimClock | None = None,
+        limits: Limits | None = None,
+        aligned: bool = True,
+        home: tuple[float, float] | None = None,
+        park_position: tuple[float, float] | None = None,
+        meridian_tolerance_deg: float = 7.5,
+        guide_rate_deg_s: float | None = None,
+    ) -> None:
+        self.clock = clock if clock is not None else SimClock()
+        super().__init__(site=site, limits=limits, clock=self.clock.now)
+        self.model = model
+        self._meridian_tolerance_deg = meridian_tolerance_deg
+        self.geometry: Geometry = self._make_geometry(site)
+        start = home if home is not None else self.geometry.home
+        self.axes: tuple[Axis, Axis] = tuple(  # type: ignore[assignment]
+            Axis(
+                name,
+                max_rate_deg_s=model.max_rate_deg_s,
+                acceleration_deg_s2=model.acceleration_deg_s2,
+                time_source=self.clock.elapsed,
+                position_deg=position,
+                wrap=wraps,
+            )
+            for name, position, wraps in (
+                ("primary", start[0], self.geometry.primary_wraps),
+                ("secondary", start[1], False),
+            )
+        )
+        self.park_position: tuple[float, float] = park_position or start
+        self.guide_rate_deg_s = (
+            guide_rate_deg_s if guide_rate_deg_s is not None else model.guide_rate_deg_s
+        )
+        self._aligned = aligned
+        self._connected = False
+        self._parked = False
+        self._tracking = TrackingMode.OFF
+        self._goto_until = -_FOREVER
+        self._moving_until = [-_FOREVER, -_FOREVER]
+        self._pulse_until = [-_FOREVER, -_FOREVER]
+        self._limit_stop: LimitStop | None = None
+        self._capabilities = self._make_capabilities()
+
+    # --- identity -------------------------------------------------------------------------------
+
+    @property
+    def capabilities(self) -> Capabilities:
+        return self._capabilities
+
+    @property
+    def identity(self) -> Identity:
+        return Identity("simulator", self.model.name, firmware="scopelink-sim", link="memory")
+
+    # --- reading --------------------------------------------------------------------------------
+
+    def elapsed(self) -> float:
+        """Elapsed simulated seconds (the time base of the axes)."""
+        return self.clock.elapsed()
+
+    @property
+    def tracking(self) -> TrackingMode:
+        """The tracking mode in force now."""
+        self._settle(self.elapsed())
+        return self._tracking
+
+    @property
+    def aligned(self) -> bool:
+        return self._aligned
+
+    def set_aligned(self, aligned: bool) -> None:
+        """Set what the mount reports as its alignment state (e.g. after a star alignment)."""
+        self._aligned = aligned
+
+    @property
+    def goto_in_progress(self) -> bool:
+        """Whether a goto, park or axis slew has not landed yet (SynScan ``L``)."""
+        return self.elapsed() < self._goto_until
+
+    @property
+    def limit_stop(self) -> LimitStop | None:
+        """The last stop at the horizon or a mechanical limit (planned or past), if any."""
+        return self._limit_stop
+
+    def counters_at(self, t: float) -> tuple[float, float]:
+        """Both axis counters (unwrapped degrees) at elapsed ``t``."""
+        return self.axes[0].unwrapped_position_at(t), self.axes[1].unwrapped_position_at(t)
+
+    def observed_at(self, t: float) -> tuple[float, float]:
+        """Observed (altitude, azimuth) the mount believes it points at, at elapsed ``t``."""
+        return self.geometry.to_observed(*self.counters_at(t))
+
+    def j2000_at(self, t: float) -> tuple[float, float]:
+        """J2000 (RA hours, Dec degrees) the mount believes it points at, at elapsed ``t``."""
+        alt, az = self.observed_at(t)
+        return observed_to_j2000(alt, az, self.clock.datetime_at(t), self._site)
+
+    def state_at(self, t: float) -> MountState:
+        """The exact state at elapsed ``t`` (does not publish it)."""
+        self._settle(t)
+        primary, secondary = self.counters_at(t)
+        alt, az = self.geometry.to_observed(primary, secondary)
+        when = self.clock.datetime_at(t)
+        ra, dec = observed_to_j2000(alt, az, when, self._site)
+        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, when)
+        moving = any(t < until for until in self._moving_until)
+        problems: tuple[str, ...] = ()
+        if self._limit_stop is not None and self._limit_stop.at_s <= t:
+            problems = (self._limit_stop.reason,)
+        return MountState(
+            read_at=when,
+            connected=self._connected,
+            ra_j2000_hours=ra,
+            dec_j2000_deg=dec,
+            ra_of_date_hours=ra_of_date,
+            dec_of_date_deg=dec_of_date,
+            alt_deg=alt,
+            az_deg=az,
+            pier_side=self.geometry.pier_side(primary, secondary),
+            slewing=t < self._goto_until or moving,
+            tracking=self._tracking,
+            parked=self._parked,
+            aligned=self._aligned,
+            pulse_guiding=any(t < until for until in self._pulse_until),
+            problems=problems,
+        )
+
+    def snapshot(self) -> MountState:
+        """Compute, publish and return the state now, without awaiting."""
+        state = self.state_at(self.elapsed())
+        self._publish(state)
+        return state
+
+    def step(self, seconds: float) -> MountState:
+        """Advance the clock by ``seconds`` and return the state then (deterministic)."""
+        self.clock.advance(seconds)
+        return self.snapshot()
+
+    def sync_distance_deg(self, ra_j2000_hours: float, dec_j2000_deg: float) -> float:
+        """How far (degrees) a J2000 position is from where the mount believes it points."""
+        ra, dec = self.j2000_at(self.elapsed())
+        return angular_separation_deg(ra * 15.0, dec, ra_j2000_hours * 15.0, dec_j2000_deg)
+
+    # --- connection -----------------------------------------------------------------------------
+
+    async def connect(self) -> None:
+        self._connected = True
+        self.snapshot()
+
+    async def disconnect(self) -> None:
+        self._stop_motion(self.elapsed())
+        self._connected = False
+        self.snapshot()
+
+    async def refresh(self) -> MountState:
+        return self.snapshot()
+
+    # --- Mount hooks ----------------------------------------------------------------------------
+
+    async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        if self._tracking is TrackingMode.OFF:
+            # SynScan: a goto RA/Dec enables tracking if it is stopped.
+            self._tracking = self._default_tracking()
+        target = SkyTarget(ra_j2000_hours, dec_j2000_deg, t, ra_drift_hours_per_s(self._tracking))
+        alt, az = j2000_to_observed(
+            ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
+        )
+        side = self.geometry.choose_side(alt, az, self._side_at(t))
+        path = self._path(target, t, side)
+        self._clear_motion_flags()
+        landings = [self._land_on(axis, trajectory, t) for axis, trajectory in self._pair(path)]
+        self._goto_until = max(landings)
+        self._enforce_limits(self._goto_until)
+        self.snapshot()
+
+    async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        # ASCOM requires tracking off for alt/az slews: the mount lands and holds still.
+        self._tracking = TrackingMode.OFF
+        side = self.geometry.choose_side(alt_deg, az_deg, self._side_at(t))
+        counters = self.geometry.to_axes(alt_deg, az_deg, side)
+        self._clear_motion_flags()
+        self._goto_until = max(
+            axis.slew_to(target, at=t) for axis, target in zip(self.axes, counters, strict=True)
+        )
+        self.snapshot()
+
+    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        alt, az = j2000_to_observed(
+            ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
+        )
+        counters = self.geometry.to_axes(alt, az, self._side_at(t))
+        for axis, counter in zip(self.axes, counters, strict=True):
+            current = axis.unwrapped_position_at(t)
+            axis.set_position(current + _wrap_signed(counter - current), at=t)
+        self._aligned = True
+        self._retarget(t)
+        self.snapshot()
+
+    async def _abort(self) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        self._stop_motion(t)
+        self.snapshot()
+
+    async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        index = axis.value
+        if t < self._goto_until:  # a manual move takes over from a goto, as on a hand control
+            self._goto_until = -_FOREVER
+        motor = self.axes[index]
+        end = motor.set_rate(rate_deg_s, at=t)
+        self._moving_until[index] = _FOREVER if rate_deg_s != 0.0 else end
+        if rate_deg_s == 0.0:
+            self._retarget(end)
+        self._enforce_limits(t)
+        self.snapshot()
+
+    async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        index, sign = self.geometry.guide_axis(direction, self.axes[1].unwrapped_position_at(t))
+        motor = self.axes[index]
+        duration = duration_ms / 1000.0
+        motor.set_rate(sign * self.guide_rate_deg_s, at=t)
+        end = motor.set_rate(0.0, at=t + duration)
+        self._pulse_until[index] = t + duration
+        self._retarget(end)
+        self._enforce_limits(t)
+        self.snapshot()
+
+    async def _set_tracking(self, mode: TrackingMode) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        self._tracking = mode
+        if t < self._goto_until:
+            # The goto's own landing decides; a change of rate applies from the landing on.
+            self._retarget(self._goto_until)
+        else:
+            self._retarget(t)
+        self._enforce_limits(max(t, self._goto_until))
+        self.snapshot()
+
+    async def _park(self) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        self._tracking = TrackingMode.OFF
+        self._clear_motion_flags()
+        self._goto_until = max(
+            axis.slew_to(target, at=t)
+            for axis, target in zip(self.axes, self.park_position, strict=True)
+        )
+        self._parked = True
+        self.snapshot()
+
+    async def _unpark(self) -> None:
+        self._parked = False
+        self.snapshot()
+
+    async def _set_site(self, site: Site) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        self._site = site
+        self.geometry = self._make_geometry(site)
+        self._retarget(t)
+        self._enforce_limits(t)
+        self.snapshot()
+
+    async def _set_time(self, utc: datetime) -> None:
+        t = self.elapsed()
+        self._settle(t)
+        self.clock.set_time(utc)
+        self._retarget(t)
+        self._enforce_limits(t)
+        self.snapshot()
+
+    # --- low-level access for device emulators ---------------------------------------------------
+
+    def set_axis_position(self, axis: MountAxis, position_deg: float) -> None:
+        """Redefine one axis counter (SynScan "set axis position"); the motor does not move."""
+        t = self.elapsed()
+        self._settle(t)
+        self.axes[axis.value].set_position(position_deg, at=t)
+        self._retarget(t)
+        self.snapshot()
+
+    def slew_axis_to(
+        self, axis: MountAxis, position_deg: float, *, max_rate_deg_s: float | None = None
+    ) -> float:
+        """Slew one axis counter to ``position_deg`` (SynScan "slow goto"); returns the landing.
+
+        Tracking, if on, resumes from wherever both axes are at the landing.
+        """
+        t = self.elapsed()
+        self._settle(t)
+        landing = self.axes[axis.value].slew_to(position_deg, max_rate_deg_s=max_rate_deg_s, at=t)
+        self._goto_until = max(self._goto_until, landing)
+        self._retarget(landing)
+        self._enforce_limits(landing)
+        self.snapshot()
+        return landing
+
+    # --- internals ------------------------------------------------------------------------------
+
+    def _make_geometry(self, site: Site) -> Geometry:
+        return geometry_for(
+            self.model.alignment_mode,
+            site.latitude_deg,
+            meridian_tolerance_deg=self._meridian_tolerance_deg,
+        )
+
+    def _make_capabilities(self) -> Capabilities:
+        equatorial = self.model.alignment_mode is not AlignmentMode.ALT_AZ
+        rates = {TrackingMode.OFF, TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR}
+        rates.add(TrackingMode.PEC if equatorial else TrackingMode.ALT_AZ)
+        return Capabilities(
+            alignment_mode=self.model.alignment_mode,
+            can_goto=True,
+            can_goto_altaz=True,
+            can_sync=True,
+            can_park=True,
+            can_set_park=True,
+            can_pulse_guide=True,
+            can_move_axis=(True, True),
+            max_axis_rate_deg_s=self.model.max_rate_deg_s,
+            tracking_modes=frozenset(rates),
+            can_set_site=True,
+            can_set_time=True,
+            can_report_pier_side=self.model.alignment_mode is AlignmentMode.GERMAN_POLAR,
+        )
+
+    def _default_tracking(self) -> TrackingMode:
+        if self.model.alignment_mode is AlignmentMode.ALT_AZ:
+            return TrackingMode.ALT_AZ
+        return TrackingMode.SIDEREAL
+
+    def _pair(self, path: SkyPath) -> tuple[tuple[Axis, Trajectory], ...]:
+        return ((self.axes[0], path.primary), (self.axes[1], path.secondary))
+
+    def _side_at(self, t: float) -> PierSide:
+        return self.geometry.pier_side(*self.counters_at(t))
+
+    def _path(self, target: SkyTarget, t: float, side: PierSide) -> SkyPath:
+        return SkyPath(
+            target,
+            geometry=self.geometry,
+            site=self._site,
+            epoch=self.clock.epoch,
+            side=side,
+            reference=self.counters_at(t),
+        )
+
+    def _path_from_here(self, t: float) -> SkyPath:
+        ra, dec = self.j2000_at(t)
+        drift = ra_drift_hours_per_s(self._tracking)
+        return self._path(SkyTarget(ra, dec, t, drift), t, self._side_at(t))
+
+    def _retarget(self, t: float) -> None:
+        """From elapsed ``t`` on, track the sky position the axes reach then (or stop tracking).
+
+        Continuous: motion in progress at ``t`` (a ramp, a guide pulse) carries on unchanged.
+        """
+        path = None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
+        for axis, trajectory in zip(
+            self.axes, (path.primary, path.secondary) if path else (None, None), strict=True
+        ):
+            axis.rebase(trajectory, at=t)
+
+    def _land_on(self, axis: Axis, trajectory: Trajectory, t: float) -> float:
+        """Slew ``axis`` so it meets the moving ``trajectory`` and follows it; returns landing.
+
+        Solves T = t + duration(trajectory(T)): fixed-point steps (a contraction, since the sky
+        moves far slower than the axis), then bisection if a tiny move makes that slow.
+        """
+
+        def landing(when: float) -> float:
+            return t + axis.slew_duration(trajectory(when), at=t)
+
+        when = landing(t)
+        for _ in range(6):
+            when = landing(when)
+        if abs(landing(when) - when) > _LANDING_TOLERANCE_S:
+            low, high = t, max(when, t) + 1.0
+            while landing(high) > high:
+                high = t + 2.0 * (high - t)
+            while high - low > _LANDING_TOLERANCE_S:
+                middle = 0.5 * (low + high)
+                low, high = (middle, high) if landing(middle) > middle else (low, middle)
+            when = high
+        return axis.slew_to(trajectory(when), at=t, then_follow=trajectory)
+
+    def _clear_motion_flags(self) -> None:
+        self._moving_until = [-_FOREVER, -_FOREVER]
+        self._limit_stop = None
+
+    def _stop_motion(self, t: float) -> None:
+        """Ramp both axes to rest; tracking, if on, resumes from the rest point."""
+        rest = max(axis.stop(at=t) for axis in self.axes)
+        self._goto_until = min(self._goto_until, rest)
+        self._moving_until = [min(until, rest) for until in self._moving_until]
+        self._retarget(rest)
+        self._enforce_limits(rest)
+
+    def _settle(self, t: float) -> None:
+        """Apply what the plan says has happened by ``t`` (a stop at a limit ends tracking)."""
+        stop = self._limit_stop
+        if stop is not None and stop.at_s <= t:
+            self._tracking = TrackingMode.OFF
+            self._moving_until = [min(until, stop.at_s) for until in self._moving_until]
+
+    # --- horizon and mechanical limits ------------------------------------------------------------
+
+    def _margin_at(self, t: float, *, exact: bool = False) -> float:
+        """How far (degrees) the physical rest point at ``t`` is inside every limit.
+
+        Braking from a tracking rate moves < 1e-5°, so the coarse search counts only kinematic
+        motion (one sky evaluation per step); ``exact`` adds the tracking rate too.
+        """
+        physical = []
+        for axis in self.axes:
+            if exact:
+                rest = axis.rest_position_if_stopped_at(t)
+            else:
+                _, rate = axis.segment_at(t).kinematic_at(t)
+                braking = rate * abs(rate) / (2.0 * axis.acceleration_deg_s2)
+                rest = axis.unwrapped_position_at(t) + braking
+            physical.append(rest - axis.counter_offset_deg)
+        alt, az = self.geometry.to_observed(physical[0], physical[1])
+        return min(
+            alt - self._limits.horizon_at(az),
+            self._limits.max_altitude_deg - alt,
+            self.geometry.axis_margin_deg(physical[0], physical[1]),
+        )
+
+    def _search_step(self, t: float) -> float:
+        step = _SEARCH_MAX_STEP_S
+        for axis in self.axes:
+            rate = abs(axis.rate_at(t))
+            if rate > 0.0:
+                step = min(step, _SEARCH_STEP_DEG / rate)
+            if axis.segment_at(t).acceleration_deg_s2 != 0.0:
+                step = min(step, _SEARCH_RAMP_STEP_S)
+            change = axis.next_change_after(t)
+            if change is not None and change - t > _SEARCH_RESOLUTION_S:
+                step = min(step, change - t)
+        return step
+
+    def _search_end(self, start: float) -> float:
+        finals = [axis.final_segment for axis in self.axes]
+        settled = max(start, *(segment.start_s for segment in finals))
+        if any(segment.follow is not None for segment in finals):
+            return settled + _TRACKING_LOOKAHEAD_S
+        rates = [abs(segment.rate_deg_s) for segment in finals if segment.rate_deg_s != 0.0]
+        if rates:
+            return settled + min(_TRACKING_LOOKAHEAD_S, 400.0 / min(rates))
+        return settled
+
+    def _enforce_limits(self, start: float) -> None:
+        """Stop continuous motion from ``start`` on where it would cross a limit."""
+        self._limit_stop = None
+        floor = min(0.0, self._margin_at(start)) - 1e-9
+        end = self._search_end(start)
+        previous = t = start
+        while True:
+            if self._margin_at(t) < floor:
+                break
+            if t >= end:
+                return
+            previous, t = t, min(t + self._search_step(t), end)
+        low, high = previous, t
+        while high - low > _SEARCH_RESOLUTION_S:
+            middle = 0.5 * (low + high)
+            inside = self._margin_at(middle, exact=True) >= floor
+            low, high = (middle, high) if inside else (low, middle)
+        for axis in self.axes:
+            axis.stop(at=low)
+        self._goto_until = min(self._goto_until, low)
+        alt, az = self.observed_at(low)
+        self._limit_stop = LimitStop(
+            low,
+            f"motion stopped at a limit (altitude {alt:.2f}°, azimuth {az:.1f}°): the horizon, "
+            "the altitude limit or the meridian limit; move away or goto elsewhere",
+        )
+
+
+def _wrap_signed(degrees: float) -> float:
+    return (degrees + 180.0) % 360.0 - 180.0
