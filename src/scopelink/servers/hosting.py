@@ -1,0 +1,131 @@
+"""Put a device server on a link: a pseudo-terminal, a TCP port or an in-memory pair.
+
+:class:`HostedDevice` is an async context manager shared by every emulated device. It wraps each
+server-side link in 9600-baud pacing (unless told not to), runs the server's connection handler,
+and on exit closes the links and waits for the handler to return.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Self
+
+from scopelink.links import (
+    ConnectionHandler,
+    Link,
+    LinkClosedError,
+    TcpServer,
+    memory_pair,
+    open_pty,
+    paced,
+    serve_tcp,
+)
+
+__all__ = ["HostedDevice", "WireSpeed"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, slots=True)
+class WireSpeed:
+    """The line a device's replies leave at: ``baudrate`` and bits per byte (8N1 is 10)."""
+
+    baudrate: int = 9600
+    bits_per_byte: int = 10
+
+    def __post_init__(self) -> None:
+        if self.baudrate <= 0 or self.bits_per_byte <= 0:
+            raise ValueError(f"baud rate and bits per byte must be positive: {self}")
+
+
+class HostedDevice:
+    """Serves ``handler`` on one pty, TCP port or memory pair; ``wire=None`` disables pacing.
+
+    Start it with one of :meth:`on_pty`, :meth:`on_tcp` or :meth:`on_memory`; :attr:`address` then
+    says where clients connect. :meth:`close` (or leaving ``async with``) stops it.
+    """
+
+    def __init__(self, handler: ConnectionHandler, *, wire: WireSpeed | None = None) -> None:
+        self._handler = handler
+        self._wire = wire
+        self._tasks: list[asyncio.Task[None]] = []
+        self._links: list[Link] = []
+        self._tcp_server: TcpServer | None = None
+        self.address = ""
+        """The pty path, ``HOST:PORT``, or ``memory``, once started."""
+
+    def _paced(self, link: Link) -> Link:
+        if self._wire is None:
+            return link
+        return paced(link, self._wire.baudrate, self._wire.bits_per_byte)
+
+    async def on_pty(self, symlink: str | None = None) -> str:
+        """Serve a new pseudo-terminal; returns the path a client opens."""
+        pty = await open_pty(symlink)
+        self.address = pty.path
+        self._start(self._paced(pty))
+        return pty.path
+
+    async def on_tcp(self, host: str = "127.0.0.1", port: int = 0) -> tuple[str, int]:
+        """Listen on ``host:port`` (0 picks a free port); returns the bound address."""
+        self._tcp_server = await serve_tcp(self._serve_tcp_link, host=host, port=port)
+        server = self._tcp_server
+        self.address = (
+            f"[{server.host}]:{server.port}"
+            if ":" in server.host
+            else f"{server.host}:{server.port}"
+        )
+        return server.host, server.port
+
+    async def on_memory(self) -> Link:
+        """Serve one end of an in-memory pair; returns the client's end."""
+        device_end, client_end = memory_pair(("emulated device", "client"))
+        self.address = "memory"
+        self._start(self._paced(device_end))
+        return client_end
+
+    async def wait_closed(self) -> None:
+        """Wait until every served pty or memory link has ended (TCP servers run until closed)."""
+        if self._tasks:
+            await asyncio.gather(*self._tasks, return_exceptions=True)
+
+    async def close(self) -> None:
+        """Stop serving: close the links and the TCP server, wait for the handlers."""
+        if self._tcp_server is not None:
+            await self._tcp_server.close()
+        for link in self._links:
+            await link.close()
+        for task in self._tasks:
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+
+    async def __aenter__(self) -> Self:
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    def _start(self, link: Link) -> None:
+        self._links.append(link)
+        self._tasks.append(asyncio.create_task(self._run(link), name=f"serve {link.name}"))
+
+    async def _run(self, link: Link) -> None:
+        try:
+            await self._handler(link)
+        except LinkClosedError as exc:
+            logger.info("%s", exc)
+        finally:
+            with contextlib.suppress(LinkClosedError):
+                await link.close()
+
+    async def _serve_tcp_link(self, link: Link) -> None:
+        await self._handler(self._paced(link))

@@ -1,0 +1,369 @@
+"""The hand control itself: each SynScan command becomes calls on a Mount and one reply.
+
+One :class:`SynScanHandControl` per emulated device, shared by all its connections. It keeps what a
+real hand control keeps and the motor controllers do not: its alignment state, its clock and time
+zone, where the axes were at power-on, whether a goto it started is still running.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import replace
+from datetime import UTC, datetime, timedelta, timezone
+from typing import Protocol, runtime_checkable
+
+from scopelink.astro import angular_separation_deg
+from scopelink.mount import (
+    AlignmentMode,
+    Mount,
+    MountAxis,
+    MountError,
+    MountState,
+    PierSide,
+    TrackingMode,
+)
+from scopelink.protocol.synscan import (
+    Ack,
+    Aligned,
+    AnyCommand,
+    AnyReply,
+    Axis,
+    CancelGoto,
+    DateTime,
+    DeviceVersion,
+    Echo,
+    EchoReply,
+    FixedRateSlew,
+    GetAzAlt,
+    GetDeviceVersion,
+    GetLocation,
+    GetModel,
+    GetPointingState,
+    GetRaDec,
+    GetTime,
+    GetTrackingMode,
+    GetVersion,
+    GotoAzAlt,
+    GotoInProgress,
+    GotoRaDec,
+    IsAligned,
+    IsGotoInProgress,
+    Location,
+    Model,
+    Passthrough,
+    PassthroughFailed,
+    PassthroughReply,
+    PointingSide,
+    PointingState,
+    Position,
+    SetAxisPosition,
+    SetLocation,
+    SetTime,
+    SetTrackingMode,
+    SlowGoto,
+    SyncRaDec,
+    Tracking,
+    VariableRateSlew,
+)
+from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
+from scopelink.servers.synscan.config import SynScanConfig
+from scopelink.sim import SIDEREAL_RATE_DEG_S, synscan_fixed_rate_deg_s
+
+__all__ = ["AxisPositioning", "SynScanHandControl"]
+
+logger = logging.getLogger(__name__)
+
+GUIDING_RATES = frozenset({1, 2})
+"""Fixed rates that, while tracking equatorially, add to tracking instead of replacing it."""
+
+_FAILED_PASSTHROUGH_EXTRA = 0x01
+
+_AXES = {Axis.AZM_RA: MountAxis.PRIMARY, Axis.ALT_DEC: MountAxis.SECONDARY}
+
+_SYNSCAN_TRACKING = {
+    TrackingMode.OFF: Tracking.OFF,
+    TrackingMode.ALT_AZ: Tracking.ALT_AZ,
+    TrackingMode.SIDEREAL: Tracking.EQUATORIAL,
+    TrackingMode.LUNAR: Tracking.EQUATORIAL,
+    TrackingMode.SOLAR: Tracking.EQUATORIAL,
+    TrackingMode.PEC: Tracking.PEC,
+}
+_EQUATORIAL_TRACKING = frozenset(
+    {TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.PEC}
+)
+_MOUNT_TRACKING: dict[int, TrackingMode] = {
+    Tracking.OFF: TrackingMode.OFF,
+    Tracking.ALT_AZ: TrackingMode.ALT_AZ,
+    Tracking.EQUATORIAL: TrackingMode.SIDEREAL,
+    Tracking.PEC: TrackingMode.PEC,
+}
+
+
+@runtime_checkable
+class AxisPositioning(Protocol):
+    """What a mount offers for the passthrough slow goto and set-position commands (the
+    simulated mount does)."""
+
+    def set_axis_position(self, axis: MountAxis, position_deg: float) -> None:
+        """Declare that one axis counter now reads ``position_deg``, without moving it."""
+
+    def slew_axis_to(
+        self, axis: MountAxis, position_deg: float, *, max_rate_deg_s: float | None = None
+    ) -> float:
+        """Turn one axis counter to ``position_deg``; returns when (elapsed s) it lands."""
+
+
+class SynScanHandControl:
+    """The state and command semantics of one SynScan hand control in front of ``mount``.
+
+    Fixed rates 1-9 are the simulator's table of the hand control's speed keys.
+    Call :meth:`power_on` once before the first command.
+    """
+
+    def __init__(self, mount: Mount, config: SynScanConfig | None = None) -> None:
+        self.mount = mount
+        self.config = config or SynScanConfig()
+        self.aligned = self.config.aligned
+        self.clock_offset = timedelta(0)
+        """How far the hand control's clock is ahead of the mount's (set by ``H``)."""
+        self.utc_offset_hours = 0
+        self.dst = False
+        self._power_on_az_alt = (0.0, 0.0)
+        self._goto_running = False
+        self._goto_sticky = False
+        self._axis_rates: dict[MountAxis, float] = {}
+
+    async def power_on(self) -> None:
+        """Remember where the axes point now: unaligned Alt-Az positions are relative to it."""
+        state = await self.mount.refresh()
+        self._power_on_az_alt = (state.az_deg or 0.0, state.alt_deg or 0.0)
+
+    def now(self) -> datetime:
+        """The hand control's clock (UTC)."""
+        return self.mount.now() + self.clock_offset
+
+    async def answer(self, command: AnyCommand) -> AnyReply:
+        """Carry out ``command`` on the mount and return the reply a real hand control sends.
+
+        A command the mount refuses (below the horizon, parked, not supported) is still
+        acknowledged with ``#`` and changes nothing, as the hand control does.
+        """
+        try:
+            return await self._answer(command)
+        except MountError as error:
+            logger.info("%s refused: %s", command.describe(), error)
+            return Ack()
+
+    async def _answer(self, command: AnyCommand) -> AnyReply:
+        match command:
+            case GetRaDec(precise):
+                state = await self.mount.refresh()
+                return Position.from_ra_dec(
+                    state.ra_j2000_hours or 0.0, state.dec_j2000_deg or 0.0, precise
+                )
+            case GetAzAlt(precise):
+                az, alt = self._reported_az_alt(await self.mount.refresh())
+                return Position.from_az_alt(az, alt, precise)
+            case GotoRaDec():
+                await self._goto_ra_dec(command.ra_hours, command.dec_degrees)
+            case GotoAzAlt():
+                await self._goto_az_alt(command.az_degrees, command.alt_degrees)
+            case SyncRaDec():
+                await self._sync(command.ra_hours, command.dec_degrees)
+            case GetTrackingMode():
+                state = await self.mount.refresh()
+                return TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
+            case SetTrackingMode(mode):
+                await self._set_tracking(mode)
+            case FixedRateSlew(axis, positive, rate):
+                await self._fixed_rate(_AXES[axis], positive, rate)
+            case VariableRateSlew():
+                await self._move(_AXES[command.axis], command.arcsec_per_second / 3600.0)
+            case GetDeviceVersion():
+                return DeviceVersion(*self.config.motor_version)
+            case SlowGoto(axis, _) | SetAxisPosition(axis, _):
+                return await self._axis_position(command, _AXES[axis])
+            case Passthrough():
+                return self._unanswerable_passthrough(command)
+            case GetLocation():
+                site = self.mount.site
+                return Location.from_degrees(site.latitude_deg, site.longitude_deg)
+            case SetLocation(location):
+                site = replace(
+                    self.mount.site,
+                    latitude_deg=location.latitude,
+                    longitude_deg=(location.longitude + 180.0) % 360.0 - 180.0,
+                )
+                await self.mount.set_site(site)
+            case GetTime():
+                return self._local_time()
+            case SetTime(time):
+                self.clock_offset = time.to_datetime().astimezone(UTC) - self.mount.now()
+                self.utc_offset_hours, self.dst = time.utc_offset_hours, time.dst
+            case GetVersion():
+                return self.config.firmware
+            case GetModel():
+                return Model(self.config.model, self.config.quirks.model_swapped)
+            case Echo(value):
+                return EchoReply(value)
+            case IsAligned():
+                return Aligned(self.aligned)
+            case IsGotoInProgress():
+                return GotoInProgress(await self._goto_in_progress())
+            case CancelGoto():
+                await self._cancel()
+            case GetPointingState():
+                return PointingState(self._pointing_side(await self.mount.refresh()))
+        return Ack()
+
+    # --- positions --------------------------------------------------------------------------------
+
+    def _reported_az_alt(self, state: MountState) -> tuple[float, float]:
+        az, alt = state.az_deg or 0.0, state.alt_deg or 0.0
+        if self.aligned:
+            return az, alt
+        az0, alt0 = self._power_on_az_alt
+        return (az - az0) % 360.0, alt - alt0
+
+    def _pointing_side(self, state: MountState) -> PointingSide:
+        flipped = state.pier_side is PierSide.WEST
+        if self.mount.site.latitude_deg < 0:
+            flipped = not flipped
+        return PointingSide.WEST if flipped else PointingSide.EAST
+
+    # --- gotos and syncs --------------------------------------------------------------------------
+
+    async def _goto_ra_dec(self, ra_hours: float, dec_deg: float) -> None:
+        if not self.aligned:
+            logger.info("RA/Dec goto ignored: the hand control is not aligned")
+            return
+        await self.mount.goto_equatorial(*_fold_over_pole(ra_hours, dec_deg, 12.0))
+        self._goto_running, self._goto_sticky = True, False
+        if self.mount.state.tracking is TrackingMode.OFF:
+            await self.mount.set_tracking(self._sky_tracking_mode())
+
+    async def _goto_az_alt(self, az_deg: float, alt_deg: float) -> None:
+        if not self.aligned:
+            az0, alt0 = self._power_on_az_alt
+            az_deg, alt_deg = az_deg + az0, alt_deg + alt0
+        az_deg, alt_deg = _fold_over_pole(az_deg, alt_deg, 180.0)
+        await self.mount.goto_horizontal(alt_deg, az_deg)
+        self._goto_running = True
+        self._goto_sticky = self.config.quirks.sticky_altaz_goto
+
+    async def _sync(self, ra_hours: float, dec_deg: float) -> None:
+        if not self.aligned:
+            logger.info("sync ignored: the hand control is not aligned")
+            return
+        ra_hours, dec_deg = _fold_over_pole(ra_hours, dec_deg, 12.0)
+        limit = self.config.quirks.sync_limit_deg
+        state = await self.mount.refresh()
+        if limit is not None and state.ra_j2000_hours is not None:
+            distance = angular_separation_deg(
+                state.ra_j2000_hours * 15.0, state.dec_j2000_deg or 0.0, ra_hours * 15.0, dec_deg
+            )
+            if distance > limit:
+                logger.info("sync %.2f° away ignored (limit %.1f°)", distance, limit)
+                return
+        await self.mount.sync_equatorial(ra_hours, dec_deg)
+
+    async def _goto_in_progress(self) -> bool:
+        if not self._goto_running:
+            return False
+        if self._goto_sticky:
+            return True
+        state = await self.mount.refresh()
+        self._goto_running = state.slewing
+        return self._goto_running
+
+    async def _cancel(self) -> None:
+        self._goto_running = self._goto_sticky = False
+        await self.mount.abort()
+        if self.config.quirks.resume_after_cancel:
+            for axis, rate in self._axis_rates.items():
+                if rate:
+                    await self.mount.move_axis(axis, rate)
+        else:
+            self._axis_rates.clear()
+
+    # --- tracking and rates -----------------------------------------------------------------------
+
+    def _sky_tracking_mode(self) -> TrackingMode:
+        """How this mount follows the sky: alt-az tracking on an alt-az mount, else sidereal."""
+        altaz = self.mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
+        preferred = TrackingMode.ALT_AZ if altaz else TrackingMode.SIDEREAL
+        modes = self.mount.capabilities.tracking_modes
+        if preferred in modes:
+            return preferred
+        return next(m for m in (TrackingMode.SIDEREAL, TrackingMode.ALT_AZ) if m in modes)
+
+    async def _set_tracking(self, mode: int) -> None:
+        wanted = _MOUNT_TRACKING.get(mode)
+        if wanted is None:
+            logger.info("tracking mode %d is unknown: ignored", mode)
+            return
+        if wanted not in self.mount.capabilities.tracking_modes:
+            wanted = self._sky_tracking_mode()
+        await self.mount.set_tracking(wanted)
+
+    async def _fixed_rate(self, axis: MountAxis, positive: bool, rate: int) -> None:
+        speed = synscan_fixed_rate_deg_s(rate)
+        rate_deg_s = speed if positive else -speed
+        if rate in GUIDING_RATES and self._tracking_equatorially():
+            rate_deg_s += self._tracking_rate_deg_s(axis)
+        await self._move(axis, rate_deg_s)
+
+    def _tracking_equatorially(self) -> bool:
+        equatorial = self.mount.capabilities.alignment_mode is not AlignmentMode.ALT_AZ
+        return equatorial and self.mount.state.tracking in _EQUATORIAL_TRACKING
+
+    def _tracking_rate_deg_s(self, axis: MountAxis) -> float:
+        """The axis rate of equatorial tracking: sidereal westwards on the polar axis."""
+        if axis is MountAxis.SECONDARY:
+            return 0.0
+        return math.copysign(SIDEREAL_RATE_DEG_S, self.mount.site.latitude_deg)
+
+    async def _move(self, axis: MountAxis, rate_deg_s: float) -> None:
+        self._axis_rates[axis] = rate_deg_s
+        await self.mount.move_axis(axis, rate_deg_s)
+
+    async def _axis_position(
+        self, command: SlowGoto | SetAxisPosition, axis: MountAxis
+    ) -> AnyReply:
+        if not isinstance(self.mount, AxisPositioning):
+            return self._unanswerable_passthrough(command)
+        position = (command.degrees + 180.0) % 360.0 - 180.0
+        if isinstance(command, SlowGoto):
+            self.mount.slew_axis_to(axis, position)
+            self._goto_running, self._goto_sticky = True, False
+        else:
+            self.mount.set_axis_position(axis, position)
+        return Ack()
+
+    def _unanswerable_passthrough(
+        self, command: Passthrough | SlowGoto | SetAxisPosition
+    ) -> AnyReply:
+        """No motor controller answers: the failed form (extra byte), or silence and ``#``."""
+        length = command.reply_length if isinstance(command, Passthrough) else 0
+        if self.config.quirks.failed_passthrough:
+            return PassthroughFailed(bytes(length), _FAILED_PASSTHROUGH_EXTRA)
+        return PassthroughReply(bytes(length))
+
+    # --- time ---------------------------------------------------------------------------------
+
+    def _local_time(self) -> DateTime:
+        zone = timezone(timedelta(hours=self.utc_offset_hours + int(self.dst)))
+        local = self.now().astimezone(zone).replace(microsecond=0)
+        return DateTime.from_datetime(local, self.dst)
+
+
+def _fold_over_pole(around: float, angle_deg: float, half_turn: float) -> tuple[float, float]:
+    """(RA or Az, Dec or Alt) with the second read signed in [-180, 180) from the wire.
+
+    Beyond ±90° the target is over the pole (or zenith): fold the second angle back and turn the
+    first by ``half_turn`` (12 h or 180°), which is the same direction in the sky.
+    """
+    if abs(angle_deg) <= 90.0:
+        return around, angle_deg
+    return (around + half_turn) % (2 * half_turn), math.copysign(180.0 - abs(angle_deg), angle_deg)

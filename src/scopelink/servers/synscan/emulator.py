@@ -1,0 +1,56 @@
+"""A SynScan hand control on a link: the server, its hand-control state and where it is served.
+
+In front of a :class:`~scopelink.sim.SimulatedMount` it is the emulator; in front of any other
+connected :class:`~scopelink.mount.Mount` it is a bridge. Use it as an async context manager::
+
+    async with SynScanEmulator(mount) as emulator:
+        path = await emulator.on_pty()        # or on_tcp(), or on_memory() for tests
+        ...
+"""
+
+from __future__ import annotations
+
+from typing import Self
+
+from scopelink.mount import Mount
+from scopelink.servers.faults import FaultInjector
+from scopelink.servers.hosting import HostedDevice, WireSpeed
+from scopelink.servers.synscan.config import SynScanConfig
+from scopelink.servers.synscan.device import SynScanHandControl
+from scopelink.servers.synscan.server import SynScanServer
+
+__all__ = ["SynScanEmulator"]
+
+
+class SynScanEmulator(HostedDevice):
+    """A SynScan hand control in front of ``mount`` (connected on entry if it is not yet).
+
+    ``wire`` paces replies at a serial line's speed (9600 8N1 by default; None sends at once).
+    ``faults`` is the injector tests and the command line drive.
+    """
+
+    def __init__(
+        self,
+        mount: Mount,
+        config: SynScanConfig | None = None,
+        *,
+        faults: FaultInjector | None = None,
+        wire: WireSpeed | None = WireSpeed(),
+    ) -> None:
+        self.hand_control = SynScanHandControl(mount, config)
+        self.server = SynScanServer(self.hand_control, faults)
+        super().__init__(self.server.serve, wire=wire)
+
+    @property
+    def mount(self) -> Mount:
+        return self.hand_control.mount
+
+    @property
+    def faults(self) -> FaultInjector:
+        return self.server.faults
+
+    async def __aenter__(self) -> Self:
+        if not self.mount.state.connected:
+            await self.mount.connect()
+        await self.hand_control.power_on()
+        return self

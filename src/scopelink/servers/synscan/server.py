@@ -1,0 +1,98 @@
+"""The SynScan server: bytes from a link in, one reply per command out, in order.
+
+A :class:`SynScanServer` serves any number of links (each with its own command stream) in front of
+one :class:`~scopelink.servers.synscan.device.SynScanHandControl`. Commands are handled one at a
+time, as the hand control does: while it waits (latency, a delayed reply) later bytes wait in the
+link. Faults from a :class:`~scopelink.servers.faults.FaultInjector` apply per command.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+
+from scopelink.links import Link, LinkClosedError
+from scopelink.protocol.synscan import (
+    NEED_DATA,
+    AnyCommand,
+    MalformedCommand,
+    SynScanServerConnection,
+    UnknownCommand,
+    encode_command,
+)
+from scopelink.servers.faults import FaultInjector, FaultKind
+from scopelink.servers.synscan.device import SynScanHandControl
+
+__all__ = ["PARTIAL_FRAME_TIMEOUT_S", "SynScanServer"]
+
+logger = logging.getLogger(__name__)
+
+PARTIAL_FRAME_TIMEOUT_S = 1.0
+"""An incomplete command older than this is dropped (a whole 18-byte command takes 19 ms)."""
+
+_NOT_EXECUTED = frozenset({FaultKind.STALL, FaultKind.HALT, FaultKind.CLOSE})
+"""Faults that stand for a hung device: the command is not carried out. Under the others the
+device works and only its reply goes wrong on the way."""
+
+
+def command_key(command: AnyCommand) -> str:
+    """The key faults match a command by: its first byte as text (``e``, ``P``, ``K``...)."""
+    return chr(encode_command(command)[0])
+
+
+class SynScanServer:
+    """Serves the SynScan protocol for ``hand_control`` on every link given to :meth:`serve`."""
+
+    def __init__(self, hand_control: SynScanHandControl, faults: FaultInjector | None = None):
+        self.hand_control = hand_control
+        self.faults = faults or FaultInjector()
+
+    async def serve(self, link: Link) -> None:
+        """Answer commands from ``link`` until it closes (or a ``close`` fault closes it)."""
+        connection = SynScanServerConnection()
+        try:
+            while True:
+                await self.faults.wait_until_reading()
+                data = await self._read(link, connection)
+                if data is None:
+                    dropped = connection.discard_partial()
+                    logger.info("%s: incomplete command %r dropped", link.name, dropped)
+                    continue
+                connection.receive_data(data)
+                if not await self._answer_all(link, connection):
+                    return
+        except LinkClosedError as exc:
+            logger.info("%s: %s", link.name, exc)
+
+    async def _read(self, link: Link, connection: SynScanServerConnection) -> bytes | None:
+        """The next bytes; None when a partial command has waited too long for the rest."""
+        if not connection.parser.pending:
+            return await link.read()
+        try:
+            async with asyncio.timeout(PARTIAL_FRAME_TIMEOUT_S):
+                return await link.read()
+        except TimeoutError:
+            return None
+
+    async def _answer_all(self, link: Link, connection: SynScanServerConnection) -> bool:
+        """Answer every complete command received; False once the link was closed by a fault."""
+        while True:
+            await self.faults.wait_until_reading()
+            event = connection.next_event()
+            if event is NEED_DATA:
+                return True
+            if isinstance(event, UnknownCommand | MalformedCommand):
+                logger.info("%s: %s", link.name, event.describe())
+                continue
+            fault = self.faults.select(command_key(event))
+            if fault is not None and fault.kind in _NOT_EXECUTED:
+                connection.skip_reply()
+                if fault.kind is FaultKind.CLOSE:
+                    await link.close()
+                    return False
+                continue
+            reply = await self.hand_control.answer(event)
+            if self.hand_control.config.latency_s:
+                await asyncio.sleep(self.hand_control.config.latency_s)
+            if not await self.faults.deliver(link, connection.send(reply), fault):
+                return False
