@@ -25,7 +25,7 @@ from scopelink.links import (
     serve_tcp,
 )
 
-__all__ = ["HostedDevice", "WireSpeed"]
+__all__ = ["SERIAL_9600_8N1", "HostedDevice", "WireSpeed"]
 
 logger = logging.getLogger(__name__)
 
@@ -40,6 +40,10 @@ class WireSpeed:
     def __post_init__(self) -> None:
         if self.baudrate <= 0 or self.bits_per_byte <= 0:
             raise ValueError(f"baud rate and bits per byte must be positive: {self}")
+
+
+SERIAL_9600_8N1 = WireSpeed()
+"""The SynScan and Sky Tracker line: 9600 baud, 8 data bits, no parity, 1 stop bit."""
 
 
 class HostedDevice:

@@ -14,7 +14,7 @@ from typing import Self
 
 from scopelink.mount import Mount
 from scopelink.servers.faults import FaultInjector
-from scopelink.servers.hosting import HostedDevice, WireSpeed
+from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
 from scopelink.servers.synscan.config import SynScanConfig
 from scopelink.servers.synscan.device import SynScanHandControl
 from scopelink.servers.synscan.server import SynScanServer
@@ -35,7 +35,7 @@ class SynScanEmulator(HostedDevice):
         config: SynScanConfig | None = None,
         *,
         faults: FaultInjector | None = None,
-        wire: WireSpeed | None = WireSpeed(),
+        wire: WireSpeed | None = SERIAL_9600_8N1,
     ) -> None:
         self.hand_control = SynScanHandControl(mount, config)
         self.server = SynScanServer(self.hand_control, faults)
