@@ -38,6 +38,7 @@ from scopelink.protocol.skytracker import (
     ReleaseBus,
     ReleaseDirections,
     Reply,
+    RequestBus,
     SelectMode,
     SetCalibration,
     SetGuideSpeed,
@@ -305,8 +306,9 @@ class SkyTracker:
 
     async def _process(self, codec: TrackerServer, port: DevicePort) -> bool:
         while (event := codec.next_event()) is not NEED_DATA:
-            if event is PAUSED:
-                self._commands_seen += 1
+            if isinstance(event, RequestBus):
+                self._commands_seen += 1  # answered at the PAUSED that follows
+            elif event is PAUSED:
                 if not await port.reply("Q", await self._answer_bus_request(codec)):
                     return False
             elif isinstance(event, RelayToCommander):
