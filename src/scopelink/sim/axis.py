@@ -47,10 +47,10 @@ class Phase:
 
 def ramp_phase(from_rate: float, to_rate: float, acceleration: float) -> Phase:
     """The phase that changes the rate from ``from_rate`` to ``to_rate`` as fast as allowed."""
-    delta = to_rate - from_rate
-    if delta == 0.0:
+    duration = abs(to_rate - from_rate) / acceleration
+    if duration == 0.0:
         return Phase(0.0, 0.0)
-    return Phase(abs(delta) / acceleration, math.copysign(acceleration, delta))
+    return Phase(duration, math.copysign(acceleration, to_rate - from_rate))
 
 
 def plan_move(
@@ -224,11 +224,12 @@ class Axis:
         offset, rate = segment.kinematic_at(t)
         self._cut(t)
         phase = ramp_phase(rate, rate_deg_s, self.acceleration_deg_s2)
-        self._segments.append(Segment(t, offset, rate, phase.acceleration_deg_s2, segment.follow))
         end = t + phase.duration_s
         if phase.duration_s > 0.0:
-            end_offset, _ = self._segments[-1].kinematic_at(end)
-            self._segments.append(Segment(end, end_offset, rate_deg_s, 0.0, segment.follow))
+            ramp = Segment(t, offset, rate, phase.acceleration_deg_s2, segment.follow)
+            self._segments.append(ramp)
+            offset, _ = ramp.kinematic_at(end)
+        self._segments.append(Segment(end, offset, rate_deg_s, 0.0, segment.follow))
         return end
 
     def stop(self, *, at: float | None = None) -> float:
@@ -237,11 +238,11 @@ class Axis:
         position, rate = self.unwrapped_position_at(t), self.rate_at(t)
         self._cut(t)
         phase = ramp_phase(rate, 0.0, self.acceleration_deg_s2)
-        self._segments.append(Segment(t, position, rate, phase.acceleration_deg_s2))
         end = t + phase.duration_s
         if phase.duration_s > 0.0:
-            rest = position + rate * abs(rate) / (2.0 * self.acceleration_deg_s2)
-            self._segments.append(Segment(end, rest, 0.0, 0.0))
+            self._segments.append(Segment(t, position, rate, phase.acceleration_deg_s2))
+            position += rate * abs(rate) / (2.0 * self.acceleration_deg_s2)
+        self._segments.append(Segment(end, position, 0.0, 0.0))
         return end
 
     def slew_phases(
