@@ -31,7 +31,7 @@ class Direction(enum.Enum):
 class Peer(enum.Enum):
     """The device a message is for or from."""
 
-    SYNSCAN = "SynScan"
+    SYNSCAN = "SynScan hand control"
     SKY_TRACKER = "Sky Tracker"
     SKY_COMMANDER = "Sky Commander"
 
