@@ -132,9 +132,11 @@ async def test_stellarium_polls_e_without_handshake() -> None:
             replies.append(await reply(link, 18))
             await asyncio.sleep(0.05)
         for data in replies:
-            assert data[8:9] == b"," and data[-1:] == b"#"
+            assert data[8:9] == b","
+            assert data[-1:] == b"#"
             assert set(data[:8] + data[9:17]) <= set(b"0123456789ABCDEF")
-            assert data[6:8] == b"00" and data[15:17] == b"00"
+            assert data[6:8] == b"00"
+            assert data[15:17] == b"00"
 
 
 async def test_skysafari_version_with_a_stray_hash_and_back_to_back_commands() -> None:
