@@ -148,6 +148,7 @@ class Axis:
         return tuple(self._segments)
 
     def segment_at(self, t: float) -> Segment:
+        """The segment in force at ``t`` (the earliest kept one for times before it)."""
         index = bisect_right([s.start_s for s in self._segments], t) - 1
         return self._segments[max(index, 0)]
 
@@ -361,8 +362,16 @@ class Axis:
         return position + _wrap_signed(target_deg - position) if self.wrap else target_deg
 
     def _cut(self, t: float) -> None:
-        """Keep the plan strictly before ``t``; the caller appends what happens from ``t``."""
-        self._segments = [s for s in self._segments if s.start_s < t]
+        """Keep the plan strictly before ``t``; the caller appends what happens from ``t``.
+
+        History is not kept: segments over before the present are dropped, so a long session
+        (hours of guide pulses) stays small and fast.
+        """
+        kept = [s for s in self._segments if s.start_s < t]
+        present = self.now()
+        while len(kept) > 1 and kept[1].start_s <= present:
+            kept.pop(0)
+        self._segments = kept
 
     def _difference(self, trajectory: Trajectory, t: float) -> float:
         step = trajectory(t + _DERIVATIVE_STEP_S) - trajectory(t - _DERIVATIVE_STEP_S)

@@ -87,19 +87,9 @@ class SimulatedMount(Mount):
         self._meridian_tolerance_deg = meridian_tolerance_deg
         self.geometry: Geometry = self._make_geometry(site)
         start = home if home is not None else self.geometry.home
-        self.axes: tuple[Axis, Axis] = tuple(  # type: ignore[assignment]
-            Axis(
-                name,
-                max_rate_deg_s=model.max_rate_deg_s,
-                acceleration_deg_s2=model.acceleration_deg_s2,
-                time_source=self.clock.elapsed,
-                position_deg=position,
-                wrap=wraps,
-            )
-            for name, position, wraps in (
-                ("primary", start[0], self.geometry.primary_wraps),
-                ("secondary", start[1], False),
-            )
+        self.axes: tuple[Axis, Axis] = (
+            self._make_axis("primary", start[0], wrap=self.geometry.primary_wraps),
+            self._make_axis("secondary", start[1], wrap=False),
         )
         self.park_position: tuple[float, float] = park_position or start
         self.guide_rate_deg_s = (
@@ -151,6 +141,11 @@ class SimulatedMount(Mount):
         return self.elapsed() < self._goto_until
 
     @property
+    def goto_ends_at(self) -> float | None:
+        """Elapsed time the goto (or park, or axis slew) in progress lands, if one is."""
+        return self._goto_until if self.goto_in_progress else None
+
+    @property
     def limit_stop(self) -> LimitStop | None:
         """The last stop at the horizon or a mechanical limit (planned or past), if any."""
         return self._limit_stop
@@ -169,17 +164,15 @@ class SimulatedMount(Mount):
         return observed_to_j2000(alt, az, self.clock.datetime_at(t), self._site)
 
     def state_at(self, t: float) -> MountState:
-        """The exact state at elapsed ``t`` (does not publish it)."""
-        self._settle(t)
+        """The exact state at elapsed ``t`` (does not publish it; ``t`` may lie ahead)."""
         primary, secondary = self.counters_at(t)
         alt, az = self.geometry.to_observed(primary, secondary)
         when = self.clock.datetime_at(t)
         ra, dec = observed_to_j2000(alt, az, when, self._site)
         ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, when)
+        stopped = self._limit_stop is not None and self._limit_stop.at_s <= t
         moving = any(t < until for until in self._moving_until)
-        problems: tuple[str, ...] = ()
-        if self._limit_stop is not None and self._limit_stop.at_s <= t:
-            problems = (self._limit_stop.reason,)
+        problems = (self._limit_stop.reason,) if self._limit_stop and stopped else ()
         return MountState(
             read_at=when,
             connected=self._connected,
@@ -191,7 +184,7 @@ class SimulatedMount(Mount):
             az_deg=az,
             pier_side=self.geometry.pier_side(primary, secondary),
             slewing=t < self._goto_until or moving,
-            tracking=self._tracking,
+            tracking=TrackingMode.OFF if stopped else self._tracking,
             parked=self._parked,
             aligned=self._aligned,
             pulse_guiding=any(t < until for until in self._pulse_until),
@@ -388,6 +381,16 @@ class SimulatedMount(Mount):
             meridian_tolerance_deg=self._meridian_tolerance_deg,
         )
 
+    def _make_axis(self, name: str, position_deg: float, *, wrap: bool) -> Axis:
+        return Axis(
+            name,
+            max_rate_deg_s=self.model.max_rate_deg_s,
+            acceleration_deg_s2=self.model.acceleration_deg_s2,
+            time_source=self.clock.elapsed,
+            position_deg=position_deg,
+            wrap=wrap,
+        )
+
     def _make_capabilities(self) -> Capabilities:
         equatorial = self.model.alignment_mode is not AlignmentMode.ALT_AZ
         rates = {TrackingMode.OFF, TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR}
@@ -480,12 +483,11 @@ class SimulatedMount(Mount):
         self._retarget(rest)
         self._enforce_limits(rest)
 
-    def _settle(self, t: float) -> None:
-        """Apply what the plan says has happened by ``t`` (a stop at a limit ends tracking)."""
+    def _settle(self, now: float) -> None:
+        """Apply what the plan says has happened by ``now`` (a stop at a limit ends tracking)."""
         stop = self._limit_stop
-        if stop is not None and stop.at_s <= t:
+        if stop is not None and stop.at_s <= now:
             self._tracking = TrackingMode.OFF
-            self._moving_until = [min(until, stop.at_s) for until in self._moving_until]
 
     # --- horizon and mechanical limits ------------------------------------------------------------
 
@@ -551,9 +553,9 @@ class SimulatedMount(Mount):
             middle = 0.5 * (low + high)
             inside = self._margin_at(middle, exact=True) >= floor
             low, high = (middle, high) if inside else (low, middle)
-        for axis in self.axes:
-            axis.stop(at=low)
+        rest = max(axis.stop(at=low) for axis in self.axes)
         self._goto_until = min(self._goto_until, low)
+        self._moving_until = [min(until, rest) for until in self._moving_until]
         alt, az = self.observed_at(low)
         self._limit_stop = LimitStop(
             low,
