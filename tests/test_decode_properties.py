@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from scopelink.cli.main import main
-from scopelink.decode import Annotation, Chunk, Direction, Protocol, annotate
+from scopelink.decode import Annotation, Chunk, Direction, Kind, Protocol, annotate
 
 # Bytes that mean something to one of the protocols, so random traces reach deep states.
 _MEANINGFUL = b"eEzZrRsSbBtTKVJLMPpWwHhmQAqGUDuldNO#\r 0123456789ABCDEF,.+-\x00\x01\x02\x10\x11\x24"
@@ -39,9 +39,14 @@ def test_untagged_annotations_cover_every_byte_once_in_order(
         position += len(annotation.data)
     assert position == len(trace)
     assert all(0 <= a.offset <= len(trace) for a in annotations)
+    commands = {a.offset for a in annotations if a.kind is Kind.COMMAND}
     for annotation in annotations:
         if annotation.error_offset is not None:
             assert annotation.offset <= annotation.error_offset < position
+        if annotation.kind is Kind.REPLY:
+            assert annotation.answers in commands
+        if annotation.answers is not None:
+            assert annotation.answers < annotation.offset or not annotation.data
 
 
 @_SETTINGS

@@ -145,13 +145,19 @@ def _print_text(
     width = min(
         _RAW_COLUMN_MAX, max((len(_show(a.data, hex_output)) for a in annotations), default=0)
     )
+    previous: Annotation | None = None
     for annotation in annotations:
         raw = _show(annotation.data, hex_output) if annotation.data else "(none)"
         peer = _PEER_TAGS[annotation.peer] if show_peer else ""
+        answers = annotation.answers
+        # A reply right after its command needs no pointer; a pipelined one does.
+        follows = previous is not None and previous.offset == answers
+        to = "" if answers is None or follows else f" (answers {answers})"
         print(
             f"{annotation.offset:>6}  {_ARROWS[annotation.direction]}  {raw:<{width}}  "
-            f"{peer}{_KIND_PREFIXES[annotation.kind]}{annotation.meaning}"
+            f"{peer}{_KIND_PREFIXES[annotation.kind]}{annotation.meaning}{to}"
         )
+        previous = annotation
         if annotation.error_offset is not None:
             print(_caret_lines(trace, annotation.error_offset, hex_output))
 
@@ -179,5 +185,6 @@ def _as_json(annotation: Annotation) -> dict[str, Any]:
         "text": escape_bytes(annotation.data),
         "meaning": annotation.meaning,
         "error_offset": annotation.error_offset,
+        "answers": annotation.answers,
         "message": type(annotation.message).__name__ if annotation.message is not None else None,
     }

@@ -70,7 +70,8 @@ class Annotation:
 
     ``offset`` counts from the first byte of the trace (all chunks one after the other, in input
     order) and is where ``data`` begins. ``data`` may be empty for a note about something absent
-    (a reply not in the trace). For an error, ``error_offset`` is the offending byte.
+    (a reply not in the trace). For an error, ``error_offset`` is the offending byte. A reply, a
+    reply that does not fit or a note about a missing reply ``answers`` the command at that offset.
     """
 
     offset: int
@@ -81,6 +82,7 @@ class Annotation:
     meaning: str
     error_offset: int | None = None
     message: DecodedMessage | None = None
+    answers: int | None = None
 
     @property
     def is_error(self) -> bool:

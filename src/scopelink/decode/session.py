@@ -53,14 +53,19 @@ class Session(ABC):
         peer: Peer,
         error_offset: int | None = None,
         message: DecodedMessage | None = None,
+        answers: int | None = None,
     ) -> None:
         self.annotations.append(
-            Annotation(positions[0], data, direction, peer, kind, meaning, error_offset, message)
+            Annotation(
+                positions[0], data, direction, peer, kind, meaning, error_offset, message, answers
+            )
         )
 
-    def _note_absent(self, offset: int, peer: Peer, meaning: str) -> None:
-        """A note about bytes that are not in the trace (it covers none)."""
-        self.annotations.append(Annotation(offset, b"", Direction.DEVICE, peer, Kind.NOTE, meaning))
+    def _note_absent(self, offset: int, peer: Peer, meaning: str, answers: int) -> None:
+        """A note about a reply that is not in the trace (it covers no byte)."""
+        self.annotations.append(
+            Annotation(offset, b"", Direction.DEVICE, peer, Kind.NOTE, meaning, answers=answers)
+        )
 
     def _stray_byte(self, byte: int, offset: int, peer: Peer) -> None:
         """A device byte while no reply is awaited; a run of them is reported as one error."""

@@ -22,6 +22,7 @@ _Reader = st.TrackerClient | st.CommanderClient
 @dataclass(slots=True)
 class _AwaitedReply:
     command: st.Command
+    command_offset: int
     peer: Peer
     reader: _Reader
     data: bytearray = field(default_factory=bytearray)
@@ -105,7 +106,7 @@ class SkyTrackerSession(Session):
                     if isinstance(event, st.ReleaseBus):
                         self._end_commander_line("cut short by 'q' (bus released)")
                     elif event.reply is not None:
-                        self._await(event, Peer.SKY_TRACKER)
+                        self._await(event, positions[0], Peer.SKY_TRACKER)
 
     def _relay(self, data: bytes, positions: list[int]) -> None:
         self._commander.receive_data(data)
@@ -136,9 +137,11 @@ class SkyTrackerSession(Session):
                 message=event,
             )
             if event.reply is not None:
-                self._await(event, Peer.SKY_COMMANDER)
+                self._await(event, taken[0], Peer.SKY_COMMANDER)
 
-    def _await(self, command: st.TrackerCommand | st.CommanderCommand, peer: Peer) -> None:
+    def _await(
+        self, command: st.TrackerCommand | st.CommanderCommand, command_offset: int, peer: Peer
+    ) -> None:
         """A reader that was sent ``command`` reads its reply exactly as a driver would."""
         reader: _Reader
         if isinstance(command, st.CommanderCommand):
@@ -147,7 +150,7 @@ class SkyTrackerSession(Session):
         else:
             reader = st.TrackerClient()
             reader.send(command)
-        self._awaited.append(_AwaitedReply(command, peer, reader))
+        self._awaited.append(_AwaitedReply(command, command_offset, peer, reader))
 
     def _end_commander_line(self, why: str) -> None:
         """An unfinished ``L`` line can never end now: report it."""
@@ -189,6 +192,7 @@ class SkyTrackerSession(Session):
                 direction=Direction.DEVICE,
                 peer=awaited.peer,
                 error_offset=awaited.positions[0],
+                answers=awaited.command_offset,
             )
         else:
             self._emit(
@@ -199,6 +203,7 @@ class SkyTrackerSession(Session):
                 direction=Direction.DEVICE,
                 peer=awaited.peer,
                 message=event,
+                answers=awaited.command_offset,
             )
         if isinstance(awaited.command, st.RequestBus):
             self._answer_bus_request(isinstance(event, st.BusAnswer) and event.granted)
@@ -227,9 +232,15 @@ class SkyTrackerSession(Session):
                     direction=Direction.DEVICE,
                     peer=awaited.peer,
                     error_offset=awaited.positions[-1],
+                    answers=awaited.command_offset,
                 )
             else:
-                self._note_absent(offset, awaited.peer, f"no reply to {what!r} {why_absent}")
+                self._note_absent(
+                    offset,
+                    awaited.peer,
+                    f"no reply to {what!r} {why_absent}",
+                    awaited.command_offset,
+                )
             if isinstance(awaited.command, st.RequestBus):
                 self._answer_bus_request(granted=False)
 

@@ -19,6 +19,7 @@ class _AwaitedReply:
     """A command sent and the bytes of its reply so far."""
 
     command: synscan.AnyCommand
+    command_offset: int
     data: bytearray = field(default_factory=bytearray)
     positions: list[int] = field(default_factory=list)
     mismatch: Mismatch | None = None
@@ -62,7 +63,7 @@ class SynScanSession(Session):
             match event:
                 case synscan.ParsedCommand(command, raw, start):
                     self._emit_pc(start, raw, Kind.COMMAND, command.describe(), message=command)
-                    self._awaited.append(_AwaitedReply(command))
+                    self._awaited.append(_AwaitedReply(command, self._pc_positions[start]))
                 case synscan.UnknownCommand(value, start):
                     self._emit_pc(
                         start,
@@ -134,6 +135,7 @@ class SynScanSession(Session):
                 direction=Direction.DEVICE,
                 peer=_PEER,
                 message=result.reply,
+                answers=awaited.command_offset,
             )
             return
         awaited.mismatch = result
@@ -152,6 +154,7 @@ class SynScanSession(Session):
             direction=Direction.DEVICE,
             peer=_PEER,
             error_offset=awaited.positions[mismatch.index],
+            answers=awaited.command_offset,
         )
 
     def _close_awaited(self, offset: int, why_absent: str, why_cut: str) -> None:
@@ -163,7 +166,10 @@ class SynScanSession(Session):
             self._awaited.popleft()
             if not awaited.data:
                 self._note_absent(
-                    offset, _PEER, f"no reply to {awaited.command.describe()!r} {why_absent}"
+                    offset,
+                    _PEER,
+                    f"no reply to {awaited.command.describe()!r} {why_absent}",
+                    awaited.command_offset,
                 )
                 continue
             shape = synscan.reply_shape(awaited.command)
@@ -176,6 +182,7 @@ class SynScanSession(Session):
                 direction=Direction.DEVICE,
                 peer=_PEER,
                 error_offset=awaited.positions[-1],
+                answers=awaited.command_offset,
             )
 
     def flush_input(self, offset: int) -> None:
