@@ -13,10 +13,10 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from scopelink import __version__
-from scopelink.cli import decode_command
+from scopelink.cli import decode_command, emulate_command
 from scopelink.cli.errors import CommandError
 
-SUBCOMMANDS: tuple[ModuleType, ...] = (decode_command,)
+SUBCOMMANDS: tuple[ModuleType, ...] = (decode_command, emulate_command)
 
 EXIT_USAGE = 2
 

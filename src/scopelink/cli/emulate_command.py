@@ -1,0 +1,245 @@
+"""``scopelink emulate DEVICE``: run an emulated device on a pty or a TCP port until Ctrl-C.
+
+Devices live in :data:`EMULATORS` (name -> :class:`EmulatedDevice`); adding one is one entry.
+Every device gets the common options (where to serve, pacing, faults, site, clock); its own
+``add_arguments`` adds the rest, and its ``create`` builds the (not yet started) device.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import signal
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+
+from scopelink.astro import Site
+from scopelink.cli.errors import CommandError
+from scopelink.links import LinkError
+from scopelink.protocol.synscan import Version, VersionDialect
+from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
+from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
+from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
+from scopelink.sim import PRESETS, SimClock, SimulatedMount
+
+__all__ = ["EMULATORS", "EmulatedDevice", "EmulatorOptions", "register", "run"]
+
+
+@dataclass(frozen=True, slots=True)
+class EmulatorOptions:
+    """What every emulated device is given, from the common options."""
+
+    faults: FaultInjector
+    wire: WireSpeed | None
+    site: Site
+    clock: SimClock
+
+
+@dataclass(frozen=True, slots=True)
+class EmulatedDevice:
+    """One entry of ``scopelink emulate``: its help line, its own options and its factory."""
+
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    create: Callable[[argparse.Namespace, EmulatorOptions], Awaitable[HostedDevice]]
+
+
+# --- SynScan ------------------------------------------------------------------------------------
+
+
+def _add_synscan_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--mount",
+        default="eq6",
+        choices=sorted(
+            name for name, model in PRESETS.items() if model.synscan_model_code is not None
+        ),
+        help="simulated mount preset (default eq6)",
+    )
+    parser.add_argument("--model", type=int, help="'m' model code (default: the preset's)")
+    parser.add_argument(
+        "--firmware",
+        type=_version,
+        default=DEFAULT_FIRMWARE,
+        help="'V' firmware version, e.g. 4.39.05 (default); 3.36.2 for old firmware",
+    )
+    parser.add_argument(
+        "--binary-version",
+        action="store_true",
+        help="answer 'V' with 3 binary bytes (old firmware)",
+    )
+    parser.add_argument("--unaligned", action="store_true", help="the hand control is not aligned")
+    parser.add_argument(
+        "--latency", type=float, default=0.0, metavar="S", help="delay every reply (0-5 s)"
+    )
+    parser.add_argument(
+        "--sync-limit",
+        type=float,
+        default=Quirks().sync_limit_deg,
+        metavar="DEG",
+        help="ignore syncs further than this (default 7); 0 obeys every sync",
+    )
+    parser.add_argument(
+        "--sticky-altaz-goto", action="store_true", help="'L' never clears after an Alt-Az goto"
+    )
+    parser.add_argument(
+        "--resume-after-cancel", action="store_true", help="rate slews resume after 'M'"
+    )
+    parser.add_argument(
+        "--passthrough-succeeds",
+        action="store_true",
+        help="unanswerable passthroughs answer '#' instead of the failed form",
+    )
+    parser.add_argument("--swapped-model", action="store_true", help="'m' answers '#' first")
+
+
+def _version(text: str) -> Version:
+    try:
+        major, minor, patch = (int(part) for part in text.split("."))
+        return Version(major, minor, patch)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a version like 4.39.05") from None
+
+
+async def _create_synscan(args: argparse.Namespace, options: EmulatorOptions) -> HostedDevice:
+    preset = PRESETS[args.mount]
+    firmware: Version = args.firmware
+    if args.binary_version:
+        firmware = Version(
+            firmware.major, firmware.minor, firmware.patch, VersionDialect.SYNSCAN_BINARY
+        )
+    quirks = Quirks(
+        sync_limit_deg=args.sync_limit or None,
+        sticky_altaz_goto=args.sticky_altaz_goto,
+        resume_after_cancel=args.resume_after_cancel,
+        failed_passthrough=not args.passthrough_succeeds,
+        model_swapped=args.swapped_model,
+    )
+    model = args.model if args.model is not None else preset.synscan_model_code
+    config = SynScanConfig(
+        model=model or 0,
+        firmware=firmware,
+        aligned=not args.unaligned,
+        latency_s=args.latency,
+        quirks=quirks,
+    )
+    mount = SimulatedMount(preset, site=options.site, clock=options.clock)
+    return SynScanEmulator(mount, config, faults=options.faults, wire=options.wire)
+
+
+EMULATORS: dict[str, EmulatedDevice] = {
+    "synscan": EmulatedDevice(
+        "a SynScan V4 hand control in front of a simulated mount",
+        _add_synscan_arguments,
+        _create_synscan,
+    ),
+}
+"""Emulated devices by name; each one is a ``scopelink emulate NAME`` subcommand."""
+
+
+# --- the command ----------------------------------------------------------------------------------
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = subparsers.add_parser(
+        "emulate",
+        help="run an emulated device on a pty or TCP port",
+        description="Run an emulated device until Ctrl-C. It prints where clients connect.",
+    )
+    devices = parser.add_subparsers(dest="device", metavar="DEVICE", required=True)
+    for name, device in EMULATORS.items():
+        device_parser = devices.add_parser(name, help=device.help, description=device.help)
+        _add_common_arguments(device_parser)
+        device.add_arguments(device_parser)
+        device_parser.set_defaults(run=run)
+
+
+def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--pty",
+        nargs="?",
+        const="",
+        metavar="SYMLINK",
+        help="serve a pseudo-terminal (default), optionally also reachable as SYMLINK",
+    )
+    where.add_argument("--tcp", metavar="HOST:PORT", help="listen on TCP (port 0 picks one)")
+    parser.add_argument(
+        "--no-pacing", action="store_true", help="send replies at once instead of at 9600 baud"
+    )
+    parser.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="inject a fault: COMMAND:KIND[=SECONDS][:once|:always|:times=N][:p=P], e.g. "
+        "e:drop, any:delay=6:p=0.1 (kinds: drop short malformed delay slow stall halt close)",
+    )
+    parser.add_argument("--seed", type=int, help="seed of probabilistic faults")
+    parser.add_argument(
+        "--site",
+        default="51.4779,-0.0015",
+        metavar="LAT,LON",
+        help="site latitude and east longitude in degrees (default Greenwich)",
+    )
+    parser.add_argument(
+        "--clock-rate", type=float, default=1.0, metavar="X", help="simulated time speed (1 = real)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        faults = FaultInjector((Fault.parse(spec) for spec in args.fault), seed=args.seed)
+    except FaultSpecError as error:
+        raise CommandError(str(error)) from None
+    options = EmulatorOptions(
+        faults=faults,
+        wire=None if args.no_pacing else SERIAL_9600_8N1,
+        site=_site(args.site),
+        clock=SimClock(rate=_positive(args.clock_rate)),
+    )
+    return asyncio.run(_serve(args, options))
+
+
+def _site(text: str) -> Site:
+    try:
+        latitude, longitude = (float(part) for part in text.split(","))
+        return Site(latitude, longitude)
+    except ValueError as error:
+        raise CommandError(f"bad --site {text!r}: {error}", "give LAT,LON like 40.4,-3.7") from None
+
+
+def _positive(rate: float) -> float:
+    if not rate > 0:
+        raise CommandError(f"--clock-rate must be positive, not {rate}")
+    return rate
+
+
+async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
+    device = await EMULATORS[args.device].create(args, options)
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop.set)
+    try:
+        async with device:
+            if args.tcp is not None:
+                host, _, port = args.tcp.rpartition(":")
+                if not host or not port.isdigit():
+                    raise CommandError(
+                        f"bad --tcp {args.tcp!r}", "give HOST:PORT, e.g. 127.0.0.1:0"
+                    )
+                await device.on_tcp(host, int(port))
+                print(f"{args.device} emulator listening on {device.address}", flush=True)
+            else:
+                path = await device.on_pty(args.pty or None)
+                print(f"{args.device} emulator on {path}", flush=True)
+            await stop.wait()
+    except LinkError as error:
+        raise CommandError(str(error)) from None
+    finally:
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(ValueError):
+                loop.remove_signal_handler(signum)
+    return 0
