@@ -55,11 +55,11 @@ async def connected(emulator: SkyTrackerEmulator, transport: str) -> AsyncIterat
             yield PcSession(link)
         return
     server = await emulator.listen_tcp()
-    link: Link = await open_tcp("127.0.0.1", server.port)
+    tcp_link: Link = await open_tcp("127.0.0.1", server.port)
     try:
-        yield PcSession(link)
+        yield PcSession(tcp_link)
     finally:
-        await link.close()
+        await tcp_link.close()
 
 
 async def status(pc: PcSession) -> StatusReply:

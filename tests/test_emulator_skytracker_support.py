@@ -76,9 +76,11 @@ class CommanderSession:
 def wait_for_a_byte(link: SerialLink) -> None:
     """VMIN=1 on the client's tty: pyserial leaves VMIN=0, where a read with nothing pending
     returns 0 bytes and our fd stream takes that for end of stream (reported to links)."""
-    attributes = termios.tcgetattr(link.port.fd)
+    fd = link.port.fd
+    assert fd is not None
+    attributes = termios.tcgetattr(fd)
     attributes[_CC][termios.VMIN] = 1
-    termios.tcsetattr(link.port.fd, termios.TCSANOW, attributes)
+    termios.tcsetattr(fd, termios.TCSANOW, attributes)
 
 
 @asynccontextmanager
@@ -97,7 +99,9 @@ async def pty_client(
 
 @asynccontextmanager
 async def running_tracker(
-    data_dir: Path, mount: SimulatedMount | None = None, **options: bool
+    data_dir: Path, mount: SimulatedMount | None = None, *, strict_line: bool = False
 ) -> AsyncIterator[SkyTrackerEmulator]:
-    async with SkyTrackerEmulator(mount or sky_tracker_mount(), data_dir, **options) as emulator:
+    async with SkyTrackerEmulator(
+        mount or sky_tracker_mount(), data_dir, strict_line=strict_line
+    ) as emulator:
         yield emulator
