@@ -33,18 +33,16 @@ async def connected(transport: str, home: Path) -> AsyncIterator[tuple[IndiDrive
         await driver.get_properties()
         await driver.wait_for("CONNECTION_MODE")
         if transport == "pty":
-            pty = await emulator.open_pty()
+            path = await emulator.on_pty()
             await driver.wait_for("DEVICE_PORT")
-            await driver.set_text("DEVICE_PORT", {"PORT": pty.path})
+            await driver.set_text("DEVICE_PORT", {"PORT": path})
         else:
-            server = await emulator.listen_tcp()
+            host, port = await emulator.on_tcp()
             await driver.set_switch(
                 "CONNECTION_MODE", {"CONNECTION_SERIAL": False, "CONNECTION_TCP": True}
             )
             await driver.wait_for("DEVICE_ADDRESS")
-            await driver.set_text(
-                "DEVICE_ADDRESS", {"ADDRESS": "127.0.0.1", "PORT": str(server.port)}
-            )
+            await driver.set_text("DEVICE_ADDRESS", {"ADDRESS": host, "PORT": str(port)})
         await driver.set_switch("CONNECTION", {"CONNECT": True, "DISCONNECT": False})
         await driver.wait_for("CONNECTION", lambda p: p.switch("CONNECT") and p.state == "Ok")
         yield driver, mount

@@ -18,8 +18,8 @@ from .test_emulator_skytracker_support import CommanderSession, sky_tracker_moun
 
 async def test_stored_objects_survive_a_restart(tmp_path: Path) -> None:
     async with SkyCommanderEmulator(sky_tracker_mount(), tmp_path) as emulator:
-        server = await emulator.listen_tcp()
-        async with await open_tcp("127.0.0.1", server.port) as link:
+        host, port = await emulator.on_tcp()
+        async with await open_tcp(host, port) as link:
             session = CommanderSession(link)
             assert (await session.send(LoadObject(7, 1.5, -20.25))) == Acknowledge()
             assert (await session.send(LoadObject(58, 23.999, 89.5))) == Acknowledge()
@@ -35,7 +35,8 @@ async def test_kill_9_during_writes_leaves_a_whole_store(tmp_path: Path) -> None
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
-        "scopelink.servers.skytracker",
+        "scopelink",
+        "emulate",
         "skycommander",
         "--tcp",
         "127.0.0.1:0",
@@ -45,7 +46,7 @@ async def test_kill_9_during_writes_leaves_a_whole_store(tmp_path: Path) -> None
     )
     assert process.stdout is not None
     async with asyncio.timeout(20):
-        address = (await process.stdout.readline()).decode().split()[1]
+        address = (await process.stdout.readline()).decode().split()[-1]
     host, port = address.rsplit(":", 1)
     acknowledged = 0
     async with await open_tcp(host, int(port)) as link:

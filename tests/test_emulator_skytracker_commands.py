@@ -54,8 +54,8 @@ async def connected(emulator: SkyTrackerEmulator, transport: str) -> AsyncIterat
         async with pty_client(emulator) as link:
             yield PcSession(link)
         return
-    server = await emulator.listen_tcp()
-    tcp_link: Link = await open_tcp("127.0.0.1", server.port)
+    host, port = await emulator.on_tcp()
+    tcp_link: Link = await open_tcp(host, port)
     try:
         yield PcSession(tcp_link)
     finally:

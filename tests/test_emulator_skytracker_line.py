@@ -77,11 +77,11 @@ async def test_pty_8n1_burst_loses_characters_and_8n2_does_not(tmp_path: Path) -
 
 async def test_tcp_fast_burst_loses_characters_and_8n2_paced_does_not(tmp_path: Path) -> None:
     async with running_tracker(tmp_path, strict_line=True) as emulator:
-        server = await emulator.listen_tcp()
-        async with await open_tcp("127.0.0.1", server.port) as link:
+        host, port = await emulator.on_tcp()
+        async with await open_tcp(host, port) as link:
             assert await bus_exchange_loses_characters(PcSession(link))
         assert emulator.commander.current_object is None
-        async with paced(await open_tcp("127.0.0.1", server.port), 9600, 11) as link:
+        async with paced(await open_tcp(host, port), 9600, 11) as link:
             assert not await bus_exchange_loses_characters(PcSession(link))
         assert emulator.commander.current_object is not None
 

@@ -88,8 +88,8 @@ async def pty_client(
     emulator: SkyTrackerEmulator, *, stopbits: float = 2, baudrate: int = 9600
 ) -> AsyncIterator[Link]:
     """A pty served by ``emulator`` and our serial link on its other end (8N2 by default)."""
-    pty = await emulator.open_pty()
-    link = await open_serial(pty.path, baudrate=baudrate, stopbits=stopbits)
+    path = await emulator.on_pty()
+    link = await open_serial(path, baudrate=baudrate, stopbits=stopbits)
     wait_for_a_byte(link)
     try:
         yield link

@@ -10,9 +10,11 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import os
 import signal
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 from scopelink.astro import Site
 from scopelink.cli.errors import CommandError
@@ -20,8 +22,9 @@ from scopelink.links import LinkError
 from scopelink.protocol.synscan import Version, VersionDialect
 from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
 from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
+from scopelink.servers.skytracker import SkyCommanderEmulator, SkyTrackerEmulator
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
-from scopelink.sim import PRESETS, SimClock, SimulatedMount
+from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount
 
 __all__ = ["EMULATORS", "EmulatedDevice", "EmulatorOptions", "register", "run"]
 
@@ -128,11 +131,71 @@ async def _create_synscan(args: argparse.Namespace, options: EmulatorOptions) ->
     return SynScanEmulator(mount, config, faults=options.faults, wire=options.wire)
 
 
+# --- Sky Tracker and Sky Commander ---------------------------------------------------------------
+
+
+def _default_data_dir() -> Path:
+    base = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
+    return Path(base) / "scopelink"
+
+
+def _add_sky_commander_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--data-dir",
+        type=Path,
+        default=None,
+        help="where non-volatile memory (objects, calibration) is kept "
+        "(default $XDG_DATA_HOME/scopelink)",
+    )
+
+
+def _add_sky_tracker_arguments(parser: argparse.ArgumentParser) -> None:
+    _add_sky_commander_arguments(parser)
+    parser.add_argument(
+        "--strict-line",
+        action="store_true",
+        help="lose characters sent faster than 8N2, as the real box's unbuffered port does",
+    )
+
+
+async def _create_sky_tracker(args: argparse.Namespace, options: EmulatorOptions) -> HostedDevice:
+    mount = SimulatedMount(SKY_TRACKER, site=options.site, clock=options.clock)
+    return SkyTrackerEmulator(
+        mount,
+        args.data_dir or _default_data_dir(),
+        faults=options.faults,
+        pace=options.wire is not None,
+        strict_line=args.strict_line,
+    )
+
+
+async def _create_sky_commander(args: argparse.Namespace, options: EmulatorOptions) -> HostedDevice:
+    mount = SimulatedMount(SKY_TRACKER, site=options.site, clock=options.clock)
+    return SkyCommanderEmulator(
+        mount,
+        args.data_dir or _default_data_dir(),
+        faults=options.faults,
+        pace=options.wire is not None,
+    )
+
+
 EMULATORS: dict[str, EmulatedDevice] = {
     "synscan": EmulatedDevice(
         "a SynScan V4 hand control in front of a simulated mount",
         _add_synscan_arguments,
         _create_synscan,
+    ),
+    "skytracker": EmulatedDevice(
+        "a Sky Tracker motor box with its Sky Commander on the bus, driving a simulated alt-az "
+        "mount",
+        _add_sky_tracker_arguments,
+        _create_sky_tracker,
+    ),
+    "skycommander": EmulatedDevice(
+        "a Sky Commander (digital setting circles) alone on its port, reading a simulated "
+        "alt-az mount",
+        _add_sky_commander_arguments,
+        _create_sky_commander,
     ),
 }
 """Emulated devices by name; each one is a ``scopelink emulate NAME`` subcommand."""

@@ -5,8 +5,10 @@
 * :class:`SkyCommanderEmulator`: the Sky Commander alone on its own port (what INDI's Sky
   Commander driver connects to), reading the mount's axes as encoders.
 
-Both are async context managers; serve a link with ``serve(link)``, or a pty / TCP port with
-``open_pty()`` / ``listen_tcp()``.
+Both are :class:`~scopelink.servers.hosting.HostedDevice` s (async context managers): serve a
+pty, TCP port or memory pair with ``on_pty()`` / ``on_tcp()`` / ``on_memory()``, or a link of
+your own with ``serve(link)``. They pace their replies themselves (and read a pty's line
+settings), so they host links unwrapped.
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ from pathlib import Path
 from types import TracebackType
 from typing import Self
 
-from scopelink.links import Link, PtyLink, TcpServer, memory_pair, open_pty, serve_tcp
+from scopelink.links import Link, memory_pair
 from scopelink.servers.faults import FaultInjector
+from scopelink.servers.hosting import HostedDevice
 from scopelink.sim import SimulatedMount
 
 from .commander import SkyCommander
@@ -37,49 +40,7 @@ def commander_for(mount: SimulatedMount, data_dir: Path) -> SkyCommander:
     return SkyCommander(encoders, mount.clock.now, mount.site, ObjectStore(data_dir))
 
 
-class _Emulator:
-    """Serving machinery shared by both emulators: background ports, pty, TCP."""
-
-    def __init__(self) -> None:
-        self._background: set[asyncio.Task[None]] = set()
-        self._links: list[Link] = []
-        self._servers: list[TcpServer] = []
-
-    async def serve(self, link: Link) -> None:
-        """Serve one client on ``link`` until it closes."""
-        raise NotImplementedError
-
-    def serve_in_background(self, link: Link) -> asyncio.Task[None]:
-        """Serve ``link`` in a task that ends with the emulator (the link is closed then)."""
-        self._links.append(link)
-        task = asyncio.create_task(self.serve(link), name=f"serve {link.name}")
-        self._background.add(task)
-        task.add_done_callback(self._background.discard)
-        return task
-
-    async def open_pty(self, symlink: str | Path | None = None) -> PtyLink:
-        """A pseudo-terminal served in the background; clients open ``.path``."""
-        link = await open_pty(symlink)
-        self.serve_in_background(link)
-        return link
-
-    async def listen_tcp(self, host: str = "127.0.0.1", port: int = 0) -> TcpServer:
-        """Serve TCP connections on ``host:port`` (port 0 picks one: read ``.port``)."""
-        server = await serve_tcp(self.serve, host=host, port=port)
-        self._servers.append(server)
-        return server
-
-    async def _stop_serving(self) -> None:
-        for server in self._servers:
-            await server.close()
-        for task in list(self._background):
-            task.cancel()
-        await asyncio.gather(*self._background, return_exceptions=True)
-        for link in self._links:
-            await link.close()
-
-
-class SkyCommanderEmulator(_Emulator):
+class SkyCommanderEmulator(HostedDevice):
     """The Sky Commander alone on its serial port (9600 baud replies, faults, pty framing)."""
 
     def __init__(
@@ -90,27 +51,17 @@ class SkyCommanderEmulator(_Emulator):
         faults: FaultInjector | None = None,
         pace: bool = True,
     ) -> None:
-        super().__init__()
+        super().__init__(self.serve)
         self.commander = commander_for(mount, data_dir)
         self.faults = faults if faults is not None else FaultInjector()
         self._pace = pace
 
     async def serve(self, link: Link) -> None:
+        """Serve one client on ``link`` until it closes."""
         await self.commander.serve(DevicePort(link, faults=self.faults, pace=self._pace))
 
-    async def __aenter__(self) -> Self:
-        return self
 
-    async def __aexit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        await self._stop_serving()
-
-
-class SkyTrackerEmulator(_Emulator):
+class SkyTrackerEmulator(HostedDevice):
     """The Sky Tracker box driving ``mount``'s axes, its Sky Commander on a real link pair.
 
     ``strict_line`` makes the PC port lose characters that come faster than 8N2 (see
@@ -127,7 +78,7 @@ class SkyTrackerEmulator(_Emulator):
         strict_line: bool = False,
         jitter_allowance_s: float = DEFAULT_JITTER_ALLOWANCE_S,
     ) -> None:
-        super().__init__()
+        super().__init__(self.serve)
         self.mount = mount
         self.faults = faults if faults is not None else FaultInjector()
         self.commander = commander_for(mount, data_dir)
@@ -158,6 +109,7 @@ class SkyTrackerEmulator(_Emulator):
         )
 
     async def serve(self, link: Link) -> None:
+        """Serve one PC on ``link`` until it closes."""
         await self.tracker.serve(self.port_for(link))
 
     async def __aenter__(self) -> Self:
@@ -174,7 +126,7 @@ class SkyTrackerEmulator(_Emulator):
         exc: BaseException | None,
         traceback: TracebackType | None,
     ) -> None:
-        await self._stop_serving()
+        await self.close()
         await self.tracker.__aexit__(exc_type, exc, traceback)
         if self._commander_task is not None:
             self._commander_task.cancel()
