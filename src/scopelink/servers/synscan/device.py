@@ -326,6 +326,7 @@ class SynScanHandControl:
 
     async def _move(self, axis: MountAxis, rate_deg_s: float) -> None:
         self._axis_rates[axis] = rate_deg_s
+        self._goto_running = self._goto_sticky = False  # a rate slew takes over, as on the keypad
         await self.mount.move_axis(axis, rate_deg_s)
 
     async def _axis_position(
