@@ -62,7 +62,7 @@ def lookup(name: str, t: ScalarTime, site: Site | None = None) -> CatalogObject:
 
     ``site`` makes solar-system positions topocentric. Raises :class:`UnknownObjectError`
     (with suggestions) for unknown names and :class:`EphemerisRangeError` for solar-system
-    bodies outside 1900-2050.
+    bodies outside DE421 (1899-12-04 to 2200-02-01).
     """
     return default_catalogue().lookup(name, t, site)
 

@@ -3,8 +3,8 @@
 Positions are *astrometric*: the direction from the observer (the geocentre, or a site on the
 WGS84 ellipsoid) to where the body was when the light now arriving left it, on ICRS axes. That is
 a J2000 position a mount can take like a star's: aberration and light deflection are added by the
-frame conversions (:func:`scopelink.astro.j2000_to_apparent` and friends). DE421 covers 1900-2050;
-TT stands in for TDB (< 2 ms). Outer planets are their system barycentres (< 0.1").
+frame conversions (:func:`scopelink.astro.j2000_to_apparent` and friends). The packaged DE421
+covers 1899-12-04 to 2200-02-01; TT stands in for TDB (< 2 ms). Outer planets are their system barycentres (< 0.1").
 """
 
 from __future__ import annotations
@@ -49,6 +49,13 @@ class EphemerisRangeError(ValueError):
 @cache
 def _ephemeris() -> Ephemeris:
     return Ephemeris(de421)
+
+
+def _coverage() -> str:
+    """The ephemeris span as "YYYY-MM-DD to YYYY-MM-DD" (TDB)."""
+    ephemeris = _ephemeris()
+    ends = (erfa.jd2cal(jd, 0.0)[:3] for jd in (ephemeris.jalpha, ephemeris.jomega))
+    return " to ".join(f"{int(y):04d}-{int(m):02d}-{int(d):02d}" for y, m, d in ends)
 
 
 def _barycentric_km(segment: str, tdb1: FloatArray, tdb2: FloatArray) -> FloatArray:
@@ -103,9 +110,9 @@ class SolarSystemBody:
                 target = _barycentric_km(self.segment, tt1, tt2 - light_days)
                 distance_km = np.linalg.norm(target - observer, axis=0)
                 light_days = distance_km / _SPEED_OF_LIGHT_KM_PER_DAY
-        except DateError as error:
+        except DateError:
             raise EphemerisRangeError(
-                f"{self.segment} positions come from DE421, which covers 1900-2050 only ({error})"
+                f"{self.segment} positions come from DE421, which covers {_coverage()} only"
             ) from None
         ra, dec = erfa.c2s((target - observer).T)
         hours = np.mod(np.degrees(ra) / 15.0, 24.0)
