@@ -4,7 +4,8 @@ Positions are *astrometric*: the direction from the observer (the geocentre, or 
 WGS84 ellipsoid) to where the body was when the light now arriving left it, on ICRS axes. That is
 a J2000 position a mount can take like a star's: aberration and light deflection are added by the
 frame conversions (:func:`scopelink.astro.j2000_to_apparent` and friends). The packaged DE421
-covers 1899-12-04 to 2200-02-01; TT stands in for TDB (< 2 ms). Outer planets are their system barycentres (< 0.1").
+covers 1899-12-04 to 2200-02-01; TT stands in for TDB (< 2 ms). Outer planets are their system
+barycentres (< 0.1").
 """
 
 from __future__ import annotations
