@@ -65,6 +65,27 @@ async def test_pyserial_opens_the_slave_path_directly() -> None:
             await asyncio.wait_for(pty.read(), 0.05)
 
 
+async def test_a_serial_client_may_read_before_the_device_answers() -> None:
+    # pyserial leaves a tty at VMIN=0, where "no data yet" reads as empty: that is not the end.
+    async with await open_pty() as pty, await open_serial(pty.path) as client:
+        pending = asyncio.create_task(client.read())
+        await asyncio.sleep(0.1)
+        assert not pending.done(), "an empty tty read was taken for end of stream"
+        await pty.write(b"042507#")
+        assert await asyncio.wait_for(pending, 2.0) == b"042507#"
+        assert not client.closed
+
+
+async def test_a_serial_client_sees_the_device_go_away() -> None:
+    pty = await open_pty()
+    async with await open_serial(pty.path) as client:
+        pending = asyncio.create_task(client.read())
+        await asyncio.sleep(0.05)
+        await pty.close()
+        with pytest.raises(LinkClosedError):
+            await asyncio.wait_for(pending, 2.0)
+
+
 async def test_line_settings_follow_what_the_client_sets() -> None:
     async with await open_pty() as pty:
         assert pty.line_settings() == LineSettings(9600, 8, "N", 1)

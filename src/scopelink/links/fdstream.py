@@ -26,6 +26,8 @@ class FdStream:
     def __init__(self, fd: int, name: str) -> None:
         os.set_blocking(fd, False)
         self._fd = fd
+        # A tty in pyserial's raw mode (VMIN=0) answers "no data" with an empty read, not EAGAIN.
+        self._empty_read_may_mean_no_data = os.isatty(fd)
         self._name = name
         self._loop = asyncio.get_running_loop()
         self._waiters: set[asyncio.Future[None]] = set()
@@ -33,18 +35,23 @@ class FdStream:
 
     async def read(self, max_bytes: int) -> bytes:
         """Wait for 1..max_bytes bytes; LinkClosedError on EOF, hang-up or close."""
+        waited = False
         while True:
             self._raise_if_closed()
             try:
                 data = os.read(self._fd, max_bytes)
             except BlockingIOError:
-                await self._wait_ready(self._loop.add_reader, self._loop.remove_reader)
-                continue
+                data = None
             except OSError as exc:
                 raise self._gone_error(exc) from exc
-            if not data:
-                raise LinkClosedError(f"{self._name}: end of stream")
-            return data
+            if data:
+                return data
+            if data is None or (self._empty_read_may_mean_no_data and not waited):
+                await self._wait_ready(self._loop.add_reader, self._loop.remove_reader)
+                waited = True
+                continue
+            # Empty although the descriptor said it was readable: the other end hung up.
+            raise LinkClosedError(f"{self._name}: end of stream")
 
     async def write(self, data: bytes) -> None:
         """Write all of ``data``, waiting for buffer space as needed."""
