@@ -195,6 +195,15 @@ class Axis:
                 return segment.start_s
         return None
 
+    def segments_from(self, t: float) -> tuple[Segment, ...]:
+        """The planned segments starting at or after ``t``."""
+        return tuple(s for s in self._segments if s.start_s >= t)
+
+    def replace_from(self, t: float, segments: tuple[Segment, ...]) -> None:
+        """Replace the plan from ``t`` on by ``segments`` (as saved by :meth:`segments_from`)."""
+        self._cut(t)
+        self._segments.extend(segments)
+
     @property
     def final_segment(self) -> Segment:
         """The open-ended motion the plan settles into."""

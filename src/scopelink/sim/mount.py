@@ -32,7 +32,7 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.mount.types import AlignmentMode
-from scopelink.sim.axis import Axis, Trajectory
+from scopelink.sim.axis import Axis, Segment, Trajectory
 from scopelink.sim.clock import SimClock
 from scopelink.sim.geometry import Geometry, geometry_for
 from scopelink.sim.models import EQ6, MountModel
@@ -53,10 +53,15 @@ _LANDING_TOLERANCE_S = 1e-9
 
 @dataclass(frozen=True, slots=True)
 class LimitStop:
-    """Motion stopped (or scheduled to stop) by the physics at elapsed time ``at_s``."""
+    """Motion stopped (or scheduled to stop) by the physics at elapsed time ``at_s``.
+
+    ``replaced`` holds each axis's plan from ``at_s`` on as it was before the stop, so a new
+    command issued before the stop can restore it and plan afresh.
+    """
 
     at_s: float
     reason: str
+    replaced: tuple[tuple[Segment, ...], tuple[Segment, ...]]
 
 
 class SimulatedMount(Mount):
@@ -214,7 +219,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def disconnect(self) -> None:
-        self._stop_motion(self.elapsed())
+        self._stop_motion(self._begin())
         self._connected = False
         self.snapshot()
 
@@ -224,8 +229,7 @@ class SimulatedMount(Mount):
     # --- Mount hooks ----------------------------------------------------------------------------
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
             self._tracking = self._default_tracking()
@@ -242,8 +246,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         # ASCOM requires tracking off for alt/az slews: the mount lands and holds still.
         self._tracking = TrackingMode.OFF
         side = self.geometry.choose_side(alt_deg, az_deg, self._side_at(t))
@@ -252,11 +255,11 @@ class SimulatedMount(Mount):
         self._goto_until = max(
             axis.slew_to(target, at=t) for axis, target in zip(self.axes, counters, strict=True)
         )
+        self._enforce_limits(self._goto_until)
         self.snapshot()
 
     async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         alt, az = j2000_to_observed(
             ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
         )
@@ -266,17 +269,16 @@ class SimulatedMount(Mount):
             axis.set_position(current + _wrap_signed(counter - current), at=t)
         self._aligned = True
         self._retarget(t)
+        self._enforce_limits(t)
         self.snapshot()
 
     async def _abort(self) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self._stop_motion(t)
         self.snapshot()
 
     async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         index = axis.value
         if t < self._goto_until:  # a manual move takes over from a goto, as on a hand control
             self._goto_until = -_FOREVER
@@ -289,8 +291,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         index, sign = self.geometry.guide_axis(direction, self.axes[1].unwrapped_position_at(t))
         motor = self.axes[index]
         duration = duration_ms / 1000.0
@@ -302,8 +303,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self._tracking = mode
         if t < self._goto_until:
             # The goto's own landing decides; a change of rate applies from the landing on.
@@ -314,8 +314,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _park(self) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self._tracking = TrackingMode.OFF
         self._clear_motion_flags()
         self._goto_until = max(
@@ -323,6 +322,7 @@ class SimulatedMount(Mount):
             for axis, target in zip(self.axes, self.park_position, strict=True)
         )
         self._parked = True
+        self._enforce_limits(self._goto_until)
         self.snapshot()
 
     async def _unpark(self) -> None:
@@ -330,8 +330,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _set_site(self, site: Site) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self._site = site
         self.geometry = self._make_geometry(site)
         self._retarget(t)
@@ -339,8 +338,7 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def _set_time(self, utc: datetime) -> None:
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self.clock.set_time(utc)
         self._retarget(t)
         self._enforce_limits(t)
@@ -350,10 +348,10 @@ class SimulatedMount(Mount):
 
     def set_axis_position(self, axis: MountAxis, position_deg: float) -> None:
         """Redefine one axis counter (SynScan "set axis position"); the motor does not move."""
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         self.axes[axis.value].set_position(position_deg, at=t)
         self._retarget(t)
+        self._enforce_limits(t)
         self.snapshot()
 
     def slew_axis_to(
@@ -363,8 +361,7 @@ class SimulatedMount(Mount):
 
         Tracking, if on, resumes from wherever both axes are at the landing.
         """
-        t = self.elapsed()
-        self._settle(t)
+        t = self._begin()
         landing = self.axes[axis.value].slew_to(position_deg, max_rate_deg_s=max_rate_deg_s, at=t)
         self._goto_until = max(self._goto_until, landing)
         self._retarget(landing)
@@ -429,7 +426,7 @@ class SimulatedMount(Mount):
             site=self._site,
             epoch=self.clock.epoch,
             side=side,
-            reference=self.counters_at(t),
+            primary_reference=self.axes[0].unwrapped_position_at(t),
         )
 
     def _path_from_here(self, t: float) -> SkyPath:
@@ -488,6 +485,20 @@ class SimulatedMount(Mount):
         stop = self._limit_stop
         if stop is not None and stop.at_s <= now:
             self._tracking = TrackingMode.OFF
+
+    def _begin(self) -> float:
+        """Start a command at the current elapsed time: settle, and undo a stop still ahead.
+
+        Every command re-runs the limit search when it has planned its motion.
+        """
+        now = self.elapsed()
+        self._settle(now)
+        stop = self._limit_stop
+        if stop is not None and stop.at_s > now:
+            for axis, plan in zip(self.axes, stop.replaced, strict=True):
+                axis.replace_from(stop.at_s, plan)
+            self._limit_stop = None
+        return now
 
     # --- horizon and mechanical limits ------------------------------------------------------------
 
@@ -553,6 +564,7 @@ class SimulatedMount(Mount):
             middle = 0.5 * (low + high)
             inside = self._margin_at(middle, exact=True) >= floor
             low, high = (middle, high) if inside else (low, middle)
+        replaced = (self.axes[0].segments_from(low), self.axes[1].segments_from(low))
         rest = max(axis.stop(at=low) for axis in self.axes)
         self._goto_until = min(self._goto_until, low)
         self._moving_until = [min(until, rest) for until in self._moving_until]
@@ -561,6 +573,7 @@ class SimulatedMount(Mount):
             low,
             f"motion stopped at a limit (altitude {alt:.2f}°, azimuth {az:.1f}°): the horizon, "
             "the altitude limit or the meridian limit; move away or goto elsewhere",
+            replaced,
         )
 
 

@@ -52,8 +52,10 @@ class SkyPath:
     """The axis counters that keep the tube on ``target``, as functions of elapsed time.
 
     ``epoch`` is the UTC date at elapsed 0 (fixed for the life of the path); ``side`` the pier
-    side on a German mount. Angles that may wrap are unwrapped near ``reference`` (the counters
-    when the path was made) so the axes take the short way and stay continuous.
+    side on a German mount. Counters are unwrapped so they never jump: a freely turning primary
+    (azimuth, fork RA) near ``primary_reference`` (the counter when the path was made, so a goto
+    takes the short way round); any other counter near its own value at the target's
+    ``at_s``, so a German mount reaches it without turning the counterweight up.
     """
 
     def __init__(
@@ -64,14 +66,17 @@ class SkyPath:
         site: Site,
         epoch: datetime,
         side: PierSide,
-        reference: tuple[float, float],
+        primary_reference: float | None = None,
     ) -> None:
         self.target = target
         self.geometry = geometry
         self.site = site
         self.epoch = epoch
         self.side = side
-        self.reference = reference
+        anchor = self._raw_axes_at(target.at_s)
+        if not geometry.primary_wraps or primary_reference is None:
+            primary_reference = anchor[0]
+        self._reference = (primary_reference, anchor[1])
         self._cache: OrderedDict[float, tuple[float, float]] = OrderedDict()
 
     def observed_at(self, t: float) -> tuple[float, float]:
@@ -79,16 +84,17 @@ class SkyPath:
         when = self.epoch + timedelta(seconds=t)
         return j2000_to_observed(self.target.ra_at(t), self.target.dec_j2000_deg, when, self.site)
 
+    def _raw_axes_at(self, t: float) -> tuple[float, float]:
+        alt, az = self.observed_at(t)
+        return self.geometry.to_axes(alt, az, self.side)
+
     def axes_at(self, t: float) -> tuple[float, float]:
         """Both counters at elapsed ``t``."""
         cached = self._cache.get(t)
         if cached is not None:
             return cached
-        alt, az = self.observed_at(t)
-        primary, secondary = self.geometry.to_axes(alt, az, self.side)
-        if self.geometry.primary_wraps:
-            primary = _unwrap(primary, self.reference[0])
-        axes = (primary, _unwrap(secondary, self.reference[1]))
+        primary, secondary = self._raw_axes_at(t)
+        axes = (_unwrap(primary, self._reference[0]), _unwrap(secondary, self._reference[1]))
         self._cache[t] = axes
         if len(self._cache) > _CACHE_SIZE:
             self._cache.popitem(last=False)
