@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import asyncio
-import termios
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
 from scopelink.astro import Site
-from scopelink.links import Link, SerialLink, open_serial
+from scopelink.links import Link, open_serial
 from scopelink.protocol.skytracker import (
     NEED_DATA,
     CommanderClient,
@@ -24,7 +23,6 @@ from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
 
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0, pressure_hpa=0.0)
 REPLY_TIMEOUT_S = 2.0
-_CC = 6
 
 
 def sky_tracker_mount(clock: SimClock | None = None) -> SimulatedMount:
@@ -73,16 +71,6 @@ class CommanderSession:
         return event
 
 
-def wait_for_a_byte(link: SerialLink) -> None:
-    """VMIN=1 on the client's tty: pyserial leaves VMIN=0, where a read with nothing pending
-    returns 0 bytes and our fd stream takes that for end of stream (reported to links)."""
-    fd = link.port.fd
-    assert fd is not None
-    attributes = termios.tcgetattr(fd)
-    attributes[_CC][termios.VMIN] = 1
-    termios.tcsetattr(fd, termios.TCSANOW, attributes)
-
-
 @asynccontextmanager
 async def pty_client(
     emulator: SkyTrackerEmulator, *, stopbits: float = 2, baudrate: int = 9600
@@ -90,7 +78,6 @@ async def pty_client(
     """A pty served by ``emulator`` and our serial link on its other end (8N2 by default)."""
     path = await emulator.on_pty()
     link = await open_serial(path, baudrate=baudrate, stopbits=stopbits)
-    wait_for_a_byte(link)
     try:
         yield link
     finally:

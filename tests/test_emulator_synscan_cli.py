@@ -57,7 +57,6 @@ async def test_pty_prints_the_device_path() -> None:
         assert match, line
         async with await open_serial(match.group(1)) as link:
             await link.write(b"J")
-            await asyncio.sleep(0.2)  # the reply is paced at 9600 baud
             async with asyncio.timeout(3):
                 assert await link.read_exactly(2) == b"\x00#"
     finally:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import termios
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -86,16 +85,6 @@ class Session:
                 self.connection.receive_data(await self.link.read())
 
 
-def blocking_reads(link: Link) -> None:
-    """pyserial opens ttys with VMIN=0, which makes a read with nothing to read look like end
-    of stream to the links layer; a real client waits, so ask the tty to wait (VMIN=1)."""
-    fd = link.port.fd  # type: ignore[attr-defined]
-    attributes = termios.tcgetattr(fd)
-    attributes[6][termios.VMIN] = 1
-    attributes[6][termios.VTIME] = 0
-    termios.tcsetattr(fd, termios.TCSANOW, attributes)
-
-
 @asynccontextmanager
 async def session(
     transport: str, config: SynScanConfig | None = None, *, clock: SimClock | None = None
@@ -104,7 +93,6 @@ async def session(
     async with SynScanEmulator(mount, config) as emulator:
         if transport == "pty":
             link: Link = await open_serial(await emulator.on_pty())
-            blocking_reads(link)
         else:
             link = await open_tcp(*await emulator.on_tcp("127.0.0.1", 0))
         async with link:
