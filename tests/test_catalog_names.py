@@ -197,6 +197,14 @@ def test_search_lists_each_object_once_and_respects_the_limit() -> None:
     assert search("zzzzzz", 10) == []
 
 
+def test_search_fills_the_limit_when_objects_have_many_matching_aliases() -> None:
+    # Every Messier object also matches "M" through "MCG ..." or "MWSC ..." identifiers.
+    results = search("M", 200)
+    assert len(results) == 200
+    assert len({r.name for r in results}) == 200
+    assert len(default_catalogue()) > 13_000
+
+
 def test_search_reports_the_alias_that_matched() -> None:
     (match,) = [m for m in search("orion neb", 10) if m.name == "M 42"]
     assert match.matched == "Orion Nebula"

@@ -9,6 +9,7 @@ from collections.abc import Callable, Iterable
 from functools import cache
 
 import numpy as np
+import numpy.typing as npt
 
 from scopelink.astro.catalog.deepsky import load_deep_sky
 from scopelink.astro.catalog.entries import CatalogEntry, Prominence
@@ -104,12 +105,15 @@ class Catalogue:
         high = bisect.bisect_left(self._keys, key + "~", lo=low)
         # Rank, then key order: a unique score, so partial selection is deterministic.
         scores = self._ranks[low:high] * len(self._keys) + np.arange(high - low)
-        wanted = min(len(scores), limit * 4)
-        best = np.argpartition(scores, wanted - 1)[:wanted] if wanted < len(scores) else None
-        best = np.argsort(scores) if best is None else best[np.argsort(scores[best])]
-        positions = [low + int(i) for i in best]
-        if low < high and self._keys[low] == key:
-            positions.insert(0, low)
+        exact = [low] if low < high and self._keys[low] == key else []
+        wanted = limit * 4  # objects have several keys: take more, then fewer after dedup
+        while True:
+            matches = self._distinct_matches(exact + _smallest(scores, wanted, low), limit)
+            if len(matches) == limit or wanted >= len(scores):
+                return matches
+            wanted *= 4
+
+    def _distinct_matches(self, positions: list[int], limit: int) -> list[SearchMatch]:
         matches: list[SearchMatch] = []
         seen: set[int] = set()
         for position in positions:
@@ -145,6 +149,16 @@ class Catalogue:
         found += difflib.get_close_matches(key, candidates, n=limit * 2, cutoff=_SUGGESTION_CUTOFF)
         texts = [self._by_key[k][1] for k in found]
         return tuple(dict.fromkeys(texts))[:limit]
+
+
+def _smallest(scores: npt.NDArray[np.int64], count: int, offset: int) -> list[int]:
+    """Indices (plus ``offset``) of the ``count`` smallest scores, smallest first."""
+    if count < len(scores):
+        chosen = np.argpartition(scores, count - 1)[:count]
+        ordered = chosen[np.argsort(scores[chosen])]
+    else:
+        ordered = np.argsort(scores)
+    return [offset + int(i) for i in ordered]
 
 
 def _magnitude_or_faint(magnitude: float | None) -> float:
