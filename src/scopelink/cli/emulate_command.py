@@ -9,15 +9,20 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import os
-import signal
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from scopelink.astro import Site
 from scopelink.cli.errors import CommandError
+from scopelink.cli.options import (
+    add_site_and_clock_arguments,
+    parse_host_port,
+    parse_site,
+    positive_rate,
+    until_stopped,
+)
 from scopelink.links import LinkError
 from scopelink.protocol.synscan import Version, VersionDialect
 from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
@@ -240,15 +245,7 @@ def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
         "e:drop, any:delay=6:p=0.1 (kinds: drop short malformed delay slow stall halt close)",
     )
     parser.add_argument("--seed", type=int, help="seed of probabilistic faults")
-    parser.add_argument(
-        "--site",
-        default="51.4779,-0.0015",
-        metavar="LAT,LON",
-        help="site latitude and east longitude in degrees (default Greenwich)",
-    )
-    parser.add_argument(
-        "--clock-rate", type=float, default=1.0, metavar="X", help="simulated time speed (1 = real)"
-    )
+    add_site_and_clock_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -259,41 +256,18 @@ def run(args: argparse.Namespace) -> int:
     options = EmulatorOptions(
         faults=faults,
         wire=None if args.no_pacing else SERIAL_9600_8N1,
-        site=_site(args.site),
-        clock=SimClock(rate=_positive(args.clock_rate)),
+        site=parse_site(args.site),
+        clock=SimClock(rate=positive_rate(args.clock_rate)),
     )
     return asyncio.run(_serve(args, options))
 
 
-def _site(text: str) -> Site:
-    try:
-        latitude, longitude = (float(part) for part in text.split(","))
-        return Site(latitude, longitude)
-    except ValueError as error:
-        raise CommandError(f"bad --site {text!r}: {error}", "give LAT,LON like 40.4,-3.7") from None
-
-
-def _positive(rate: float) -> float:
-    if not rate > 0:
-        raise CommandError(f"--clock-rate must be positive, not {rate}")
-    return rate
-
-
 async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
     device = await EMULATORS[args.device].create(args, options)
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
     try:
-        async with device:
+        async with until_stopped() as stop, device:
             if args.tcp is not None:
-                host, _, port = args.tcp.rpartition(":")
-                if not host or not port.isdigit():
-                    raise CommandError(
-                        f"bad --tcp {args.tcp!r}", "give HOST:PORT, e.g. 127.0.0.1:0"
-                    )
-                await device.on_tcp(host, int(port))
+                await device.on_tcp(*parse_host_port(args.tcp, "--tcp"))
                 print(f"{args.device} emulator listening on {device.address}", flush=True)
             else:
                 path = await device.on_pty(args.pty or None)
@@ -301,8 +275,4 @@ async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
             await stop.wait()
     except LinkError as error:
         raise CommandError(str(error)) from None
-    finally:
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            with contextlib.suppress(ValueError):
-                loop.remove_signal_handler(signum)
     return 0

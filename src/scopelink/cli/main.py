@@ -13,10 +13,10 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from scopelink import __version__
-from scopelink.cli import decode_command, emulate_command
+from scopelink.cli import decode_command, emulate_command, serve_command
 from scopelink.cli.errors import CommandError
 
-SUBCOMMANDS: tuple[ModuleType, ...] = (decode_command, emulate_command)
+SUBCOMMANDS: tuple[ModuleType, ...] = (serve_command, emulate_command, decode_command)
 
 EXIT_USAGE = 2
 
