@@ -164,16 +164,32 @@ def test_set_position_redefines_the_counter_without_moving() -> None:
     assert axis.rate == pytest.approx(1.0)
 
 
-def test_follow_and_rebase_are_continuous() -> None:
+def test_follow_and_insert_follow_are_continuous() -> None:
     _, axis = make_axis()
-    axis.follow(lambda t: 0.01 * t, at=0.0)
+    axis.follow(lambda t: 100.0 + 0.01 * t, at=0.0)
+    assert axis.unwrapped_position_at(5.0) == pytest.approx(0.05)
     axis.set_rate(0.5, at=10.0)
-    before = axis.unwrapped_position_at(12.0)
-    axis.rebase(lambda t: 5.0 + 0.02 * t, at=12.0)
-    assert axis.unwrapped_position_at(12.0) == pytest.approx(before, abs=1e-12)
+    axis.insert_follow(lambda t: 0.03 * t, at=20.0)
+    axis.insert_follow(lambda t: 5.0 + 0.02 * t, at=12.0)  # ahead of the one at 20 s
+    for t in (12.0, 20.0):
+        assert axis.unwrapped_position_at(t) == pytest.approx(
+            axis.unwrapped_position_at(t - 1e-9), abs=1e-8
+        )
     assert axis.rate_at(13.0) == pytest.approx(0.5 + 0.02, abs=1e-9)
-    axis.rebase(None, at=20.0)
-    assert axis.rate_at(21.0) == pytest.approx(0.5, abs=1e-12)
+    assert axis.rate_at(21.0) == pytest.approx(0.5 + 0.03, abs=1e-9)
+    axis.insert_follow(None, at=30.0)
+    assert axis.rate_at(31.0) == pytest.approx(0.5, abs=1e-12)
+    rest = axis.stop(at=40.0)
+    assert not axis.is_moving_at(rest)
+    assert axis.unwrapped_position_at(rest + 5.0) == axis.unwrapped_position_at(rest)
+
+
+def test_stop_takes_over_a_followed_rate() -> None:
+    _, axis = make_axis()
+    axis.follow(lambda t: 0.004 * t, at=0.0)
+    rest = axis.stop(at=100.0)
+    assert rest == pytest.approx(100.0 + 0.004 / ACCELERATION)
+    assert axis.unwrapped_position_at(rest) == pytest.approx(0.4 + 0.004**2 / (2 * ACCELERATION))
 
 
 @settings(max_examples=300, deadline=None)

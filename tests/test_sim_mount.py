@@ -359,3 +359,23 @@ async def test_power_on_positions() -> None:
     altaz = (await make_mount(AZ_GTI, NORTH)).snapshot()
     assert (altaz.alt_deg, altaz.az_deg) == (0.0, 0.0)
     assert altaz.pier_side is PierSide.UNKNOWN
+
+
+@pytest.mark.parametrize("model", [EQ6, AZ_GTI], ids=["gem", "altaz"])
+async def test_overlapping_guide_pulses_end_smoothly_and_are_tracked(model: MountModel) -> None:
+    mount = await make_mount(model, NORTH)
+    await mount.goto_equatorial(*target_at_hour_angle(NORTH, 2.0, 30.0))
+    await land(mount)
+    await mount.pulse_guide(GuideDirection.WEST, 1000)
+    mount.step(0.2)
+    await mount.pulse_guide(GuideDirection.NORTH, 500)
+    start = mount.elapsed()
+    previous = mount.counters_at(start)
+    for k in range(1, 1500):  # both pulses end in here: no jump anywhere (1 ms steps)
+        counters = mount.counters_at(start + k * 1e-3)
+        assert abs(counters[0] - previous[0]) < 2e-5
+        assert abs(counters[1] - previous[1]) < 2e-5
+        previous = counters
+    held = mount.step(2.0)
+    state = mount.step(3600.0)
+    assert error_arcsec(state, held.ra_j2000_hours or 0.0, held.dec_j2000_deg or 0.0) < 0.1

@@ -1,14 +1,18 @@
 """One motor axis with exact, closed-form motion.
 
-An axis's future is a list of :class:`Segment` s, each a constant-acceleration motion (the
-*kinematic* part) optionally added to a *followed trajectory* (a smooth function of time such as
-a star's hour angle, used for tracking). The position at any time is evaluated in closed form from
-the segment in force, so it does not depend on how often anyone looks: the clock can run x1000
-and every reading stays exact.
+The counter is the sum of two continuous parts, each planned ahead:
+
+* the *kinematic* part: :class:`Segment` s of constant acceleration (ramps, cruises, slews);
+* the *followed* part: :class:`FollowPiece` s, each adding the change of a smooth function of
+  time (a star's hour angle, for tracking) since the piece began, so swapping the function
+  never makes the axis jump.
+
+The position at any time is evaluated in closed form, so it does not depend on how often anyone
+looks: the clock can run x1000 and every reading stays exact.
 
 Commands (``set_rate``, ``slew_to``, ``stop``, ``follow``...) take effect at a time ``at``
-(default: now). They keep the plan up to that time and replace everything after it, so
-commands may be scheduled ahead (a guide pulse schedules its own end).
+(default: now) and replace what was planned after it, so commands may be scheduled ahead (a guide
+pulse schedules its own end).
 
 Units: degrees, seconds, degrees per second. A *wrapping* axis (RA of a fork, azimuth) reports
 positions in [0, 360) and takes the short way round; a bounded one reports the raw angle.
@@ -20,9 +24,12 @@ import math
 from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 __all__ = [
     "Axis",
+    "AxisPlan",
+    "FollowPiece",
     "Phase",
     "Segment",
     "Trajectory",
@@ -90,23 +97,51 @@ def plan_move(
 
 @dataclass(frozen=True, slots=True)
 class Segment:
-    """Motion from ``start_s`` until the next segment starts.
+    """Kinematic motion from ``start_s`` until the next segment starts.
 
-    The kinematic part is ``offset + rate τ + acceleration τ²/2`` (τ = t - start); the position is
-    that plus ``follow(t)`` when a trajectory is followed.
+    Position ``offset + rate τ + acceleration τ²/2`` and rate ``rate + acceleration τ``, with
+    τ = t - start.
     """
 
     start_s: float
     offset_deg: float
     rate_deg_s: float
     acceleration_deg_s2: float
-    follow: Trajectory | None = None
 
     def kinematic_at(self, t: float) -> tuple[float, float]:
-        """Kinematic (position, rate) at ``t``."""
+        """(position, rate) at ``t``."""
         tau = t - self.start_s
         position = self.offset_deg + tau * (self.rate_deg_s + 0.5 * self.acceleration_deg_s2 * tau)
         return position, self.rate_deg_s + self.acceleration_deg_s2 * tau
+
+
+@dataclass(frozen=True, slots=True)
+class FollowPiece:
+    """Followed motion from ``start_s``: ``base + trajectory(t) - trajectory(start)``.
+
+    With no trajectory the followed part holds ``base``.
+    """
+
+    start_s: float
+    base_deg: float
+    trajectory: Trajectory | None = None
+    origin_deg: float = 0.0
+
+    def value_at(self, t: float) -> float:
+        if self.trajectory is None:
+            return self.base_deg
+        return self.base_deg + self.trajectory(t) - self.origin_deg
+
+
+_Planned = TypeVar("_Planned", Segment, FollowPiece)
+
+
+@dataclass(frozen=True, slots=True)
+class AxisPlan:
+    """Both parts of an axis's plan from some time on (to put back with ``restore_plan``)."""
+
+    segments: tuple[Segment, ...]
+    follows: tuple[FollowPiece, ...]
 
 
 class Axis:
@@ -114,7 +149,9 @@ class Axis:
 
     ``position`` is the motor *counter* the controller reads; :meth:`set_position` redefines it
     (the motor does not move), and ``counter_offset_deg`` accumulates those redefinitions so the
-    physical angle stays known (``physical = counter - counter_offset``).
+    physical angle stays known (``physical = counter - counter_offset``). The rate and
+    acceleration limits bind the kinematic part; a followed trajectory (tracking) adds its own
+    slow motion on top.
     """
 
     def __init__(
@@ -134,7 +171,9 @@ class Axis:
         self.acceleration_deg_s2 = acceleration_deg_s2
         self.wrap = wrap
         self._time = time_source
-        self._segments: list[Segment] = [Segment(time_source(), position_deg, 0.0, 0.0)]
+        start = time_source()
+        self._segments: list[Segment] = [Segment(start, position_deg, 0.0, 0.0)]
+        self._follows: list[FollowPiece] = [FollowPiece(start, 0.0)]
         self.counter_offset_deg = 0.0
 
     # --- reading --------------------------------------------------------------------------------
@@ -144,19 +183,30 @@ class Axis:
 
     @property
     def segments(self) -> tuple[Segment, ...]:
-        """The plan in force (for inspection and tests)."""
+        """The kinematic plan in force (for inspection and tests)."""
         return tuple(self._segments)
 
+    @property
+    def follows(self) -> tuple[FollowPiece, ...]:
+        """The followed plan in force (for inspection and tests)."""
+        return tuple(self._follows)
+
     def segment_at(self, t: float) -> Segment:
-        """The segment in force at ``t`` (the earliest kept one for times before it)."""
-        index = bisect_right([s.start_s for s in self._segments], t) - 1
-        return self._segments[max(index, 0)]
+        """The kinematic segment in force at ``t`` (the earliest kept one before it)."""
+        return _in_force(self._segments, t)
+
+    def follow_at(self, t: float) -> FollowPiece:
+        """The followed piece in force at ``t``."""
+        return _in_force(self._follows, t)
+
+    def kinematic_at(self, t: float) -> tuple[float, float]:
+        """Kinematic (position, rate) at ``t``: the motor's own commanded motion."""
+        return self.segment_at(t).kinematic_at(t)
 
     def unwrapped_position_at(self, t: float) -> float:
         """Counter position at ``t`` without wrapping (continuous in time)."""
-        segment = self.segment_at(t)
-        position, _ = segment.kinematic_at(t)
-        return position + segment.follow(t) if segment.follow is not None else position
+        position, _ = self.kinematic_at(t)
+        return position + self.follow_at(t).value_at(t)
 
     def position_at(self, t: float) -> float:
         """Counter position at ``t``: in [0, 360) on a wrapping axis."""
@@ -165,11 +215,9 @@ class Axis:
 
     def rate_at(self, t: float) -> float:
         """Rate at ``t`` in degrees per second (kinematic plus followed)."""
-        segment = self.segment_at(t)
-        _, rate = segment.kinematic_at(t)
-        if segment.follow is not None:
-            rate += self._difference(segment.follow, t)
-        return rate
+        _, rate = self.kinematic_at(t)
+        trajectory = self.follow_at(t).trajectory
+        return rate if trajectory is None else rate + self._difference(trajectory, t)
 
     def rest_position_if_stopped_at(self, t: float) -> float:
         """Where the axis would come to rest (unwrapped) if told to stop at ``t``."""
@@ -181,33 +229,27 @@ class Axis:
         return self.unwrapped_position_at(t) - self.counter_offset_deg
 
     def is_following_at(self, t: float) -> bool:
-        return self.segment_at(t).follow is not None
+        return self.follow_at(t).trajectory is not None
 
     def is_moving_at(self, t: float) -> bool:
         """Whether the axis turns at ``t`` (tracking counts as moving)."""
-        segment = self.segment_at(t)
-        return segment.follow is not None or self.rate_at(t) != 0.0
+        return self.is_following_at(t) or self.kinematic_at(t)[1] != 0.0
 
     def next_change_after(self, t: float) -> float | None:
-        """Start of the first planned segment after ``t``, if any."""
-        for segment in self._segments:
-            if segment.start_s > t:
-                return segment.start_s
-        return None
-
-    def segments_from(self, t: float) -> tuple[Segment, ...]:
-        """The planned segments starting at or after ``t``."""
-        return tuple(s for s in self._segments if s.start_s >= t)
-
-    def replace_from(self, t: float, segments: tuple[Segment, ...]) -> None:
-        """Replace the plan from ``t`` on by ``segments`` (as saved by :meth:`segments_from`)."""
-        self._cut(t)
-        self._segments.extend(segments)
+        """Start of the first planned segment or piece after ``t``, if any."""
+        starts = [s.start_s for s in self._segments] + [f.start_s for f in self._follows]
+        later = [start for start in starts if start > t]
+        return min(later) if later else None
 
     @property
     def final_segment(self) -> Segment:
-        """The open-ended motion the plan settles into."""
+        """The open-ended kinematic motion the plan settles into."""
         return self._segments[-1]
+
+    @property
+    def final_follow(self) -> FollowPiece:
+        """The open-ended followed motion the plan settles into."""
+        return self._follows[-1]
 
     @property
     def position(self) -> float:
@@ -224,35 +266,36 @@ class Axis:
     # --- commanding -----------------------------------------------------------------------------
 
     def set_rate(self, rate_deg_s: float, *, at: float | None = None) -> float:
-        """Ramp the kinematic rate to ``rate_deg_s`` (added to any followed trajectory).
+        """Ramp the kinematic rate to ``rate_deg_s`` (on top of any followed trajectory).
 
         Returns the time the ramp ends.
         """
         self._check_rate(rate_deg_s)
         t = self._when(at)
-        segment = self.segment_at(t)
-        offset, rate = segment.kinematic_at(t)
-        self._cut(t)
+        offset, rate = self.kinematic_at(t)
+        self._segments = self._kept(self._segments, t)
         phase = ramp_phase(rate, rate_deg_s, self.acceleration_deg_s2)
         end = t + phase.duration_s
         if phase.duration_s > 0.0:
-            ramp = Segment(t, offset, rate, phase.acceleration_deg_s2, segment.follow)
+            ramp = Segment(t, offset, rate, phase.acceleration_deg_s2)
             self._segments.append(ramp)
             offset, _ = ramp.kinematic_at(end)
-        self._segments.append(Segment(end, offset, rate_deg_s, 0.0, segment.follow))
+        self._segments.append(Segment(end, offset, rate_deg_s, 0.0))
         return end
 
     def stop(self, *, at: float | None = None) -> float:
-        """Ramp down to rest (a followed trajectory is dropped). Returns the time at rest."""
+        """Stop following and ramp down to rest. Returns the time at rest."""
         t = self._when(at)
-        position, rate = self.unwrapped_position_at(t), self.rate_at(t)
-        self._cut(t)
+        offset, _ = self.kinematic_at(t)
+        rate = self.rate_at(t)  # the followed rate is taken over by the motor and ramped down
+        self._freeze(t)
+        self._segments = self._kept(self._segments, t)
         phase = ramp_phase(rate, 0.0, self.acceleration_deg_s2)
         end = t + phase.duration_s
         if phase.duration_s > 0.0:
-            self._segments.append(Segment(t, position, rate, phase.acceleration_deg_s2))
-            position += rate * abs(rate) / (2.0 * self.acceleration_deg_s2)
-        self._segments.append(Segment(end, position, 0.0, 0.0))
+            self._segments.append(Segment(t, offset, rate, phase.acceleration_deg_s2))
+            offset += rate * abs(rate) / (2.0 * self.acceleration_deg_s2)
+        self._segments.append(Segment(end, offset, 0.0, 0.0))
         return end
 
     def slew_phases(
@@ -289,61 +332,65 @@ class Axis:
         t = self._when(at)
         position, rate = self.unwrapped_position_at(t), self.rate_at(t)
         target, phases = self.slew_phases(target_deg, max_rate_deg_s=max_rate_deg_s, at=t)
-        self._cut(t)
-        start, offset = t, position
+        held = self._freeze(t)
+        self._segments = self._kept(self._segments, t)
+        start, offset = t, position - held
         for phase in phases:
             segment = Segment(start, offset, rate, phase.acceleration_deg_s2)
             self._segments.append(segment)
             start += phase.duration_s
             offset, rate = segment.kinematic_at(start)
         # Rounding in the phase sums is ~1e-13 degrees; land on the target itself.
-        if then_follow is None:
-            self._segments.append(Segment(start, target, 0.0, 0.0))
-        else:
-            self._segments.append(
-                Segment(start, target - then_follow(start), 0.0, 0.0, then_follow)
-            )
+        self._segments.append(Segment(start, target - held, 0.0, 0.0))
+        if then_follow is not None:
+            self._follows.append(FollowPiece(start, held, then_follow, then_follow(start)))
         return start
 
-    def follow(self, trajectory: Trajectory, *, at: float | None = None) -> None:
-        """Follow ``trajectory`` from ``at`` on, keeping the current position as an offset."""
-        t = self._when(at)
-        position = self.unwrapped_position_at(t)
-        self._cut(t)
-        self._segments.append(Segment(t, position - trajectory(t), 0.0, 0.0, trajectory))
+    def follow(self, trajectory: Trajectory | None, *, at: float | None = None) -> None:
+        """Follow ``trajectory`` (``None``: hold) from ``at`` on, replacing later pieces.
 
-    def rebase(self, trajectory: Trajectory | None, *, at: float | None = None) -> None:
-        """Swap the followed trajectory for ``trajectory`` (``None``: none) from ``at`` on.
-
-        The position does not jump. Any kinematic motion in progress (a guide pulse, a rate
-        offset) continues unchanged on top of the new trajectory; later segments that followed
-        the old one follow the new one. Only the followed rate changes at once (by a tracking
-        rate at most, far below what the acceleration limit allows in one motor step).
+        The position does not jump; only the followed rate changes at once (by a tracking rate
+        at most, far below what the acceleration limit allows in one motor step).
         """
         t = self._when(at)
-        current = self.segment_at(t)
-        old = current.follow
-        shift = (old(t) if old is not None else 0.0) - (trajectory(t) if trajectory else 0.0)
-        offset, rate = current.kinematic_at(t)
-        later = [s for s in self._segments if s.start_s > t]
-        self._cut(t)
-        self._segments.append(
-            Segment(t, offset + shift, rate, current.acceleration_deg_s2, trajectory)
-        )
-        self._segments.extend(
-            replace(s, offset_deg=s.offset_deg + shift, follow=trajectory) if s.follow is old else s
-            for s in later
-        )
+        base = self._follow_value_before(t)
+        self._follows = self._kept(self._follows, t)
+        self._follows.append(_piece(t, base, trajectory))
+
+    def insert_follow(self, trajectory: Trajectory | None, *, at: float) -> None:
+        """Follow ``trajectory`` from ``at`` until the next planned piece.
+
+        Later pieces keep their trajectories and start from wherever this one leaves off.
+        """
+        pieces = [f for f in self._follows if f.start_s != at]
+        pieces.append(_piece(at, 0.0, trajectory))
+        pieces.sort(key=lambda f: f.start_s)
+        self._prune(pieces)
+        chained = pieces[:1]
+        for piece in pieces[1:]:
+            chained.append(replace(piece, base_deg=chained[-1].value_at(piece.start_s)))
+        self._follows = chained
 
     def set_position(self, position_deg: float, *, at: float | None = None) -> None:
         """Redefine the counter to read ``position_deg`` at ``at``; the motor does not move."""
         t = self._when(at)
-        current = self.unwrapped_position_at(t)
-        shift = position_deg - current
+        shift = position_deg - self.unwrapped_position_at(t)
         if self.wrap:
             shift = _wrap_signed(shift)
         self._segments = [replace(s, offset_deg=s.offset_deg + shift) for s in self._segments]
         self.counter_offset_deg += shift
+
+    def plan_from(self, t: float) -> AxisPlan:
+        """What is planned from ``t`` on (to put back later with :meth:`restore_plan`)."""
+        return AxisPlan(
+            tuple(s for s in self._segments if s.start_s >= t),
+            tuple(f for f in self._follows if f.start_s >= t),
+        )
+
+    def restore_plan(self, t: float, plan: AxisPlan) -> None:
+        """Replace what is planned from ``t`` on by ``plan`` (as saved by :meth:`plan_from`)."""
+        self._segments = [*self._kept(self._segments, t), *plan.segments]
+        self._follows = [*self._kept(self._follows, t), *plan.follows]
 
     # --- internals ------------------------------------------------------------------------------
 
@@ -370,23 +417,46 @@ class Axis:
             raise ValueError(f"{self.name}: target {target_deg} is not a number")
         return position + _wrap_signed(target_deg - position) if self.wrap else target_deg
 
-    def _cut(self, t: float) -> None:
-        """Keep the plan strictly before ``t``; the caller appends what happens from ``t``.
+    def _follow_value_before(self, t: float) -> float:
+        """The followed part just before ``t`` (pieces starting at ``t`` ignored)."""
+        earlier = [f for f in self._follows if f.start_s < t]
+        return (earlier[-1] if earlier else self._follows[0]).value_at(t)
 
-        History is not kept: segments over before the present are dropped, so a long session
-        (hours of guide pulses) stays small and fast.
+    def _freeze(self, t: float) -> float:
+        """Stop following at ``t`` (dropping later pieces); returns the value held."""
+        held = self._follow_value_before(t)
+        self._follows = [*self._kept(self._follows, t), FollowPiece(t, held)]
+        return held
+
+    def _kept(self, items: list[_Planned], t: float) -> list[_Planned]:
+        """``items`` strictly before ``t``, without those over before the present.
+
+        History is not kept, so a long session (hours of guide pulses) stays small and fast.
         """
-        kept = [s for s in self._segments if s.start_s < t]
+        kept = [item for item in items if item.start_s < t]
+        self._prune(kept)
+        return kept
+
+    def _prune(self, items: list[_Planned]) -> None:
         present = self.now()
-        while len(kept) > 1 and kept[1].start_s <= present:
-            kept.pop(0)
-        self._segments = kept
+        while len(items) > 1 and items[1].start_s < present:
+            items.pop(0)
 
     def _difference(self, trajectory: Trajectory, t: float) -> float:
         step = trajectory(t + _DERIVATIVE_STEP_S) - trajectory(t - _DERIVATIVE_STEP_S)
         if self.wrap:
             step = _wrap_signed(step)
         return step / (2.0 * _DERIVATIVE_STEP_S)
+
+
+def _in_force(items: list[_Planned], t: float) -> _Planned:
+    index = bisect_right([item.start_s for item in items], t) - 1
+    return items[max(index, 0)]
+
+
+def _piece(t: float, base: float, trajectory: Trajectory | None) -> FollowPiece:
+    origin = trajectory(t) if trajectory is not None else 0.0
+    return FollowPiece(t, base, trajectory, origin)
 
 
 def _wrap_signed(degrees: float) -> float:

@@ -32,7 +32,7 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.mount.types import AlignmentMode
-from scopelink.sim.axis import Axis, Segment, Trajectory
+from scopelink.sim.axis import Axis, AxisPlan, Trajectory
 from scopelink.sim.clock import SimClock
 from scopelink.sim.geometry import Geometry, geometry_for
 from scopelink.sim.models import EQ6, MountModel
@@ -55,13 +55,15 @@ _LANDING_TOLERANCE_S = 1e-9
 class LimitStop:
     """Motion stopped (or scheduled to stop) by the physics at elapsed time ``at_s``.
 
-    ``replaced`` holds each axis's plan from ``at_s`` on as it was before the stop, so a new
-    command issued before the stop can restore it and plan afresh.
+    ``replaced`` holds each axis's plan from ``at_s`` on as it was before the stop (and
+    ``moving_until`` when manual moves were to end), so a new command issued before the stop can
+    restore it and plan afresh.
     """
 
     at_s: float
     reason: str
-    replaced: tuple[tuple[Segment, ...], tuple[Segment, ...]]
+    replaced: tuple[AxisPlan, AxisPlan]
+    moving_until: tuple[float, float]
 
 
 class SimulatedMount(Mount):
@@ -105,8 +107,10 @@ class SimulatedMount(Mount):
         self._parked = False
         self._tracking = TrackingMode.OFF
         self._goto_until = -_FOREVER
+        self._landing = [-_FOREVER, -_FOREVER]
         self._moving_until = [-_FOREVER, -_FOREVER]
         self._pulse_until = [-_FOREVER, -_FOREVER]
+        self._retarget_at: set[float] = set()
         self._limit_stop: LimitStop | None = None
         self._capabilities = self._make_capabilities()
 
@@ -219,9 +223,10 @@ class SimulatedMount(Mount):
         self.snapshot()
 
     async def disconnect(self) -> None:
-        self._stop_motion(self._begin())
+        t = self._begin(replan=True)
+        self._stop_motion(t)
         self._connected = False
-        self.snapshot()
+        self._finish(limits_from=t)
 
     async def refresh(self) -> MountState:
         return self.snapshot()
@@ -229,7 +234,7 @@ class SimulatedMount(Mount):
     # --- Mount hooks ----------------------------------------------------------------------------
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        t = self._begin()
+        t = self._begin(replan=True)
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
             self._tracking = self._default_tracking()
@@ -239,24 +244,18 @@ class SimulatedMount(Mount):
         )
         side = self.geometry.choose_side(alt, az, self._side_at(t))
         path = self._path(target, t, side)
-        self._clear_motion_flags()
-        landings = [self._land_on(axis, trajectory, t) for axis, trajectory in self._pair(path)]
-        self._goto_until = max(landings)
-        self._enforce_limits(self._goto_until)
-        self.snapshot()
+        for index, trajectory in enumerate((path.primary, path.secondary)):
+            self._landing[index] = self._land_on(self.axes[index], trajectory, t)
+        self._goto_until = max(self._landing)
+        self._finish(limits_from=self._goto_until)
 
     async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
-        t = self._begin()
+        t = self._begin(replan=True)
         # ASCOM requires tracking off for alt/az slews: the mount lands and holds still.
         self._tracking = TrackingMode.OFF
         side = self.geometry.choose_side(alt_deg, az_deg, self._side_at(t))
-        counters = self.geometry.to_axes(alt_deg, az_deg, side)
-        self._clear_motion_flags()
-        self._goto_until = max(
-            axis.slew_to(target, at=t) for axis, target in zip(self.axes, counters, strict=True)
-        )
-        self._enforce_limits(self._goto_until)
-        self.snapshot()
+        self._slew_both_to(self.geometry.to_axes(alt_deg, az_deg, side), t)
+        self._finish(limits_from=self._goto_until)
 
     async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         t = self._begin()
@@ -268,62 +267,48 @@ class SimulatedMount(Mount):
             current = axis.unwrapped_position_at(t)
             axis.set_position(current + _wrap_signed(counter - current), at=t)
         self._aligned = True
-        self._retarget(t)
-        self._enforce_limits(t)
-        self.snapshot()
+        self._retarget_at.add(t)
+        self._finish(limits_from=t)
 
     async def _abort(self) -> None:
-        t = self._begin()
+        t = self._begin(replan=True)
         self._stop_motion(t)
-        self.snapshot()
+        self._finish(limits_from=t)
 
     async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         t = self._begin()
         index = axis.value
-        if t < self._goto_until:  # a manual move takes over from a goto, as on a hand control
-            self._goto_until = -_FOREVER
-        motor = self.axes[index]
-        end = motor.set_rate(rate_deg_s, at=t)
+        self._take_over_from_goto(index, t)
+        end = self.axes[index].set_rate(rate_deg_s, at=t)
         self._moving_until[index] = _FOREVER if rate_deg_s != 0.0 else end
         if rate_deg_s == 0.0:
-            self._retarget(end)
-        self._enforce_limits(t)
-        self.snapshot()
+            self._retarget_at.add(end)  # track the new position from where the axis stops
+        self._finish(limits_from=t)
 
     async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         t = self._begin()
         index, sign = self.geometry.guide_axis(direction, self.axes[1].unwrapped_position_at(t))
+        self._take_over_from_goto(index, t)
         motor = self.axes[index]
         duration = duration_ms / 1000.0
         motor.set_rate(sign * self.guide_rate_deg_s, at=t)
-        end = motor.set_rate(0.0, at=t + duration)
+        self._retarget_at.add(motor.set_rate(0.0, at=t + duration))
         self._pulse_until[index] = t + duration
-        self._retarget(end)
-        self._enforce_limits(t)
-        self.snapshot()
+        self._finish(limits_from=t)
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
         t = self._begin()
         self._tracking = mode
-        if t < self._goto_until:
-            # The goto's own landing decides; a change of rate applies from the landing on.
-            self._retarget(self._goto_until)
-        else:
-            self._retarget(t)
-        self._enforce_limits(max(t, self._goto_until))
-        self.snapshot()
+        # During a goto the new mode applies from the landing on.
+        self._retarget_at.add(max(t, self._goto_until))
+        self._finish(limits_from=max(t, self._goto_until))
 
     async def _park(self) -> None:
-        t = self._begin()
+        t = self._begin(replan=True)
         self._tracking = TrackingMode.OFF
-        self._clear_motion_flags()
-        self._goto_until = max(
-            axis.slew_to(target, at=t)
-            for axis, target in zip(self.axes, self.park_position, strict=True)
-        )
+        self._slew_both_to(self.park_position, t)
         self._parked = True
-        self._enforce_limits(self._goto_until)
-        self.snapshot()
+        self._finish(limits_from=self._goto_until)
 
     async def _unpark(self) -> None:
         self._parked = False
@@ -333,16 +318,14 @@ class SimulatedMount(Mount):
         t = self._begin()
         self._site = site
         self.geometry = self._make_geometry(site)
-        self._retarget(t)
-        self._enforce_limits(t)
-        self.snapshot()
+        self._retarget_at.add(t)
+        self._finish(limits_from=t)
 
     async def _set_time(self, utc: datetime) -> None:
         t = self._begin()
         self.clock.set_time(utc)
-        self._retarget(t)
-        self._enforce_limits(t)
-        self.snapshot()
+        self._retarget_at.add(t)
+        self._finish(limits_from=t)
 
     # --- low-level access for device emulators ---------------------------------------------------
 
@@ -350,9 +333,8 @@ class SimulatedMount(Mount):
         """Redefine one axis counter (SynScan "set axis position"); the motor does not move."""
         t = self._begin()
         self.axes[axis.value].set_position(position_deg, at=t)
-        self._retarget(t)
-        self._enforce_limits(t)
-        self.snapshot()
+        self._retarget_at.add(t)
+        self._finish(limits_from=t)
 
     def slew_axis_to(
         self, axis: MountAxis, position_deg: float, *, max_rate_deg_s: float | None = None
@@ -362,11 +344,13 @@ class SimulatedMount(Mount):
         Tracking, if on, resumes from wherever both axes are at the landing.
         """
         t = self._begin()
-        landing = self.axes[axis.value].slew_to(position_deg, max_rate_deg_s=max_rate_deg_s, at=t)
+        index = axis.value
+        self._moving_until[index] = -_FOREVER
+        landing = self.axes[index].slew_to(position_deg, max_rate_deg_s=max_rate_deg_s, at=t)
+        self._landing[index] = landing
         self._goto_until = max(self._goto_until, landing)
-        self._retarget(landing)
-        self._enforce_limits(landing)
-        self.snapshot()
+        self._retarget_at.add(landing)
+        self._finish(limits_from=landing)
         return landing
 
     # --- internals ------------------------------------------------------------------------------
@@ -413,9 +397,6 @@ class SimulatedMount(Mount):
             return TrackingMode.ALT_AZ
         return TrackingMode.SIDEREAL
 
-    def _pair(self, path: SkyPath) -> tuple[tuple[Axis, Trajectory], ...]:
-        return ((self.axes[0], path.primary), (self.axes[1], path.secondary))
-
     def _side_at(self, t: float) -> PierSide:
         return self.geometry.pier_side(*self.counters_at(t))
 
@@ -434,16 +415,40 @@ class SimulatedMount(Mount):
         drift = ra_drift_hours_per_s(self._tracking)
         return self._path(SkyTarget(ra, dec, t, drift), t, self._side_at(t))
 
-    def _retarget(self, t: float) -> None:
-        """From elapsed ``t`` on, track the sky position the axes reach then (or stop tracking).
+    def _resolve_retargets(self) -> None:
+        """At each pending time, track the sky position the axes reach then (or hold still).
 
-        Continuous: motion in progress at ``t`` (a ramp, a guide pulse) carries on unchanged.
+        Recomputed in time order after every command, so each uses the plan as it now stands
+        (two overlapping guide pulses end at two different, correct positions). Motion in
+        progress at that time (a ramp, another pulse) carries on; an axis still slewing to a
+        goto target is left to its own landing.
         """
-        path = None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
-        for axis, trajectory in zip(
-            self.axes, (path.primary, path.secondary) if path else (None, None), strict=True
-        ):
-            axis.rebase(trajectory, at=t)
+        now = self.elapsed()
+        self._retarget_at = {t for t in self._retarget_at if t >= now}
+        for t in sorted(self._retarget_at):
+            path = None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
+            trajectories = (path.primary, path.secondary) if path else (None, None)
+            for index, axis in enumerate(self.axes):
+                if t >= self._landing[index]:
+                    axis.insert_follow(trajectories[index], at=t)
+
+    def _finish(self, *, limits_from: float) -> None:
+        """End a command: settle tracking, stop at the first limit, publish the state."""
+        self._resolve_retargets()
+        self._enforce_limits(limits_from)
+        self.snapshot()
+
+    def _take_over_from_goto(self, index: int, t: float) -> None:
+        """A manual motion of an axis cancels the goto it was landing (as on a hand control)."""
+        if t < self._landing[index]:
+            self.axes[index].follow(None, at=t)
+            self._landing[index] = -_FOREVER
+            self._goto_until = max(self._landing)
+
+    def _slew_both_to(self, counters: tuple[float, float], t: float) -> None:
+        for index, (axis, target) in enumerate(zip(self.axes, counters, strict=True)):
+            self._landing[index] = axis.slew_to(target, at=t)
+        self._goto_until = max(self._landing)
 
     def _land_on(self, axis: Axis, trajectory: Trajectory, t: float) -> float:
         """Slew ``axis`` so it meets the moving ``trajectory`` and follows it; returns landing.
@@ -468,17 +473,11 @@ class SimulatedMount(Mount):
             when = high
         return axis.slew_to(trajectory(when), at=t, then_follow=trajectory)
 
-    def _clear_motion_flags(self) -> None:
-        self._moving_until = [-_FOREVER, -_FOREVER]
-        self._limit_stop = None
-
     def _stop_motion(self, t: float) -> None:
         """Ramp both axes to rest; tracking, if on, resumes from the rest point."""
         rest = max(axis.stop(at=t) for axis in self.axes)
-        self._goto_until = min(self._goto_until, rest)
-        self._moving_until = [min(until, rest) for until in self._moving_until]
-        self._retarget(rest)
-        self._enforce_limits(rest)
+        self._moving_until = [rest, rest]
+        self._retarget_at.add(rest)
 
     def _settle(self, now: float) -> None:
         """Apply what the plan says has happened by ``now`` (a stop at a limit ends tracking)."""
@@ -486,17 +485,25 @@ class SimulatedMount(Mount):
         if stop is not None and stop.at_s <= now:
             self._tracking = TrackingMode.OFF
 
-    def _begin(self) -> float:
+    def _begin(self, *, replan: bool = False) -> float:
         """Start a command at the current elapsed time: settle, and undo a stop still ahead.
 
-        Every command re-runs the limit search when it has planned its motion.
+        Every command re-runs the limit search when it has planned its motion. ``replan``:
+        the command replaces all motion (goto, park, abort), so what was scheduled is dropped.
         """
         now = self.elapsed()
         self._settle(now)
         stop = self._limit_stop
         if stop is not None and stop.at_s > now:
             for axis, plan in zip(self.axes, stop.replaced, strict=True):
-                axis.replace_from(stop.at_s, plan)
+                axis.restore_plan(stop.at_s, plan)
+            self._moving_until = list(stop.moving_until)
+            self._limit_stop = None
+        if replan:
+            self._retarget_at.clear()
+            self._landing = [-_FOREVER, -_FOREVER]
+            self._goto_until = -_FOREVER
+            self._moving_until = [-_FOREVER, -_FOREVER]
             self._limit_stop = None
         return now
 
@@ -513,7 +520,7 @@ class SimulatedMount(Mount):
             if exact:
                 rest = axis.rest_position_if_stopped_at(t)
             else:
-                _, rate = axis.segment_at(t).kinematic_at(t)
+                _, rate = axis.kinematic_at(t)
                 braking = rate * abs(rate) / (2.0 * axis.acceleration_deg_s2)
                 rest = axis.unwrapped_position_at(t) + braking
             physical.append(rest - axis.counter_offset_deg)
@@ -540,7 +547,8 @@ class SimulatedMount(Mount):
     def _search_end(self, start: float) -> float:
         finals = [axis.final_segment for axis in self.axes]
         settled = max(start, *(segment.start_s for segment in finals))
-        if any(segment.follow is not None for segment in finals):
+        settled = max(settled, *(axis.final_follow.start_s for axis in self.axes))
+        if any(axis.final_follow.trajectory is not None for axis in self.axes):
             return settled + _TRACKING_LOOKAHEAD_S
         rates = [abs(segment.rate_deg_s) for segment in finals if segment.rate_deg_s != 0.0]
         if rates:
@@ -564,9 +572,9 @@ class SimulatedMount(Mount):
             middle = 0.5 * (low + high)
             inside = self._margin_at(middle, exact=True) >= floor
             low, high = (middle, high) if inside else (low, middle)
-        replaced = (self.axes[0].segments_from(low), self.axes[1].segments_from(low))
+        replaced = (self.axes[0].plan_from(low), self.axes[1].plan_from(low))
+        moving_until = (self._moving_until[0], self._moving_until[1])
         rest = max(axis.stop(at=low) for axis in self.axes)
-        self._goto_until = min(self._goto_until, low)
         self._moving_until = [min(until, rest) for until in self._moving_until]
         alt, az = self.observed_at(low)
         self._limit_stop = LimitStop(
@@ -574,6 +582,7 @@ class SimulatedMount(Mount):
             f"motion stopped at a limit (altitude {alt:.2f}°, azimuth {az:.1f}°): the horizon, "
             "the altitude limit or the meridian limit; move away or goto elsewhere",
             replaced,
+            moving_until,
         )
 
 
