@@ -379,3 +379,22 @@ async def test_overlapping_guide_pulses_end_smoothly_and_are_tracked(model: Moun
     held = mount.step(2.0)
     state = mount.step(3600.0)
     assert error_arcsec(state, held.ra_j2000_hours or 0.0, held.dec_j2000_deg or 0.0) < 0.1
+
+
+@pytest.mark.parametrize("site", [NORTH, SOUTH], ids=["north", "south"])
+async def test_gem_flip_swings_the_tube_through_the_visible_pole(site: Site) -> None:
+    mount = await make_mount(EQ6, site)
+    first = target_at_hour_angle(site, 2.0, -20.0 if site is NORTH else 20.0)
+    second = target_at_hour_angle(site, -2.0, first[1])  # the other side of the meridian
+    for target in (first, second, first):
+        start = mount.elapsed()
+        await mount.goto_equatorial(*target)
+        landing = mount.goto_ends_at
+        assert landing is not None
+        for k in range(201):
+            t = start + (landing - start) * k / 200
+            _, secondary = mount.counters_at(t)
+            assert -90.0 - 1e-9 <= secondary <= 270.0 + 1e-9  # never through the hidden pole
+            assert mount.geometry.to_observed(*mount.counters_at(t))[0] > -5.0
+        state = await land(mount)
+        assert error_arcsec(state, *target) < 0.1

@@ -74,7 +74,8 @@ class Geometry(ABC):
     def to_axes(self, alt_deg: float, az_deg: float, side: PierSide) -> tuple[float, float]:
         """Observed (altitude, azimuth) -> counters, on ``side`` of the pier where that matters.
 
-        The primary is in [-180, 180) (or [0, 360) for azimuth), the secondary in [-180, 180).
+        The primary is in [-180, 180) (or [0, 360) for azimuth); the secondary in [-90, 90], or
+        (90, 270] for a flipped German mount.
         """
 
     def pier_side(self, primary: float, secondary: float) -> PierSide:
@@ -154,7 +155,9 @@ class GermanEquatorialGeometry(_Equatorial):
             side = destination_side_of_pier(ha_hours)
         if side is self.normal_side:
             return _wrap_signed(15.0 * (s * ha_hours - 6.0)), s * dec_deg
-        return _wrap_signed(15.0 * (s * ha_hours + 6.0)), _wrap_signed(180.0 - s * dec_deg)
+        # Flipped secondary in [90, 270]: with the normal [-90, 90] one continuous range through
+        # the visible pole, so a flip never swings the tube through the pole below the horizon.
+        return _wrap_signed(15.0 * (s * ha_hours + 6.0)), 180.0 - s * dec_deg
 
     def pier_side(self, primary: float, secondary: float) -> PierSide:
         if abs(_wrap_signed(secondary)) <= 90.0:
