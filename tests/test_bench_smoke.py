@@ -1,0 +1,30 @@
+"""The emulator benchmark still runs and prints its table (so the benchmark code cannot rot)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.timeout(60)
+def test_quick_benchmark_prints_its_tables() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "bench.emulators", "--quick"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("1 mount, unpaced") for line in lines), result.stdout
+    assert any(line.startswith("1 mount, 9600 paced") for line in lines), result.stdout
+    assert any("mounts, 9600 paced" in line for line in lines), result.stdout
+    assert any(line.strip().startswith("1e+04") for line in lines), result.stdout
+    assert any(line.startswith("largest factor") for line in lines), result.stdout
