@@ -336,6 +336,17 @@ async def test_lunar_tracking_drifts_east_against_the_stars() -> None:
     assert drift_arcsec == pytest.approx((15.041067 - 14.685) * 3600, rel=1e-3)
 
 
+async def test_pec_tracking_is_sidereal() -> None:
+    mount = await make_mount(EQ6, NORTH)
+    target = target_at_hour_angle(NORTH, 1.0, 10.0)
+    await mount.goto_equatorial(*target)
+    await land(mount)
+    await mount.set_tracking(TrackingMode.PEC)
+    state = mount.step(3600.0)
+    assert state.tracking is TrackingMode.PEC
+    assert error_arcsec(state, *target) < 0.1
+
+
 async def test_set_time_moves_the_sky_not_the_axes() -> None:
     mount = await make_mount(EQ6, NORTH)
     await mount.goto_equatorial(*target_at_hour_angle(NORTH, 1.0, 20.0))
@@ -371,10 +382,10 @@ async def test_overlapping_guide_pulses_end_smoothly_and_are_tracked(model: Moun
     await mount.pulse_guide(GuideDirection.NORTH, 500)
     start = mount.elapsed()
     previous = mount.counters_at(start)
-    for k in range(1, 1500):  # both pulses end in here: no jump anywhere (1 ms steps)
-        counters = mount.counters_at(start + k * 1e-3)
-        assert abs(counters[0] - previous[0]) < 2e-5
-        assert abs(counters[1] - previous[1]) < 2e-5
+    for k in range(1, 500):  # both pulses end in here: no jump anywhere (3 ms steps)
+        counters = mount.counters_at(start + k * 3e-3)
+        assert abs(counters[0] - previous[0]) < 5e-5
+        assert abs(counters[1] - previous[1]) < 5e-5
         previous = counters
     held = mount.step(2.0)
     state = mount.step(3600.0)

@@ -576,7 +576,7 @@ class SimulatedMount(Mount):
         moving_until = (self._moving_until[0], self._moving_until[1])
         rest = max(axis.stop(at=low) for axis in self.axes)
         self._moving_until = [min(until, rest) for until in self._moving_until]
-        alt, az = self.observed_at(low)
+        alt, az = self.observed_at(rest)
         self._limit_stop = LimitStop(
             low,
             f"motion stopped at a limit (altitude {alt:.2f}°, azimuth {az:.1f}°): the horizon, "
