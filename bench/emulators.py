@@ -340,6 +340,10 @@ async def main(sizes: Sizes) -> None:
         f"clients at >= 95 % of the wire limit: {at_rate}/{many.mounts}; "
         f"unpaced one mount runs {sum(unpaced.polls_per_s) / WIRE_LIMIT:.0f}x the wire limit"
     )
+    print(
+        f"all {many.mounts} together: {sum(many.polls_per_s) / WIRE_LIMIT:.1f} mounts' worth of "
+        "wire-rate polling (total polls/s / wire limit)"
+    )
     print()
     print(
         "3. Time acceleration: goto A, goto B at "
@@ -348,7 +352,7 @@ async def main(sizes: Sizes) -> None:
     )
     print(
         f"{'factor':>10}{'real s':>9}{'slip sim s':>12}{'final err':>12}"
-        f"{'drift':>10}{'replay err':>13}  exact (errors in arcsec)"
+        f"{'drift':>12}{'replay err':>13}  exact (errors in arcsec)"
     )
     largest_exact: float | None = None
     still_exact = True
@@ -359,7 +363,7 @@ async def main(sizes: Sizes) -> None:
             largest_exact = factor
         print(
             f"{factor:>10.0e}{run.real_s:>9.3f}{run.slip_s:>12.1f}"
-            f"{run.pointing_error_arcsec:>12.4f}{run.drift_arcsec:>10.4f}"
+            f"{run.pointing_error_arcsec:>12.4f} {run.drift_arcsec:>11.4f}"
             f"{run.replay_error_arcsec:>13.4f}  {'yes' if run.exact else 'NO'}"
         )
     exact_text = "none" if largest_exact is None else f"{largest_exact:.0e}"
