@@ -121,8 +121,14 @@ def test_bad_escape_shows_where(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_readme_quick_start_examples_run() -> None:
     readme = (REPO / "README.md").read_text(encoding="utf-8")
-    block = readme.split("## Quick start", 1)[1].split("```sh\n", 1)[1].split("```", 1)[0]
-    examples = [line for line in block.splitlines() if re.search(r"\bscopelink decode\b", line)]
+    section = readme.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    blocks = [part.split("```", 1)[0] for part in section.split("```sh\n")[1:]]
+    examples = [
+        line
+        for block in blocks
+        for line in block.splitlines()
+        if re.search(r"\bscopelink decode\b", line)
+    ]
     assert len(examples) >= 4
     environment = {**os.environ, "PATH": f"{_SCRIPT.parent}{os.pathsep}{os.environ['PATH']}"}
     for example in examples:
