@@ -102,8 +102,11 @@ async def test_indi_connects_and_reads_coordinates(transport: str, tmp_path: Pat
         assert location.number("LONG") == pytest.approx(SITE.longitude_deg, abs=1e-3)
 
 
-async def test_indi_goto_sync_abort_motion_tracking_time_and_site(tmp_path: Path) -> None:
-    async with connected("pty", tmp_path) as (driver, mount, emulator):
+@pytest.mark.parametrize("transport", ["pty", "tcp"])
+async def test_indi_goto_sync_abort_motion_tracking_time_and_site(
+    transport: str, tmp_path: Path
+) -> None:
+    async with connected(transport, tmp_path) as (driver, mount, emulator):
         # goto a point 60° up in the south, given in JNow as INDI clients do
         now = mount.now()
         ra, dec = observed_to_j2000(60.0, 180.0, now, mount.site)
