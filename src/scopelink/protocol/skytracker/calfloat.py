@@ -88,3 +88,15 @@ def is_canonical_calfloat(data: bytes) -> bool:
     return len(data) == CALFLOAT_SIZE and (
         data[0] & 0x7F != 0 or data[1] & 0x80 != 0 or not any(data)
     )
+
+
+def encode_calfloat_pair(first: float, second: float) -> bytes:
+    """Two numbers back to back, as ``S``/``s`` and the Sky Commander's ``O``/``R`` carry them."""
+    return encode_calfloat(first) + encode_calfloat(second)
+
+
+def decode_calfloat_pair(data: bytes) -> tuple[float, float]:
+    """The two numbers of an 8-byte pair (see :func:`encode_calfloat_pair`)."""
+    return decode_calfloat(data[:CALFLOAT_SIZE]), decode_calfloat(
+        data[CALFLOAT_SIZE : 2 * CALFLOAT_SIZE]
+    )

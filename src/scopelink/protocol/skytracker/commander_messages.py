@@ -6,7 +6,7 @@ import re
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
-from .calfloat import CALFLOAT_SIZE, decode_calfloat, encode_calfloat
+from .calfloat import CALFLOAT_SIZE, decode_calfloat_pair, encode_calfloat_pair
 from .coordinates import (
     check_dec_degrees,
     check_ra_hours,
@@ -81,10 +81,10 @@ class _FloatPairReply(Reply):
 
     @classmethod
     def decode(cls, data: bytes) -> Self:
-        return cls(decode_calfloat(data[:CALFLOAT_SIZE]), decode_calfloat(data[CALFLOAT_SIZE:]))
+        return cls(*decode_calfloat_pair(data))
 
     def encode(self) -> bytes:
-        return encode_calfloat(self.altitude) + encode_calfloat(self.azimuth)
+        return encode_calfloat_pair(self.altitude, self.azimuth)
 
     def describe(self) -> str:
         return (

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
-from .calfloat import CALFLOAT_SIZE, decode_calfloat, encode_calfloat
+from .calfloat import CALFLOAT_SIZE, decode_calfloat_pair, encode_calfloat_pair
 from .calibration import bearing_diameter_in, ground_board_diameter_in
 from .status import Direction, TrackerMode, TrackerStatus, direction_names
 from .wire import Acknowledge, Command, Reply
@@ -69,10 +69,10 @@ class CalibrationReply(Reply):
 
     @classmethod
     def decode(cls, data: bytes) -> Self:
-        return cls(decode_calfloat(data[:CALFLOAT_SIZE]), decode_calfloat(data[CALFLOAT_SIZE:]))
+        return cls(*decode_calfloat_pair(data))
 
     def encode(self) -> bytes:
-        return encode_calfloat(self.azimuth_factor) + encode_calfloat(self.elevation_factor)
+        return encode_calfloat_pair(self.azimuth_factor, self.elevation_factor)
 
     def describe(self) -> str:
         return f"calibration: {_calibration_text(self.azimuth_factor, self.elevation_factor)}"
@@ -245,7 +245,7 @@ class SetCalibration(TrackerCommand):
         self.encode()  # refuses numbers the format cannot carry
 
     def encode(self) -> bytes:
-        return b"S" + encode_calfloat(self.azimuth_factor) + encode_calfloat(self.elevation_factor)
+        return b"S" + encode_calfloat_pair(self.azimuth_factor, self.elevation_factor)
 
     def describe(self) -> str:
         return f"S: set {_calibration_text(self.azimuth_factor, self.elevation_factor)}"
@@ -374,7 +374,5 @@ PAYLOAD_SIZES: dict[int, int] = {ord("S"): 2 * CALFLOAT_SIZE, ord("K"): 2}
 def decode_payload_command(code: int, payload: bytes) -> TrackerCommand:
     """Build ``S`` or ``K`` from its payload (never fails: every payload byte value is valid)."""
     if code == ord("S"):
-        return SetCalibration(
-            decode_calfloat(payload[:CALFLOAT_SIZE]), decode_calfloat(payload[CALFLOAT_SIZE:])
-        )
+        return SetCalibration(*decode_calfloat_pair(payload))
     return SetGuideSpeed(payload[0], payload[1])
