@@ -34,9 +34,22 @@ class Session(ABC):
     def from_device(self, byte: int, offset: int) -> None:
         """One byte the device sent; ``offset`` is its place in the trace."""
 
-    @abstractmethod
     def flush_input(self, offset: int) -> None:
         """The driver discarded unread input here: replies still awaited will never be read."""
+        self._flush_stray()
+        self._close_awaited(
+            offset,
+            "read: the driver discarded its input before the next command",
+            "read, then the driver discarded its input before the next command",
+        )
+
+    @abstractmethod
+    def _close_awaited(self, offset: int, why_absent: str, why_cut: str) -> None:
+        """Report every awaited reply as absent (none of it read) or cut short, and stop waiting.
+
+        ``why_absent`` and ``why_cut`` finish the sentences "no reply to X ..." and "incomplete
+        reply to X: N bytes ...".
+        """
 
     @abstractmethod
     def finish(self, offset: int) -> None:

@@ -244,14 +244,6 @@ class SkyTrackerSession(Session):
             if isinstance(awaited.command, st.RequestBus):
                 self._answer_bus_request(granted=False)
 
-    def flush_input(self, offset: int) -> None:
-        self._flush_stray()
-        self._close_awaited(
-            offset,
-            "read: the driver discarded its input before the next command",
-            "read, then the driver discarded its input before the next command",
-        )
-
     def finish(self, offset: int) -> None:
         self._flush_stray()
         self._close_awaited(offset, "in the trace", "before the end of the trace")

@@ -185,14 +185,6 @@ class SynScanSession(Session):
                 answers=awaited.command_offset,
             )
 
-    def flush_input(self, offset: int) -> None:
-        self._flush_stray()
-        self._close_awaited(
-            offset,
-            "read: the driver discarded its input before the next command",
-            "read, then the driver discarded its input before the next command",
-        )
-
     def finish(self, offset: int) -> None:
         self._flush_stray()
         pending = self._parser.pending
