@@ -43,7 +43,11 @@ async def connected(
     transport: str, home: Path
 ) -> AsyncIterator[tuple[IndiDriver, SimulatedMount, SynScanEmulator]]:
     require_executable(DRIVER)
-    mount = SimulatedMount(EQ6, site=SITE, clock=SimClock(start=datetime.now(UTC), rate=20.0))
+    # INDI reads `h` until '#': minute or second 35 would desync it over TCP (docs/emulators.md),
+    # so connect at real-time rate from minute 10 and only then speed the clock up.
+    start = datetime.now(UTC).replace(minute=10, second=0, microsecond=0)
+    clock = SimClock(start=start, rate=1.0)
+    mount = SimulatedMount(EQ6, site=SITE, clock=clock)
     async with (
         SynScanEmulator(mount) as emulator,
         IndiDriver.start(DRIVER, home=home, device="SynScan") as driver,
@@ -66,6 +70,9 @@ async def connected(
             await driver.set_text("DEVICE_ADDRESS", {"ADDRESS": host, "PORT": str(port)})
         await driver.set_switch("CONNECTION", {"CONNECT": True, "DISCONNECT": False})
         await driver.wait_for("CONNECTION", lambda p: p.switch("CONNECT") and is_ok(p))
+        time_read = await driver.wait_for("TIME_UTC", is_ok)
+        assert ":10:" in time_read.text("UTC"), time_read
+        clock.set_rate(20.0)
         await driver.set_number("POLLING_PERIOD", {"PERIOD_MS": 250})
         yield driver, mount, emulator
 
