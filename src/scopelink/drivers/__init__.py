@@ -1,0 +1,1 @@
+"""Protocol clients: drivers that implement the Mount API over a link to a real device."""
