@@ -230,13 +230,13 @@ async def test_park_and_unpark() -> None:
     state = await land(mount)
     assert state.parked
     assert state.tracking is TrackingMode.OFF
-    assert mount.counters_at(mount.elapsed()) == pytest.approx(mount.park_position)
+    assert mount.counters_at(mount.elapsed()) == pytest.approx(mount.park_counters)
     with pytest.raises(ParkedError):
         await mount.goto_equatorial(*target_at_hour_angle(NORTH, 2.0, 30.0))
     with pytest.raises(ParkedError):
         await mount.move_axis(MountAxis.PRIMARY, 1.0)
     state = mount.step(600.0)
-    assert mount.counters_at(mount.elapsed()) == pytest.approx(mount.park_position)
+    assert mount.counters_at(mount.elapsed()) == pytest.approx(mount.park_counters)
     await mount.unpark()
     unparked = mount.snapshot()
     assert not unparked.parked

@@ -11,6 +11,7 @@ from scopelink.mount.errors import (
     ParkedError,
 )
 from scopelink.mount.limits import Limits
+from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.mount.types import (
     AlignmentMode,
     Capabilities,
@@ -18,7 +19,10 @@ from scopelink.mount.types import (
     Identity,
     MountAxis,
     MountState,
+    ParkPosition,
     PierSide,
+    SlewProgress,
+    SlewTarget,
     TrackingMode,
 )
 
@@ -38,8 +42,13 @@ __all__ = [
     "MountState",
     "NotConnectedError",
     "NotSupportedError",
+    "ParkPosition",
     "ParkedError",
     "PierSide",
+    "Priority",
+    "SlewProgress",
+    "SlewTarget",
     "TrackingMode",
+    "WireScheduler",
     "utc_now",
 ]

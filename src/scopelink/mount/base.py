@@ -9,12 +9,16 @@ as "not implemented".
 
 from __future__ import annotations
 
+import asyncio
+import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import AsyncGenerator, Callable
+from contextlib import AbstractAsyncContextManager, aclosing
 from datetime import UTC, datetime
 
-from scopelink.astro import Site, j2000_to_observed
+from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
+from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.mount.errors import (
     InvalidValueError,
     NotConnectedError,
@@ -22,12 +26,16 @@ from scopelink.mount.errors import (
     ParkedError,
 )
 from scopelink.mount.limits import Limits
+from scopelink.mount.polling import StateBroadcast, StatePoller
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
     Identity,
     MountAxis,
     MountState,
+    ParkPosition,
+    SlewProgress,
+    SlewTarget,
     TrackingMode,
 )
 
@@ -57,7 +65,16 @@ def _check_alt_az(alt_deg: float, az_deg: float) -> None:
 
 
 class Mount(ABC):
-    """A telescope mount, whatever protocol (or simulation) is behind it."""
+    """A telescope mount, whatever protocol (or simulation) is behind it.
+
+    Reads come from a state cache (:attr:`state`) that a background poller keeps fresh while
+    anyone is inside :meth:`watching` (or iterating :meth:`states`). ``poll_interval_s`` is the
+    shortest time between two polls: 0 for a device on a wire (the wire paces it), more for
+    mounts whose refresh costs only CPU.
+    """
+
+    poll_interval_s: float = 0.0
+    poll_retry_s: float = 1.0
 
     def __init__(
         self,
@@ -65,11 +82,23 @@ class Mount(ABC):
         site: Site,
         limits: Limits | None = None,
         clock: Callable[[], datetime] = utc_now,
+        park_position: ParkPosition | None = None,
     ) -> None:
         self._site = site
         self._limits = limits or Limits()
         self._clock = clock
-        self._state = MountState(read_at=clock())
+        self._broadcast = StateBroadcast(MountState(read_at=clock()))
+        self._poller = StatePoller(
+            self.refresh,
+            lambda: self.state.connected,
+            self._report_problem,
+            self._broadcast,
+            interval_s=self.poll_interval_s,
+            retry_s=self.poll_retry_s,
+        )
+        self._target: SlewTarget | None = None
+        self.park_position = park_position or ParkPosition.pole(site.latitude_deg)
+        """Where :meth:`park` points the mount (drivers use it; a device may keep its own)."""
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -102,10 +131,69 @@ class Mount(ABC):
     @property
     def state(self) -> MountState:
         """The last known state, without waiting on the wire."""
-        return self._state
+        return self._broadcast.state
+
+    @property
+    def target(self) -> SlewTarget | None:
+        """Where the last goto was sent (``None`` before the first)."""
+        return self._target
 
     def _publish(self, state: MountState) -> None:
-        self._state = state
+        self._broadcast.publish(state)
+
+    def _report_problem(self, problem: str) -> None:
+        """Publish the last good reading again, with ``problem`` saying why it is not fresh."""
+        self._publish(dataclasses.replace(self.state, problems=(problem,)))
+
+    # --- the state cache ------------------------------------------------------------------------
+
+    def watching(self) -> AbstractAsyncContextManager[None]:
+        """Keep :attr:`state` fresh (polling as fast as the wire allows) inside ``async with``."""
+        return self._poller.watching()
+
+    @property
+    def poller(self) -> StatePoller:
+        """The background poller (its counters and watchers, for health displays)."""
+        return self._poller
+
+    async def states(self) -> AsyncGenerator[MountState, None]:
+        """Each newly published state, starting with the current one; watches while iterating.
+        A slow consumer skips states rather than queueing them."""
+        async with self.watching():
+            version = self._broadcast.version
+            yield self.state
+            while True:
+                await self._broadcast.changed_since(version)
+                version = self._broadcast.version
+                yield self.state
+
+    async def wait_for(
+        self, predicate: Callable[[MountState], bool], timeout_s: float | None = None
+    ) -> MountState:
+        """The first state (current or later) satisfying ``predicate``; ``TimeoutError`` after
+        ``timeout_s`` seconds."""
+        async with asyncio.timeout(timeout_s), aclosing(self.states()) as states:
+            async for state in states:
+                if predicate(state):
+                    return state
+        raise AssertionError("unreachable: states() never ends")  # pragma: no cover
+
+    async def wait_for_slew(
+        self,
+        timeout_s: float | None = None,
+        progress: Callable[[SlewProgress], None] | None = None,
+    ) -> MountState:
+        """Wait until the current slew has ended (read after this call began) and return that
+        state; ``progress`` is called with each new reading meanwhile."""
+        since = self.now()
+        tracker = _ProgressTracker(self._target)
+        async with asyncio.timeout(timeout_s), aclosing(self.states()) as states:
+            async for state in states:
+                if progress is not None:
+                    progress(tracker.update(state))
+                if not state.slewing and state.read_at >= since:
+                    return state
+        raise AssertionError("unreachable: states() never ends")  # pragma: no cover
 
     # --- connection ------------------------------------------------------------------------------
 
@@ -122,12 +210,12 @@ class Mount(ABC):
         """Read the device now and return (and cache) a fresh state."""
 
     def _require_connected(self) -> None:
-        if not self._state.connected:
+        if not self.state.connected:
             raise NotConnectedError(f"{self.identity.model or 'the mount'} is not connected")
 
     def _require_unparked(self) -> None:
         self._require_connected()
-        if self._state.parked:
+        if self.state.parked:
             raise ParkedError("the mount is parked: unpark it before moving it")
 
     # --- checked motion: validate, check limits, then delegate ---------------------------------
@@ -143,6 +231,17 @@ class Mount(ABC):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
+
+    async def goto_object(self, name: str) -> CatalogObject:
+        """Start a slew to a named object of the offline catalogue (``"M31"``, ``"Vega"``,
+        ``"Jupiter"``, ``"HIP 91262"``); returns the object, with its J2000 position now.
+        Unknown names raise :class:`~scopelink.astro.catalog.UnknownObjectError` with
+        suggestions."""
+        found = lookup(name, self.now(), self._site)
+        await self.goto_equatorial(found.ra_hours, found.dec_deg)
+        self._target = dataclasses.replace(self._target or SlewTarget(), name=found.name)
+        return found
 
     async def goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
         """Start a slew to an observed altitude and azimuth; returns once the slew has started."""
@@ -150,6 +249,7 @@ class Mount(ABC):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._goto_horizontal(alt_deg, az_deg)
+        self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Tell the mount it is pointing at this J2000 position."""
@@ -250,3 +350,54 @@ class Mount(ABC):
 
     async def _set_time(self, utc: datetime) -> None:
         raise NotSupportedError("this mount keeps no time")
+
+
+class _ProgressTracker:
+    """Distance to the target and an arrival estimate from the recent closing speed."""
+
+    def __init__(self, target: SlewTarget | None) -> None:
+        self._target = target
+        self._last: tuple[datetime, float] | None = None
+        self._speed_deg_s: float | None = None
+
+    def update(self, state: MountState) -> SlewProgress:
+        distance = self._distance(state)
+        if distance is None:
+            return SlewProgress(state, None, None)
+        if self._last is not None:
+            elapsed = (state.read_at - self._last[0]).total_seconds()
+            closed = self._last[1] - distance
+            if elapsed > 0 and closed > 0:
+                speed = closed / elapsed
+                # Smooth over a few readings: acceleration ramps make single steps jumpy.
+                previous = self._speed_deg_s
+                self._speed_deg_s = speed if previous is None else 0.5 * (previous + speed)
+        self._last = (state.read_at, distance)
+        eta = None
+        if not state.slewing:
+            eta = 0.0
+        elif self._speed_deg_s:
+            eta = distance / self._speed_deg_s
+        return SlewProgress(state, distance, eta)
+
+    def _distance(self, state: MountState) -> float | None:
+        target = self._target
+        if target is None:
+            return None
+        if target.ra_j2000_hours is not None and target.dec_j2000_deg is not None:
+            if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
+                return None
+            return angular_separation_deg(
+                state.ra_j2000_hours * 15.0,
+                state.dec_j2000_deg,
+                target.ra_j2000_hours * 15.0,
+                target.dec_j2000_deg,
+            )
+        if (
+            target.alt_deg is None
+            or target.az_deg is None
+            or state.alt_deg is None
+            or state.az_deg is None
+        ):
+            return None
+        return angular_separation_deg(state.az_deg, state.alt_deg, target.az_deg, target.alt_deg)

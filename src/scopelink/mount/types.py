@@ -18,7 +18,10 @@ __all__ = [
     "Identity",
     "MountAxis",
     "MountState",
+    "ParkPosition",
     "PierSide",
+    "SlewProgress",
+    "SlewTarget",
     "TrackingMode",
 ]
 
@@ -104,3 +107,41 @@ class MountState:
     aligned: bool = False
     pulse_guiding: bool = False
     problems: tuple[str, ...] = field(default=())
+
+
+@dataclass(frozen=True, slots=True)
+class ParkPosition:
+    """Where ``park`` points the mount: an observed altitude and azimuth."""
+
+    alt_deg: float
+    az_deg: float
+
+    @classmethod
+    def pole(cls, latitude_deg: float) -> ParkPosition:
+        """The celestial pole of the site's hemisphere (INDI's default equatorial park)."""
+        return cls(abs(latitude_deg), 0.0 if latitude_deg >= 0 else 180.0)
+
+
+@dataclass(frozen=True, slots=True)
+class SlewTarget:
+    """Where the last goto was sent: a J2000 position, or an observed altitude and azimuth."""
+
+    ra_j2000_hours: float | None = None
+    dec_j2000_deg: float | None = None
+    alt_deg: float | None = None
+    az_deg: float | None = None
+    name: str = ""
+
+    @property
+    def equatorial(self) -> bool:
+        return self.ra_j2000_hours is not None
+
+
+@dataclass(frozen=True, slots=True)
+class SlewProgress:
+    """How far a slew still has to go (degrees on the sky) and, once it can be estimated, when it
+    will arrive (seconds, from the recent closing speed)."""
+
+    state: MountState
+    distance_deg: float | None
+    eta_s: float | None

@@ -71,9 +71,11 @@ class SimulatedMount(Mount):
 
     ``clock`` defaults to a real-time :class:`SimClock`; tests pass ``SimClock.stepped(...)``.
     ``home`` are the counters at power-on (default: the geometry's home: counterweight down at
-    the pole, or level pointing north); ``park_position`` defaults to ``home``. ``aligned``
+    the pole, or level pointing north); ``park_counters`` defaults to ``home``. ``aligned``
     is what the mount reports before any sync (the simulation is always physically perfect).
     """
+
+    poll_interval_s = 0.05  # a refresh costs only CPU: 20 Hz is plenty for any front end
 
     def __init__(
         self,
@@ -84,7 +86,7 @@ class SimulatedMount(Mount):
         limits: Limits | None = None,
         aligned: bool = True,
         home: tuple[float, float] | None = None,
-        park_position: tuple[float, float] | None = None,
+        park_counters: tuple[float, float] | None = None,
         meridian_tolerance_deg: float = 7.5,
         guide_rate_deg_s: float | None = None,
     ) -> None:
@@ -98,7 +100,7 @@ class SimulatedMount(Mount):
             self._make_axis("primary", start[0], wrap=self.geometry.primary_wraps),
             self._make_axis("secondary", start[1], wrap=False),
         )
-        self.park_position: tuple[float, float] = park_position or start
+        self.park_counters: tuple[float, float] = park_counters or start
         self.guide_rate_deg_s = (
             guide_rate_deg_s if guide_rate_deg_s is not None else model.guide_rate_deg_s
         )
@@ -306,7 +308,7 @@ class SimulatedMount(Mount):
     async def _park(self) -> None:
         t = self._begin(replan=True)
         self._tracking = TrackingMode.OFF
-        self._slew_both_to(self.park_position, t)
+        self._slew_both_to(self.park_counters, t)
         self._parked = True
         self._finish(limits_from=self._goto_until)
 

@@ -1,0 +1,78 @@
+"""Taking turns on a wire: one exchange at a time, user commands before background polls.
+
+A serial line carries one command and its reply at a time. The state poller keeps the line busy
+while anyone watches, so a user's goto or abort must not queue behind a backlog of polls: waiting
+commands are granted the line before waiting polls, and within one priority the order is
+first come, first served.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import heapq
+import itertools
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+__all__ = ["Priority", "WireScheduler"]
+
+
+class Priority(enum.IntEnum):
+    """Lower values are served first."""
+
+    COMMAND = 0
+    POLL = 1
+
+
+class WireScheduler:
+    """Grants the wire to one holder at a time, by priority, then arrival order."""
+
+    def __init__(self) -> None:
+        self._busy = False
+        self._waiting: list[tuple[int, int, asyncio.Future[None]]] = []
+        self._arrivals = itertools.count()
+
+    @property
+    def busy(self) -> bool:
+        """Whether someone holds the wire now."""
+        return self._busy
+
+    def waiting(self, priority: Priority | None = None) -> int:
+        """How many are queued (at ``priority``, or in all)."""
+        return sum(
+            1
+            for level, _, future in self._waiting
+            if not future.done() and (priority is None or level == priority)
+        )
+
+    @asynccontextmanager
+    async def turn(self, priority: Priority) -> AsyncIterator[None]:
+        """Hold the wire for the body of the ``async with``; cancelled waiters leave the queue."""
+        await self._acquire(priority)
+        try:
+            yield
+        finally:
+            self._release()
+
+    async def _acquire(self, priority: Priority) -> None:
+        if not self._busy and not self._waiting:
+            self._busy = True
+            return
+        future: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        heapq.heappush(self._waiting, (int(priority), next(self._arrivals), future))
+        try:
+            await future
+        except asyncio.CancelledError:
+            if future.done() and not future.cancelled():
+                # Granted and cancelled in the same step: pass the turn on.
+                self._release()
+            raise
+
+    def _release(self) -> None:
+        while self._waiting:
+            _, _, future = heapq.heappop(self._waiting)
+            if not future.done():
+                future.set_result(None)  # the wire passes directly to this waiter
+                return
+        self._busy = False
