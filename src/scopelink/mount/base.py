@@ -75,6 +75,9 @@ class Mount(ABC):
 
     poll_interval_s: float = 0.0
     poll_retry_s: float = 1.0
+    refresh_uses_wire: bool = True
+    """Whether :meth:`refresh` costs a round trip to a device (front ends then answer from
+    :attr:`state` while the poller runs, instead of refreshing per request)."""
 
     def __init__(
         self,
@@ -146,6 +149,13 @@ class Mount(ABC):
         self._publish(dataclasses.replace(self.state, problems=(problem,)))
 
     # --- the state cache ------------------------------------------------------------------------
+
+    async def current_state(self) -> MountState:
+        """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
+        wire, else a refresh (exact, for a simulated mount)."""
+        if self.refresh_uses_wire and self._poller.running and self.state.connected:
+            return self.state
+        return await self.refresh()
 
     def watching(self) -> AbstractAsyncContextManager[None]:
         """Keep :attr:`state` fresh (polling as fast as the wire allows) inside ``async with``."""

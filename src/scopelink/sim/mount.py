@@ -76,6 +76,7 @@ class SimulatedMount(Mount):
     """
 
     poll_interval_s = 0.05  # a refresh costs only CPU: 20 Hz is plenty for any front end
+    refresh_uses_wire = False
 
     def __init__(
         self,

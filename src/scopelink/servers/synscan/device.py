@@ -132,11 +132,12 @@ class SynScanHandControl:
         self._power_on_az_alt = (0.0, 0.0)
         self._goto_running = False
         self._goto_sticky = False
+        self._goto_sent_at: datetime | None = None
         self._axis_rates: dict[MountAxis, float] = {}
 
     async def power_on(self) -> None:
         """Remember where the axes point now: unaligned Alt-Az positions are relative to it."""
-        state = await self.mount.refresh()
+        state = await self.mount.current_state()
         self._power_on_az_alt = (state.az_deg or 0.0, state.alt_deg or 0.0)
 
     def now(self) -> datetime:
@@ -158,12 +159,12 @@ class SynScanHandControl:
     async def _answer(self, command: AnyCommand) -> AnyReply:
         match command:
             case GetRaDec(precise):
-                state = await self.mount.refresh()
+                state = await self.mount.current_state()
                 return Position.from_ra_dec(
                     state.ra_j2000_hours or 0.0, state.dec_j2000_deg or 0.0, precise
                 )
             case GetAzAlt(precise):
-                az, alt = self._reported_az_alt(await self.mount.refresh())
+                az, alt = self._reported_az_alt(await self.mount.current_state())
                 return Position.from_az_alt(az, alt, precise)
             case GotoRaDec():
                 await self._goto_ra_dec(command.ra_hours, command.dec_degrees)
@@ -172,7 +173,7 @@ class SynScanHandControl:
             case SyncRaDec():
                 await self._sync(command.ra_hours, command.dec_degrees)
             case GetTrackingMode():
-                state = await self.mount.refresh()
+                state = await self.mount.current_state()
                 return TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
             case SetTrackingMode(mode):
                 await self._set_tracking(mode)
@@ -214,7 +215,7 @@ class SynScanHandControl:
             case CancelGoto():
                 await self._cancel()
             case GetPointingState():
-                return PointingState(self._pointing_side(await self.mount.refresh()))
+                return PointingState(self._pointing_side(await self.mount.current_state()))
         return Ack()
 
     # --- positions --------------------------------------------------------------------------------
@@ -240,6 +241,7 @@ class SynScanHandControl:
             return
         await self.mount.goto_equatorial(*_fold_over_pole(ra_hours, dec_deg, 12.0))
         self._goto_running, self._goto_sticky = True, False
+        self._goto_sent_at = self.mount.now()
         if self.mount.state.tracking is TrackingMode.OFF:
             await self.mount.set_tracking(self._sky_tracking_mode())
 
@@ -250,6 +252,7 @@ class SynScanHandControl:
         az_deg, alt_deg = _fold_over_pole(az_deg, alt_deg, 180.0)
         await self.mount.goto_horizontal(alt_deg, az_deg)
         self._goto_running = True
+        self._goto_sent_at = self.mount.now()
         self._goto_sticky = self.config.quirks.sticky_altaz_goto
 
     async def _sync(self, ra_hours: float, dec_deg: float) -> None:
@@ -258,7 +261,7 @@ class SynScanHandControl:
             return
         ra_hours, dec_deg = _fold_over_pole(ra_hours, dec_deg, 12.0)
         limit = self.config.quirks.sync_limit_deg
-        state = await self.mount.refresh()
+        state = await self.mount.current_state()
         if limit is not None and state.ra_j2000_hours is not None:
             distance = angular_separation_deg(
                 state.ra_j2000_hours * 15.0, state.dec_j2000_deg or 0.0, ra_hours * 15.0, dec_deg
@@ -273,7 +276,9 @@ class SynScanHandControl:
             return False
         if self._goto_sticky:
             return True
-        state = await self.mount.refresh()
+        state = await self.mount.current_state()
+        if self._goto_sent_at is not None and state.read_at < self._goto_sent_at:
+            return True  # a cached reading from before the goto says nothing about it
         self._goto_running = state.slewing
         return self._goto_running
 
