@@ -1,0 +1,574 @@
+"""The Mount API over a Sky-Watcher SynScan hand control (serial protocol v3.3).
+
+Usage::
+
+    mount = await SynScanMount.open("/dev/ttyUSB0", site=Site(51.48, 0.0))
+    await mount.goto_object("M31")
+    await mount.wait_for_slew(timeout_s=120)
+
+Every exchange goes through :class:`~scopelink.drivers.synscan.wire.SynScanWire` (one command in
+flight, replies read by length, timeouts and resynchronisation). Decisions where the spec is
+silent are in ``docs/drivers-synscan.md``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import logging
+import math
+from collections.abc import Callable
+from datetime import datetime, timedelta, timezone
+from typing import Self, TypeVar
+
+from scopelink.astro import (
+    PierSide,
+    Site,
+    angular_separation_deg,
+    j2000_to_apparent,
+    j2000_to_observed,
+)
+from scopelink.drivers.synscan.identify import (
+    SIDEREAL_RATE_DEG_S,
+    HandControlInfo,
+    capabilities_for,
+    mount_tracking,
+    synscan_tracking,
+)
+from scopelink.drivers.synscan.settling import SettleDetector
+from scopelink.drivers.synscan.wire import DEFAULT_TIMEOUT_S, LinkFactory, SynScanWire
+from scopelink.links import Link, open_link
+from scopelink.mount import (
+    AlignmentMode,
+    Capabilities,
+    DeviceError,
+    GuideDirection,
+    Identity,
+    Limits,
+    Mount,
+    MountAxis,
+    MountError,
+    MountState,
+    NotConnectedError,
+    ParkPosition,
+    Priority,
+    TrackingMode,
+    utc_now,
+)
+from scopelink.protocol.synscan import (
+    Ack,
+    Aligned,
+    AnyCommand,
+    AnyReply,
+    Axis,
+    CancelGoto,
+    DateTime,
+    DeviceVersion,
+    FixedRateSlew,
+    GetDeviceVersion,
+    GetModel,
+    GetPointingState,
+    GetRaDec,
+    GetTrackingMode,
+    GetVersion,
+    GotoAzAlt,
+    GotoInProgress,
+    GotoRaDec,
+    IsAligned,
+    IsGotoInProgress,
+    Location,
+    Model,
+    PassthroughFailed,
+    PointingSide,
+    PointingState,
+    Position,
+    SetLocation,
+    SetTime,
+    SetTrackingMode,
+    SyncRaDec,
+    VariableRateSlew,
+    Version,
+    VersionDialect,
+)
+from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
+
+__all__ = ["DEFAULT_GUIDE_RATE_DEG_S", "NotAlignedError", "SynScanMount"]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_GUIDE_RATE_DEG_S = 0.5 * SIDEREAL_RATE_DEG_S
+"""Guide pulses move at half the sidereal rate, the usual autoguider setting."""
+
+SYNC_TOLERANCE_DEG = 0.05
+"""A sync read back further than this from its target was not obeyed (the hand control ignores
+syncs beyond ~7° silently). Generous against drift between the ``s`` and the ``e`` read back."""
+
+_AXES = {MountAxis.PRIMARY: Axis.AZM_RA, MountAxis.SECONDARY: Axis.ALT_DEC}
+
+R = TypeVar("R", bound=AnyReply)
+
+
+class NotAlignedError(MountError):
+    """The hand control is not aligned, so it ignores gotos and syncs: align it on the keypad."""
+
+
+class SynScanMount(Mount):
+    """A SynScan hand control on ``link``: a link spec (``/dev/ttyUSB0``, ``tcp://host:11880``,
+    a pty path) or a factory that opens a :class:`~scopelink.links.Link`.
+
+    ``timeout_s`` bounds every reply (the spec's 5 s). ``guide_rate_deg_s`` is the pulse-guide
+    speed. ``utc_offset_hours`` is the time zone ``set_time`` gives the hand control (it keeps
+    local time; whole hours only). ``altaz_settle_timeout_s`` bounds how long a position that
+    stopped short of an Alt-Az goto target still counts as slewing on firmware whose ``L``
+    sticks. ``clock`` is the PC's UTC clock, used to convert the J2000 position to alt/az.
+    """
+
+    def __init__(
+        self,
+        link: str | LinkFactory,
+        *,
+        site: Site,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        limits: Limits | None = None,
+        clock: Callable[[], datetime] = utc_now,
+        park_position: ParkPosition | None = None,
+        guide_rate_deg_s: float = DEFAULT_GUIDE_RATE_DEG_S,
+        utc_offset_hours: int = 0,
+        altaz_settle_timeout_s: float = 300.0,
+        name: str | None = None,
+    ) -> None:
+        super().__init__(site=site, limits=limits, clock=clock, park_position=park_position)
+        if isinstance(link, str):
+            spec = link
+
+            async def open_spec() -> Link:
+                return await open_link(spec)
+
+            factory: LinkFactory = open_spec
+            name = name or spec
+        else:
+            factory = link
+            name = name or "SynScan link"
+        if not 0 < guide_rate_deg_s <= 10 * SIDEREAL_RATE_DEG_S:
+            raise ValueError(f"guide rate {guide_rate_deg_s}°/s must lie in (0, 10x sidereal]")
+        if not -12 <= utc_offset_hours <= 14:
+            raise ValueError(f"UTC offset {utc_offset_hours} h must lie in [-12, 14]")
+        self.wire = SynScanWire(factory, name=name, timeout_s=timeout_s)
+        self.guide_rate_deg_s = guide_rate_deg_s
+        self.utc_offset_hours = utc_offset_hours
+        self.altaz_settle_timeout_s = altaz_settle_timeout_s
+        self.info: HandControlInfo | None = None
+        """What the hand control said at connect (firmware, model, motor controller versions)."""
+        self._identity = Identity("synscan", "", link=name)
+        self._capabilities = Capabilities(alignment_mode=AlignmentMode.GERMAN_POLAR)
+        self._connected = False
+        self._aligned = False
+        self._parked = False
+        self._tracking = TrackingMode.OFF
+        self._pier_side = PierSide.UNKNOWN
+        self._goto_running = False
+        self._settle: SettleDetector | None = None
+        self._axis_rates: dict[MountAxis, float] = {}
+        self._pulses: dict[MountAxis, asyncio.Task[None]] = {}
+
+    @classmethod
+    async def open(cls, link: str | LinkFactory, **options: object) -> Self:
+        """Create the driver and connect; ``options`` are the constructor's keywords."""
+        mount = cls(link, **options)  # type: ignore[arg-type]
+        await mount.connect()
+        return mount
+
+    # --- who, what --------------------------------------------------------------------------------
+
+    @property
+    def capabilities(self) -> Capabilities:
+        return self._capabilities
+
+    @property
+    def identity(self) -> Identity:
+        return self._identity
+
+    @property
+    def timeout_s(self) -> float:
+        return self.wire.timeout_s
+
+    # --- connection -------------------------------------------------------------------------------
+
+    async def connect(self) -> None:
+        """Open the link, echo, and identify: ``V``, ``m``, ``J``, motor versions, ``t``, ``p``."""
+        await self.wire.open()
+        try:
+            version = await self._ask(GetVersion(), Version)
+            if version.dialect is VersionDialect.NEXSTAR_BINARY:
+                raise DeviceError(
+                    f"{self.wire.name} answered V like a Celestron NexStar, not a SynScan hand "
+                    "control"
+                )
+            model = await self._ask(GetModel(), Model)
+            # A stale "m" reply (code + '#') must never pass for a resynchronising echo.
+            self.wire.avoid_echo.add(model.code)
+            motors = (
+                await self._motor_version(Axis.AZM_RA),
+                await self._motor_version(Axis.ALT_DEC),
+            )
+            self.info = HandControlInfo(version, model, motors)
+            if self.info.old_firmware:
+                logger.warning(
+                    "%s: hand control firmware %s predates the protocol spec (3.38 / 4.38.06)",
+                    self.wire.name,
+                    self.info.identity(self.wire.name).firmware,
+                )
+            self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
+        except BaseException:
+            await self.wire.close()
+            raise
+        self._identity = self.info.identity(self.wire.name)
+        self._capabilities = capabilities_for(self.info)
+        self._connected = True
+        self._parked = False
+        self._goto_running = False
+        self._settle = None
+        self._axis_rates.clear()
+        await self._read_state(Priority.COMMAND)
+
+    async def disconnect(self) -> None:
+        """Stop manual motion this driver started (nothing could stop it later), then close.
+
+        Gotos and tracking carry on, as INDI leaves them: a mount tracking an exposure should not
+        stop because the PC let go of the link.
+        """
+        if not self._connected:
+            await self.wire.close()
+            return
+        try:
+            await self._cancel_pulses()
+            for axis, rate in list(self._axis_rates.items()):
+                if rate:
+                    with contextlib.suppress(MountError):
+                        await self._stop_axis(axis)
+        finally:
+            self._connected = False
+            self._axis_rates.clear()
+            await self.wire.close()
+            self._publish(dataclasses.replace(self.state, connected=False, slewing=False))
+
+    async def _motor_version(self, axis: Axis) -> tuple[int, int] | None:
+        reply = await self.wire.ask(GetDeviceVersion(axis))
+        if isinstance(reply, DeviceVersion):
+            return reply.major, reply.minor
+        return None  # a failed passthrough: that motor controller did not answer
+
+    # --- reading ----------------------------------------------------------------------------------
+
+    async def refresh(self) -> MountState:
+        """Poll ``e`` (J2000 RA/Dec), ``L``, ``t``, ``p`` on equatorial mounts, ``J`` while
+        unaligned; alt/az and of-date RA/Dec are computed on the PC (see the docs)."""
+        return await self._read_state(Priority.POLL)
+
+    async def _read_state(self, priority: Priority) -> MountState:
+        if not self._connected:
+            raise NotConnectedError(f"{self.wire.name} is not connected")
+        try:
+            position = await self._ask(GetRaDec(), Position, priority)
+            read_at = self.now()
+            goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
+            tracking = await self._ask(GetTrackingMode(), TrackingModeReply, priority)
+            if self._capabilities.can_report_pier_side:
+                side = await self._ask(GetPointingState(), PointingState, priority)
+                self._pier_side = self._pier_side_of(side)
+            if not self._aligned:
+                self._aligned = (await self._ask(IsAligned(), Aligned, priority)).aligned
+        except DeviceError as error:
+            self._report_problem(str(error))
+            raise
+        ra, dec = position.ra_hours, position.dec_degrees
+        if position.flipped:  # Dec read beyond the pole: the same direction is RA + 12 h
+            ra = (ra + 12.0) % 24.0
+        alt, az = j2000_to_observed(ra, dec, read_at, self.site)
+        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
+        mode = mount_tracking(tracking.mode)
+        problems: tuple[str, ...] = ()
+        if mode is None:
+            problems = (f"unknown tracking mode {tracking.mode} reported",)
+            mode = self._tracking
+        self._tracking = mode
+        self._goto_running = self._goto_still_running(goto.in_progress, alt, az)
+        state = MountState(
+            read_at=read_at,
+            connected=True,
+            ra_j2000_hours=ra,
+            dec_j2000_deg=dec,
+            ra_of_date_hours=ra_of_date,
+            dec_of_date_deg=dec_of_date,
+            alt_deg=alt,
+            az_deg=az,
+            pier_side=self._pier_side,
+            slewing=self._slewing,
+            tracking=mode,
+            parked=self._parked,
+            aligned=self._aligned,
+            pulse_guiding=bool(self._pulses),
+            problems=problems,
+        )
+        self._publish(state)
+        return state
+
+    @property
+    def _slewing(self) -> bool:
+        return self._goto_running or any(self._axis_rates.values())
+
+    def _goto_still_running(self, in_progress: bool, alt: float, az: float) -> bool:
+        if not in_progress:
+            self._settle = None
+            return False
+        if self._settle is None:
+            return True
+        # An Alt-Az goto on firmware whose L may stick: trust the position once it stands still.
+        loop_time = asyncio.get_running_loop().time()
+        return not self._settle.update(alt, az, loop_time)
+
+    def _pier_side_of(self, reply: PointingState) -> PierSide:
+        # 'E' is the normal side in the north and the flipped one in the south ("W" vice versa).
+        flipped = reply.side is PointingSide.WEST
+        if self.site.latitude_deg < 0:
+            flipped = not flipped
+        return PierSide.WEST if flipped else PierSide.EAST
+
+    # --- gotos and syncs --------------------------------------------------------------------------
+
+    async def _require_aligned(self, what: str) -> None:
+        if not self._aligned:
+            self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
+        if not self._aligned:
+            raise NotAlignedError(
+                f"the hand control is not aligned, so it would ignore the {what}: align it on the "
+                "keypad first (tracking and manual slews work without alignment)"
+            )
+
+    async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        await self._require_aligned("goto")
+        await self._cancel_pulses()
+        await self._ask(GotoRaDec.from_hours_degrees(ra_j2000_hours, dec_j2000_deg), Ack)
+        self._goto_started(None)
+
+    async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        await self._require_aligned("goto")
+        await self._cancel_pulses()
+        await self._ask(GotoAzAlt.from_degrees(az_deg, alt_deg), Ack)
+        self._goto_started((alt_deg, az_deg))
+
+    def _goto_started(self, altaz_target: tuple[float, float] | None) -> None:
+        self._axis_rates.clear()  # a goto takes over from manual motion, as on the keypad
+        self._goto_running = True
+        self._settle = None
+        if altaz_target is not None:
+            self._settle = SettleDetector(
+                *altaz_target,
+                started_at_s=asyncio.get_running_loop().time(),
+                timeout_s=self.altaz_settle_timeout_s,
+            )
+        self._publish(dataclasses.replace(self.state, slewing=True))
+
+    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        await self._require_aligned("sync")
+        await self._ask(SyncRaDec.from_hours_degrees(ra_j2000_hours, dec_j2000_deg), Ack)
+        state = await self._read_state(Priority.COMMAND)
+        assert state.ra_j2000_hours is not None
+        assert state.dec_j2000_deg is not None
+        error = _separation_deg(
+            state.ra_j2000_hours, state.dec_j2000_deg, ra_j2000_hours, dec_j2000_deg
+        )
+        if error > SYNC_TOLERANCE_DEG:
+            raise DeviceError(
+                f"sync ignored by the hand control (more than ~7° away?): it still reports a "
+                f"position {error:.2f}° from the sync target"
+            )
+
+    # --- stopping ---------------------------------------------------------------------------------
+
+    async def _abort(self) -> None:
+        """``M``, then rate 0 on both axes (firmware up to 3.36 resumes rate motion after ``M``),
+        tracking re-enabled as it was, and ``L`` checked (``M`` sent again if a goto still runs)."""
+        await self._cancel_pulses()
+        await self._ask(CancelGoto(), Ack)
+        for axis in MountAxis:
+            await self._send_rate_zero(axis)
+        self._axis_rates.clear()
+        await self._resume_tracking()
+        for attempt in range(2):
+            running = await self._ask(IsGotoInProgress(), GotoInProgress)
+            if not running.in_progress:
+                break
+            if attempt == 1:
+                raise DeviceError("abort: the hand control still reports a goto in progress")
+            await self._ask(CancelGoto(), Ack)
+        self._goto_running = False
+        self._settle = None
+        self._publish(dataclasses.replace(self.state, slewing=False, pulse_guiding=False))
+
+    async def _send_rate_zero(self, axis: MountAxis) -> None:
+        reply = await self.wire.ask(FixedRateSlew(_AXES[axis], positive=True, rate=0))
+        if isinstance(reply, PassthroughFailed):
+            logger.warning("%s: stop of the %s axis not acknowledged", self.wire.name, axis.name)
+
+    async def _resume_tracking(self) -> None:
+        """Re-send the tracking mode: on the hand control a rate slew overrides tracking."""
+        if self._tracking is not TrackingMode.OFF:
+            await self._ask(SetTrackingMode(synscan_tracking(self._tracking)), Ack)
+
+    async def _stop_axis(self, axis: MountAxis) -> None:
+        await self._send_rate_zero(axis)
+        self._axis_rates.pop(axis, None)
+        await self._resume_tracking()
+
+    # --- manual motion ----------------------------------------------------------------------------
+
+    async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """A variable-rate slew (0.25"/s steps); 0 stops the axis and tracking resumes."""
+        self._cancel_pulse(axis)
+        if rate_deg_s == 0.0:
+            await self._stop_axis(axis)
+        else:
+            command = VariableRateSlew.from_arcsec_per_second(_AXES[axis], rate_deg_s * 3600.0)
+            await self._ask_passthrough(command)
+            self._axis_rates[axis] = rate_deg_s
+            self._goto_running = False
+            self._settle = None
+        self._publish(dataclasses.replace(self.state, slewing=self._slewing))
+
+    async def move_axis_fixed(self, axis: MountAxis, speed: int, *, positive: bool = True) -> None:
+        """Slew one axis at hand-control speed ``speed`` (1-9, as the keypad; 0 stops).
+
+        On an equatorial mount that is tracking, speeds 1 and 2 add to tracking (guiding speeds).
+        """
+        if not 0 <= speed <= 9:
+            raise ValueError(f"fixed speed {speed} must lie in 0..9")
+        if speed == 0:
+            await self.move_axis(axis, 0.0)
+            return
+        self._require_unparked()
+        self._cancel_pulse(axis)
+        await self._ask_passthrough(FixedRateSlew(_AXES[axis], positive, speed))
+        multiple = (2, 8, 16, 32, 64, 128, 400, 600, 800)[speed - 1]
+        rate = multiple * SIDEREAL_RATE_DEG_S
+        self._axis_rates[axis] = rate if positive else -rate
+        self._goto_running = False
+        self._publish(dataclasses.replace(self.state, slewing=True))
+
+    async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        """A variable-rate slew at the guide rate on one axis, stopped by a PC timer."""
+        axis, sign = self._guide_axis(direction)
+        self._cancel_pulse(axis)
+        if duration_ms == 0:
+            return
+        rate = sign * self.guide_rate_deg_s
+        if axis is MountAxis.PRIMARY and self._tracking is not TrackingMode.OFF:
+            # A rate slew replaces tracking on that axis: carry the tracking rate along.
+            rate += math.copysign(SIDEREAL_RATE_DEG_S, self.site.latitude_deg)
+        command = VariableRateSlew.from_arcsec_per_second(_AXES[axis], rate * 3600.0)
+        await self._ask_passthrough(command)
+        self._pulses[axis] = asyncio.create_task(
+            self._end_pulse(axis, duration_ms / 1000.0), name=f"end guide pulse {axis.name}"
+        )
+        self._publish(dataclasses.replace(self.state, pulse_guiding=True))
+
+    def _guide_axis(self, direction: GuideDirection) -> tuple[MountAxis, float]:
+        """Axis and rate sign that move the tube towards ``direction`` on an equatorial mount."""
+        hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
+        if direction in (GuideDirection.EAST, GuideDirection.WEST):
+            return (
+                MountAxis.PRIMARY,
+                hemisphere if direction is GuideDirection.WEST else -hemisphere,
+            )
+        # Past the meridian flip the Dec axis runs the other way.
+        flipped = self._pier_side is PierSide.WEST
+        sign = -hemisphere if flipped else hemisphere
+        return MountAxis.SECONDARY, sign if direction is GuideDirection.NORTH else -sign
+
+    async def _end_pulse(self, axis: MountAxis, seconds: float) -> None:
+        await asyncio.sleep(seconds)
+        try:
+            await self._send_rate_zero(axis)
+            await self._resume_tracking()
+        except MountError as error:
+            logger.warning("%s: ending a guide pulse failed: %s", self.wire.name, error)
+            self._report_problem(f"ending a guide pulse failed: {error}")
+        finally:
+            if self._pulses.get(axis) is asyncio.current_task():
+                del self._pulses[axis]
+            if not self._pulses:
+                self._publish(dataclasses.replace(self.state, pulse_guiding=False))
+
+    def _cancel_pulse(self, axis: MountAxis) -> None:
+        task = self._pulses.pop(axis, None)
+        if task is not None:
+            task.cancel()
+
+    async def _cancel_pulses(self) -> None:
+        tasks = list(self._pulses.values())
+        self._pulses.clear()
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+
+    # --- tracking, park, site, time ------------------------------------------------------------
+
+    async def _set_tracking(self, mode: TrackingMode) -> None:
+        await self._ask(SetTrackingMode(synscan_tracking(mode)), Ack)
+        self._tracking = mode
+        self._publish(dataclasses.replace(self.state, tracking=mode))
+
+    async def _park(self) -> None:
+        """Tracking off, then an Alt-Az goto to :attr:`park_position`; parked until unpark."""
+        park = self.park_position
+        self._limits.check_altaz(park.alt_deg, park.az_deg, what="park position")
+        await self._require_aligned("park goto")
+        await self._cancel_pulses()
+        await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
+        self._tracking = TrackingMode.OFF
+        await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
+        self._parked = True
+        self._goto_started((park.alt_deg, park.az_deg))
+        self._publish(dataclasses.replace(self.state, parked=True, tracking=TrackingMode.OFF))
+
+    async def _unpark(self) -> None:
+        self._parked = False
+        self._publish(dataclasses.replace(self.state, parked=False))
+
+    async def _set_site(self, site: Site) -> None:
+        if self._connected:
+            await self._ask(
+                SetLocation(Location.from_degrees(site.latitude_deg, site.longitude_deg)), Ack
+            )
+
+    async def _set_time(self, utc: datetime) -> None:
+        zone = timezone(timedelta(hours=self.utc_offset_hours))
+        local = utc.astimezone(zone).replace(microsecond=0)
+        await self._ask(SetTime(DateTime.from_datetime(local)), Ack)
+
+    # --- exchanges ----------------------------------------------------------------------------
+
+    async def _ask(
+        self, command: AnyCommand, expected: type[R], priority: Priority = Priority.COMMAND
+    ) -> R:
+        reply = await self.wire.ask(command, priority)
+        if not isinstance(reply, expected):
+            raise DeviceError(
+                f"{self.wire.name}: {command.describe()!r} answered {reply.describe()!r}"
+            )
+        return reply
+
+    async def _ask_passthrough(self, command: AnyCommand) -> None:
+        reply = await self.wire.ask(command)
+        if isinstance(reply, PassthroughFailed):
+            raise DeviceError(
+                f"{command.describe()!r}: the motor controller did not answer the hand control "
+                "(failed passthrough)"
+            )
+
+
+def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float) -> float:
+    return float(angular_separation_deg(ra1_hours * 15.0, dec1, ra2_hours * 15.0, dec2))

@@ -1,0 +1,233 @@
+"""One SynScan exchange at a time on a link: send, read the reply by its shape, recover from faults.
+
+:class:`SynScanWire` owns the link and the client codec. Every exchange takes a turn on the
+:class:`~scopelink.mount.scheduling.WireScheduler` (user commands before polls), writes one
+command and reads its reply by exact length within the timeout (the spec's 5 s by default).
+
+After a timeout, a malformed reply or a dropped link the stream can no longer be trusted: a late
+reply would be read as the answer to the next command. So the wire drains the input, resets the
+codec and echoes a byte that no earlier echo used (``K`` + 0x80..0xFF, counting); everything
+before that byte and ``#`` is discarded. Only then is the command tried once more: every SynScan
+command is idempotent (a repeated goto, sync, rate or tracking command has the effect of one), so
+the retry is safe. A link that closed is reopened through the factory first (a TCP bridge that
+dropped the connection comes back transparently). When recovery fails the caller gets a
+:class:`~scopelink.mount.DeviceError` naming the cause, and the next exchange recovers again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+
+from scopelink.links import Link, LinkClosedError, LinkError
+from scopelink.mount import DeviceError, Priority, WireScheduler
+from scopelink.protocol.synscan import (
+    NEED_DATA,
+    AnyCommand,
+    AnyReply,
+    Echo,
+    EchoReply,
+    MalformedReply,
+    SynScanClientConnection,
+    UnexpectedData,
+)
+
+__all__ = ["DEFAULT_TIMEOUT_S", "LinkFactory", "SynScanWire", "WireStatistics"]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_TIMEOUT_S = 5.0
+"""The spec: "Software drivers should be prepared to wait up to 5.0s" for a reply."""
+
+LinkFactory = Callable[[], Awaitable[Link]]
+"""Opens the link to the hand control (called again to reconnect after the link dropped)."""
+
+_ECHO_VALUES = range(0x80, 0x100)
+"""Resynchronisation echoes: bytes no ASCII reply contains, counted so that each is unique among
+recent ones."""
+
+_DRAIN_QUIET_S = 0.05
+"""Input silent this long after a failure: the device has finished sending whatever it had."""
+
+
+class _ExchangeError(Exception):
+    """One exchange went wrong; the message says how (it becomes part of a DeviceError)."""
+
+
+@dataclass(slots=True)
+class WireStatistics:
+    """Counters for health displays and benchmarks."""
+
+    exchanges: int = 0
+    failures: int = 0
+    resyncs: int = 0
+    reconnects: int = 0
+    discarded_bytes: int = 0
+
+
+class SynScanWire:
+    """The link to one hand control, used one exchange at a time.
+
+    ``name`` labels errors (the link spec, e.g. ``/dev/ttyUSB0``). ``avoid_echo`` holds bytes the
+    resynchronising echo must not use: a stale reply ending in such a byte and ``#`` (the model
+    code of ``m``) would otherwise pass for the echo.
+    """
+
+    def __init__(
+        self,
+        factory: LinkFactory,
+        *,
+        name: str,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        scheduler: WireScheduler | None = None,
+    ) -> None:
+        if not timeout_s > 0:
+            raise ValueError(f"timeout {timeout_s} s must be positive")
+        self._factory = factory
+        self.name = name
+        self.timeout_s = timeout_s
+        self.scheduler = scheduler or WireScheduler()
+        self.statistics = WireStatistics()
+        self.avoid_echo: set[int] = set()
+        self._link: Link | None = None
+        self._codec = SynScanClientConnection()
+        self._needs_resync = False
+        self._next_echo = 0
+
+    @property
+    def link(self) -> Link | None:
+        """The open link, if any."""
+        return self._link
+
+    @property
+    def is_open(self) -> bool:
+        return self._link is not None and not self._link.closed
+
+    async def open(self) -> None:
+        """Open the link and check the stream with a unique echo."""
+        async with self.scheduler.turn(Priority.COMMAND):
+            await self._reopen()
+            await self._resynchronise("checking the link")
+
+    async def close(self) -> None:
+        """Close the link (idempotent)."""
+        link, self._link = self._link, None
+        if link is not None:
+            await link.close()
+
+    async def ask(self, command: AnyCommand, priority: Priority = Priority.COMMAND) -> AnyReply:
+        """Send ``command`` and return its reply; recovers once, else raises DeviceError."""
+        async with self.scheduler.turn(priority):
+            return await self._ask_holding_the_wire(command)
+
+    async def _ask_holding_the_wire(self, command: AnyCommand) -> AnyReply:
+        failure: _ExchangeError | None = None
+        for _attempt in range(2):
+            await self._recover_if_needed(command, failure)
+            try:
+                return await self._exchange(command)
+            except _ExchangeError as error:
+                self.statistics.failures += 1
+                self._needs_resync = True
+                logger.info("%s: %s; recovering", self.name, error)
+                if failure is not None:
+                    raise DeviceError(f"{failure}; after recovering, again: {error}") from None
+                failure = error
+        raise AssertionError("unreachable")  # pragma: no cover
+
+    async def _recover_if_needed(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
+        if self.is_open and not self._needs_resync:
+            return
+        why = str(failure) if failure else "the previous exchange failed"
+        try:
+            if not self.is_open:
+                await self._reopen()
+            await self._resynchronise(why)
+        except DeviceError as error:
+            raise DeviceError(f"{command.describe()!r} not sent: {error}") from None
+
+    async def _reopen(self) -> None:
+        await self.close()
+        try:
+            self._link = await self._factory()
+        except (LinkError, OSError) as error:
+            raise DeviceError(f"cannot open {self.name}: {error}") from None
+        self.statistics.reconnects += 1
+        self._codec = SynScanClientConnection()
+
+    async def _resynchronise(self, why: str) -> None:
+        """Drain, reset the codec and echo a byte no earlier echo used."""
+        link = self._link
+        assert link is not None
+        self._needs_resync = True
+        self.statistics.resyncs += 1
+        dropped = self._codec.reset()
+        try:
+            dropped += await link.drain_input(_DRAIN_QUIET_S, max_seconds=self.timeout_s)
+        except LinkClosedError as error:
+            await self.close()
+            raise DeviceError(f"{why}, and {self.name} closed: {error}") from None
+        self._discard(dropped)
+        value = self._echo_value()
+        try:
+            reply = await self._exchange(Echo(value))
+        except _ExchangeError as error:
+            raise DeviceError(
+                f"{why}; resynchronising failed: {error} — is the hand control switched on and "
+                "connected?"
+            ) from None
+        if reply != EchoReply(value):  # pragma: no cover - the codec only returns this shape
+            raise DeviceError(f"{why}; resynchronising got {reply.describe()!r}")
+        self._needs_resync = False
+
+    def _echo_value(self) -> int:
+        while True:
+            value = _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]
+            self._next_echo += 1
+            if value not in self.avoid_echo:
+                return value
+
+    async def _exchange(self, command: AnyCommand) -> AnyReply:
+        link = self._link
+        if link is None or link.closed:
+            raise _ExchangeError(f"{self.name} is closed")
+        data = self._codec.send(command)
+        self.statistics.exchanges += 1
+        completed = False
+        try:
+            await link.write(data)
+            async with asyncio.timeout(self.timeout_s):
+                reply = await self._read_reply(link, command)
+            completed = True
+            return reply
+        except TimeoutError:
+            raise _ExchangeError(
+                f"no reply to {command.describe()!r} within {self.timeout_s:g} s on {self.name}"
+            ) from None
+        except LinkClosedError as error:
+            await self.close()
+            message = f"{self.name} closed during {command.describe()!r}: {error}"
+            raise _ExchangeError(message) from None
+        finally:
+            if not completed:
+                # Cancelled or failed half way: the stream is out of step until resynchronised.
+                self._needs_resync = True
+
+    async def _read_reply(self, link: Link, command: AnyCommand) -> AnyReply:
+        while True:
+            event = self._codec.next_event()
+            if event is NEED_DATA:
+                self._codec.receive_data(await link.read())
+            elif isinstance(event, UnexpectedData):
+                self._discard(event.data)
+            elif isinstance(event, MalformedReply):
+                raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
+            else:
+                return event
+
+    def _discard(self, data: bytes) -> None:
+        if data:
+            self.statistics.discarded_bytes += len(data)
+            logger.info("%s: discarded %d stale bytes %r", self.name, len(data), data)
