@@ -1,0 +1,312 @@
+"""The Alpaca HTTP server: device API, management API, setup pages and UDP discovery.
+
+:class:`AlpacaServer` serves one ``telescope/0`` for a :class:`~scopelink.mount.Mount`::
+
+    async with AlpacaServer(mount, port=0, discovery_port=0, state_dir=path) as server:
+        print(server.port, server.discovery_port)
+        await server.serve_forever()
+
+While it runs it holds ``mount.watching()`` so reads are answered from a fresh state cache.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import inspect
+import itertools
+import json
+import logging
+from collections.abc import AsyncIterator
+from pathlib import Path
+from types import TracebackType
+from typing import Any, Self
+from urllib.parse import parse_qsl
+
+from aiohttp import web
+
+from scopelink import __version__ as scopelink_version
+from scopelink.mount import Mount, MountError
+from scopelink.servers.alpaca.discovery import DISCOVERY_PORT, start_discovery
+from scopelink.servers.alpaca.errors import (
+    AlpacaError,
+    BadRequest,
+    ErrorNumber,
+    from_mount_error,
+)
+from scopelink.servers.alpaca.identity import default_state_dir, load_or_create_unique_id
+from scopelink.servers.alpaca.params import Params, parse_transaction_id
+from scopelink.servers.alpaca.setup_page import render_setup_page
+from scopelink.servers.alpaca.telescope import Member, TelescopeConfig, TelescopeDevice
+
+__all__ = ["ALPACA_PORT", "MAX_REQUEST_BYTES", "AlpacaServer"]
+
+logger = logging.getLogger(__name__)
+
+ALPACA_PORT = 11111
+MAX_REQUEST_BYTES = 64 * 1024
+"""Largest request body accepted (HTTP 413 above it); real Alpaca requests are < 1 KiB."""
+_FALLBACK_POLL_S = 0.1
+_DEVICE_TYPE = "telescope"
+_JSON = "application/json"
+_METHODS = ("GET", "PUT")
+
+
+def _text(status: int, message: str) -> web.Response:
+    return web.Response(status=status, text=message)
+
+
+class AlpacaServer:
+    """ASCOM Alpaca for ``mount`` on ``host:port`` (0 picks a free port), as ``telescope/0``.
+
+    ``discovery_port=None`` turns discovery off; it listens on ``discovery_host`` (default
+    ``host``). ``state_dir`` holds the persistent UniqueID (default: ``$XDG_STATE_HOME/scopelink``).
+    """
+
+    def __init__(
+        self,
+        mount: Mount,
+        *,
+        host: str = "127.0.0.1",
+        port: int = ALPACA_PORT,
+        discovery_port: int | None = DISCOVERY_PORT,
+        discovery_host: str | None = None,
+        state_dir: Path | None = None,
+        config: TelescopeConfig | None = None,
+        max_request_bytes: int = MAX_REQUEST_BYTES,
+    ) -> None:
+        self.mount = mount
+        self.host = host
+        self.port = port
+        self.discovery_port = discovery_port
+        self._discovery_host = discovery_host or host
+        self.state_dir = state_dir if state_dir is not None else default_state_dir()
+        self.config = config or TelescopeConfig()
+        self.telescope = TelescopeDevice(mount, self.config)
+        self.unique_id = ""
+        self._max_request_bytes = max_request_bytes
+        self._transactions = itertools.count(1)
+        self._runner: web.AppRunner | None = None
+        self._discovery: asyncio.DatagramTransport | None = None
+        self._stack = contextlib.AsyncExitStack()
+
+    @property
+    def url(self) -> str:
+        return f"http://{self.host}:{self.port}"
+
+    # --- lifecycle -------------------------------------------------------------------------------
+
+    async def start(self) -> None:
+        self.unique_id = load_or_create_unique_id(self.state_dir)
+        await self._stack.enter_async_context(self._fresh_state())
+        app = web.Application(client_max_size=self._max_request_bytes)
+        app.router.add_route("*", "/api/v1/{device_type}/{device_number}/{member}", self._api)
+        app.router.add_get("/management/apiversions", self._api_versions)
+        app.router.add_get("/management/v1/description", self._description)
+        app.router.add_get("/management/v1/configureddevices", self._configured_devices)
+        app.router.add_get("/setup", self._setup)
+        app.router.add_get("/setup/v1/telescope/0/setup", self._setup)
+        runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        await runner.setup()
+        self._runner = runner
+        site = web.TCPSite(runner, self.host, self.port, reuse_address=True)
+        await site.start()
+        server = site._server  # aiohttp keeps the bound socket here; port 0 needs it
+        if isinstance(server, asyncio.Server) and server.sockets:
+            self.port = int(server.sockets[0].getsockname()[1])
+        if self.discovery_port is not None:
+            transport, _ = await start_discovery(
+                self._discovery_host, self.discovery_port, self.port
+            )
+            self._discovery = transport
+            self.discovery_port = int(transport.get_extra_info("sockname")[1])
+        logger.info("Alpaca telescope on %s (discovery port %s)", self.url, self.discovery_port)
+
+    async def close(self) -> None:
+        if self._discovery is not None:
+            self._discovery.close()
+            self._discovery = None
+        if self._runner is not None:
+            await self._runner.cleanup()
+            self._runner = None
+        await self.telescope.close()
+        await self._stack.aclose()
+
+    async def serve_forever(self) -> None:
+        await asyncio.Event().wait()
+
+    async def __aenter__(self) -> Self:
+        try:
+            await self.start()
+        except BaseException:
+            await self.close()
+            raise
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    @contextlib.asynccontextmanager
+    async def _fresh_state(self) -> AsyncIterator[None]:
+        """Keep ``mount.state`` fresh while serving: the mount's own poller when it has one."""
+        watching = getattr(self.mount, "watching", None)
+        if watching is not None:
+            async with watching():
+                yield
+            return
+        task = asyncio.create_task(self._poll_forever(), name="alpaca state refresh")
+        try:
+            yield
+        finally:
+            task.cancel()
+            await asyncio.gather(task, return_exceptions=True)
+
+    async def _poll_forever(self) -> None:
+        interval = float(getattr(self.mount, "poll_interval_s", _FALLBACK_POLL_S))
+        while True:
+            if self.mount.state.connected:
+                try:
+                    await self.mount.refresh()
+                except MountError as error:
+                    logger.warning("position poll failed: %s", error)
+            await asyncio.sleep(max(interval, 0.01))
+
+    # --- replies ---------------------------------------------------------------------------------
+
+    def _reply(
+        self,
+        client_transaction_id: int,
+        *,
+        value: object = None,
+        has_value: bool = False,
+        error: AlpacaError | None = None,
+    ) -> web.Response:
+        body: dict[str, Any] = {}
+        if has_value and error is None:
+            body["Value"] = value
+        body["ClientTransactionID"] = client_transaction_id
+        body["ServerTransactionID"] = next(self._transactions)
+        body["ErrorNumber"] = int(error.number) if error else 0
+        body["ErrorMessage"] = error.message if error else ""
+        return web.Response(body=json.dumps(body).encode(), content_type=_JSON)
+
+    @staticmethod
+    def _query_ids(request: web.Request) -> tuple[int, int]:
+        params = Params.from_pairs(request.query.items(), exact=False)
+        client_id = parse_transaction_id("ClientID", params.optional("ClientID"))
+        transaction = parse_transaction_id(
+            "ClientTransactionID", params.optional("ClientTransactionID")
+        )
+        return client_id, transaction
+
+    # --- device API ------------------------------------------------------------------------------
+
+    async def _api(self, request: web.Request) -> web.Response:
+        info = request.match_info
+        if info["device_type"] != _DEVICE_TYPE:
+            return _text(404, f"no device of type {info['device_type']!r} here (only 'telescope')")
+        if info["device_number"] != "0":
+            return _text(404, f"no telescope number {info['device_number']!r} here (only 0)")
+        member = self.telescope.members.get(info["member"])
+        if member is None:
+            return _text(404, f"the telescope has no member {info['member']!r}")
+        if request.method not in _METHODS:
+            return _text(405, f"{request.method} is not an Alpaca method: use GET or PUT")
+        try:
+            if request.method == "GET":
+                params = Params.from_pairs(request.query.items(), exact=False)
+            else:
+                params = await self._form(request)
+            client_id = params.optional("ClientID")
+            parse_transaction_id("ClientID", client_id)
+            transaction = parse_transaction_id(
+                "ClientTransactionID", params.optional("ClientTransactionID")
+            )
+            return await self._invoke(request.method, member, info["member"], params, transaction)
+        except BadRequest as error:
+            return _text(400, str(error))
+
+    @staticmethod
+    async def _form(request: web.Request) -> Params:
+        body = await request.read()
+        try:
+            text = body.decode("utf-8")
+            pairs = parse_qsl(text, keep_blank_values=True, strict_parsing=False)
+        except (UnicodeDecodeError, ValueError):
+            raise BadRequest("the PUT body must be UTF-8 form data (name=value&...)") from None
+        return Params.from_pairs(pairs, exact=True)
+
+    async def _invoke(
+        self, method: str, member: Member, name: str, params: Params, transaction: int
+    ) -> web.Response:
+        handler = member.get if method == "GET" else member.put
+        if handler is None:
+            other = "PUT" if method == "GET" else "GET"
+            return _text(405, f"{name} is read with {other}, not {method}")
+        try:
+            if member.needs_connection:
+                self.telescope.require_connected()
+            value = handler(params)
+            if inspect.isawaitable(value):
+                value = await value
+        except AlpacaError as error:
+            return self._reply(transaction, error=error)
+        except MountError as error:
+            return self._reply(transaction, error=from_mount_error(error))
+        except BadRequest:
+            raise
+        except Exception as error:
+            logger.exception("Alpaca %s %s failed", method, name)
+            failure = AlpacaError(ErrorNumber.DRIVER_ERROR, f"internal error: {error}")
+            return self._reply(transaction, error=failure)
+        has_value = method == "GET" or value is not None
+        return self._reply(transaction, value=value, has_value=has_value)
+
+    # --- management API and setup pages ----------------------------------------------------------
+
+    async def _management(self, request: web.Request, value: object) -> web.Response:
+        try:
+            _, transaction = self._query_ids(request)
+        except BadRequest as error:
+            return _text(400, str(error))
+        return self._reply(transaction, value=value, has_value=True)
+
+    async def _api_versions(self, request: web.Request) -> web.Response:
+        return await self._management(request, [1])
+
+    async def _description(self, request: web.Request) -> web.Response:
+        description = {
+            "ServerName": "scopelink",
+            "Manufacturer": "scopelink developers",
+            "ManufacturerVersion": scopelink_version,
+            "Location": (
+                f"{self.mount.site.latitude_deg:.4f}, {self.mount.site.longitude_deg:.4f}"
+            ),
+        }
+        return await self._management(request, description)
+
+    async def _configured_devices(self, request: web.Request) -> web.Response:
+        devices = [
+            {
+                "DeviceName": self.config.name,
+                "DeviceType": "Telescope",
+                "DeviceNumber": 0,
+                "UniqueID": self.unique_id,
+            }
+        ]
+        return await self._management(request, devices)
+
+    async def _setup(self, _: web.Request) -> web.Response:
+        page = render_setup_page(
+            self.mount,
+            self.config,
+            unique_id=self.unique_id,
+            port=self.port,
+            discovery_port=self.discovery_port,
+        )
+        return web.Response(text=page, content_type="text/html")
