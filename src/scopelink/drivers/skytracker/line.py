@@ -1,0 +1,245 @@
+"""The PC end of a Sky Tracker line: one exchange at a time, timeouts, resync, the bus.
+
+Every exchange takes a turn on the :class:`~scopelink.mount.scheduling.WireScheduler`, so user
+commands go before background polls. A Sky Commander exchange holds one turn from ``Q`` to ``q``
+(nothing else may pass while the bus is held). After a timeout or a reply that does not parse
+the line is resynchronised: ``q`` (harmless when the bus is not held), drain until quiet, and a
+fresh codec, so a late reply can never be read as the answer to a later command.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from scopelink.links import Link, LinkError
+from scopelink.mount import DeviceError, NotConnectedError
+from scopelink.mount.scheduling import Priority, WireScheduler
+from scopelink.protocol.skytracker import (
+    NEED_DATA,
+    BadReply,
+    BusAnswer,
+    CommanderCommand,
+    ReleaseBus,
+    Reply,
+    RequestBus,
+    StrayByte,
+    TrackerClient,
+    TrackerCommand,
+    Wait,
+)
+
+__all__ = [
+    "DEFAULT_BUS_RETRY_DELAYS_S",
+    "DEFAULT_GRANT_TIMEOUT_S",
+    "DEFAULT_REPLY_TIMEOUT_S",
+    "BadReplyError",
+    "BusRefusedError",
+    "LineOptions",
+    "ReplyTimeoutError",
+    "SkyTrackerLine",
+]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_REPLY_TIMEOUT_S = 1.0
+"""The spec names no reply time; the longest reply (16 bytes) takes 17 ms at 9600 baud."""
+DEFAULT_GRANT_TIMEOUT_S = 0.1
+"""The spec: after ``Q`` the PC waits up to 100 ms for the grant ``A``."""
+DEFAULT_BUS_RETRY_DELAYS_S: tuple[float, ...] = (0.05, 0.1, 0.2, 0.4, 0.8, 1.6)
+"""Back-off between bus requests that were refused (NUL) or unanswered: 7 tries in ~3.2 s."""
+RESYNC_QUIET_S = 0.1
+"""After a fault, input is drained until the line has been quiet this long."""
+RESYNC_MAX_S = 2.0
+
+
+class ReplyTimeoutError(DeviceError):
+    """No complete reply came in time (the line has been resynchronised)."""
+
+
+class BadReplyError(DeviceError):
+    """A reply of the right length that does not fit its command (the line was resynchronised)."""
+
+
+class BusRefusedError(DeviceError):
+    """The Sky Tracker would not lend the Sky Commander bus within the retry schedule."""
+
+
+@dataclass(frozen=True, slots=True)
+class LineOptions:
+    """Timing of the PC side; the defaults follow the spec (see ``docs/drivers-skytracker.md``)."""
+
+    reply_timeout_s: float = DEFAULT_REPLY_TIMEOUT_S
+    grant_timeout_s: float = DEFAULT_GRANT_TIMEOUT_S
+    bus_retry_delays_s: tuple[float, ...] = DEFAULT_BUS_RETRY_DELAYS_S
+
+    def __post_init__(self) -> None:
+        if self.reply_timeout_s <= 0 or self.grant_timeout_s <= 0:
+            raise ValueError(f"timeouts must be positive: {self}")
+        if any(delay < 0 for delay in self.bus_retry_delays_s):
+            raise ValueError(f"bus retry delays must not be negative: {self}")
+
+
+class SkyTrackerLine:
+    """Exchanges with the Sky Tracker (and, through its bus, the Sky Commander) on ``link``."""
+
+    def __init__(
+        self,
+        link: Link,
+        *,
+        options: LineOptions | None = None,
+        scheduler: WireScheduler | None = None,
+    ) -> None:
+        self.link = link
+        self.options = options or LineOptions()
+        self.scheduler = scheduler or WireScheduler()
+        self._client = TrackerClient()
+        self.commands_sent = 0
+        """Commands written since the link opened (the Sky Tracker's ``S`` rule counts them)."""
+        self.resyncs = 0
+        self.stray_bytes = 0
+
+    # --- Sky Tracker commands ----------------------------------------------------------------
+
+    async def tracker(
+        self, command: TrackerCommand, priority: Priority = Priority.COMMAND
+    ) -> Reply | None:
+        """One Sky Tracker command and its reply (None for a command without one)."""
+        async with self.scheduler.turn(priority):
+            return await self._exchange(command, self.options.reply_timeout_s)
+
+    async def tracker_sequence(
+        self, commands: Sequence[TrackerCommand], priority: Priority = Priority.COMMAND
+    ) -> list[Reply | None]:
+        """Several Sky Tracker commands in one turn (e.g. ``b`` then the arrows still held)."""
+        async with self.scheduler.turn(priority):
+            return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
+
+    # --- Sky Commander commands through the bus ----------------------------------------------
+
+    async def commander(
+        self,
+        commands: Sequence[CommanderCommand],
+        priority: Priority = Priority.COMMAND,
+        *,
+        retry_delays_s: Sequence[float] | None = None,
+    ) -> list[Reply | None]:
+        """``Q``, the commands, ``q`` in one turn; the replies of the commands.
+
+        A refused (NUL) or unanswered request is retried after each delay of the schedule, the
+        wire free for others meanwhile; then :class:`BusRefusedError`.
+        """
+        delays = self.options.bus_retry_delays_s if retry_delays_s is None else retry_delays_s
+        refused = unanswered = 0
+        for attempt in range(len(delays) + 1):
+            if attempt:
+                await asyncio.sleep(delays[attempt - 1])
+            async with self.scheduler.turn(priority):
+                answer = await self._request_bus()
+                if answer is None:
+                    unanswered += 1
+                    continue
+                if not answer:
+                    refused += 1
+                    continue
+                try:
+                    return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
+                finally:
+                    await self._release_bus()
+        waited = sum(delays)
+        what = ", ".join(c.describe() for c in commands)
+        if refused:
+            cause = (
+                f"refused {refused} time(s) (NUL: a GOTO is running; wait for it or abort it)"
+                + (f", unanswered {unanswered} time(s)" if unanswered else "")
+            )
+        else:
+            cause = (
+                f"no answer to 'Q' within {self.options.grant_timeout_s * 1000:.0f} ms, "
+                f"{unanswered} time(s)"
+            )
+        raise BusRefusedError(
+            f"the Sky Tracker on {self.link.name} did not lend the Sky Commander bus for "
+            f"{what!r} in {attempt + 1} request(s) over {waited:.2f} s: {cause}"
+        )
+
+    async def _request_bus(self) -> bool | None:
+        """True granted, False refused, None no (good) answer (the line was resynchronised)."""
+        try:
+            reply = await self._exchange(RequestBus(), self.options.grant_timeout_s)
+        except (ReplyTimeoutError, BadReplyError) as error:
+            logger.info("bus request failed: %s", error)
+            return None
+        assert isinstance(reply, BusAnswer)
+        return reply.granted
+
+    async def _release_bus(self) -> None:
+        if self.link.closed:
+            return
+        # If the link went away, the box takes the bus back when its PC link ends.
+        with contextlib.suppress(LinkError, NotConnectedError):
+            await self._exchange(ReleaseBus(), self.options.reply_timeout_s)
+
+    # --- one exchange ------------------------------------------------------------------------
+
+    async def _exchange(
+        self, command: TrackerCommand | CommanderCommand, reply_within_s: float
+    ) -> Reply | None:
+        self._flush_strays()
+        data = self._client.send(command)
+        try:
+            await self.link.write(data)
+            self.commands_sent += 1
+            if command.reply is None:
+                return None
+            async with asyncio.timeout(reply_within_s):
+                event = await self._next_reply()
+        except TimeoutError:
+            self._client.abandon_reply()
+            await self.resync()
+            raise ReplyTimeoutError(
+                f"no reply to {command.describe()!r} within {reply_within_s * 1000:.0f} ms on "
+                f"{self.link.name}: is the Sky Tracker on, at 9600 baud, and the cable plugged in?"
+            ) from None
+        except LinkError as error:
+            raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
+        if isinstance(event, BadReply):
+            await self.resync()
+            raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
+        return event
+
+    async def _next_reply(self) -> Reply | BadReply:
+        while True:
+            event = self._client.next_event()
+            if event is NEED_DATA:
+                self._client.receive_data(await self.link.read())
+            elif isinstance(event, StrayByte):
+                self._note_stray(event)
+            else:
+                assert not isinstance(event, Wait)  # a client never pauses
+                return event
+
+    def _flush_strays(self) -> None:
+        while (event := self._client.next_event()) is not NEED_DATA:
+            if isinstance(event, StrayByte):
+                self._note_stray(event)
+
+    def _note_stray(self, event: StrayByte) -> None:
+        self.stray_bytes += 1
+        logger.info("ignored %s", event.describe())
+
+    async def resync(self) -> None:
+        """Release the bus (in case), drain late bytes until quiet, start a fresh codec."""
+        self.resyncs += 1
+        self._client = TrackerClient()
+        try:
+            await self.link.write(ReleaseBus().encode())
+            self.commands_sent += 1
+            discarded = await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
+        except LinkError as error:
+            raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
+        if discarded:
+            logger.info("resync discarded %s", discarded.hex(" "))

@@ -1,0 +1,84 @@
+"""What the Sky Tracker's arrows can do: the rates it supports and the buttons for a motion.
+
+The box has no rate command. An arrow moves an axis at a speed set by the mode: 4°/s in
+UTILITY (no tracking), ±8 arcmin/s on top of tracking in TRACK, ±``K`` arcsec/s (1-255, set per
+axis) on top of tracking in GUIDE. A requested rate is mapped to the nearest of these.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from scopelink.mount import GuideDirection, MountAxis
+from scopelink.protocol.skytracker import Direction, TrackerMode
+
+__all__ = [
+    "GUIDE_SPEED_MAX_ARCSEC_S",
+    "TRACK_ARROW_ARCSEC_S",
+    "UTILITY_ARROW_ARCSEC_S",
+    "AxisMotion",
+    "axis_motion",
+    "guide_button",
+]
+
+UTILITY_ARROW_ARCSEC_S = 4.0 * 3600.0
+"""UTILITY mode: an arrow slews at up to 4°/s (spec)."""
+TRACK_ARROW_ARCSEC_S = 8.0 * 60.0
+"""TRACK mode: an arrow adds or subtracts 8 arcmin/s to the track rate (spec)."""
+GUIDE_SPEED_MAX_ARCSEC_S = 255
+"""GUIDE mode: an arrow adds the ``K`` speed, 1-255 arcsec/s per axis (spec)."""
+
+
+@dataclass(frozen=True, slots=True)
+class AxisMotion:
+    """How to move one axis: press ``direction`` in ``mode``; in GUIDE with ``guide_speed``."""
+
+    direction: Direction
+    mode: TrackerMode
+    guide_speed_arcsec_s: int | None
+    rate_deg_s: float
+    """The signed rate this gives on top of tracking (UTILITY: instead of tracking)."""
+
+
+_POSITIVE = {MountAxis.PRIMARY: Direction.RIGHT, MountAxis.SECONDARY: Direction.UP}
+_NEGATIVE = {MountAxis.PRIMARY: Direction.LEFT, MountAxis.SECONDARY: Direction.DOWN}
+
+
+def axis_motion(axis: MountAxis, rate_deg_s: float) -> AxisMotion | None:
+    """The arrow and mode nearest to ``rate_deg_s`` on ``axis``; None for 0 (stop).
+
+    PRIMARY is azimuth (positive: compass azimuth increasing, the RIGHT arrow, clockwise seen
+    from above); SECONDARY is altitude (positive: UP). Up to 255 arcsec/s the GUIDE speed is set
+    to the rate rounded to whole arcsec/s (at least 1); above, the nearest of 255 arcsec/s
+    (GUIDE), 8 arcmin/s (TRACK) and 4°/s (UTILITY) in absolute difference.
+    """
+    if rate_deg_s == 0.0:
+        return None
+    direction = _POSITIVE[axis] if rate_deg_s > 0 else _NEGATIVE[axis]
+    sign = 1.0 if rate_deg_s > 0 else -1.0
+    speed = abs(rate_deg_s) * 3600.0
+    if speed <= GUIDE_SPEED_MAX_ARCSEC_S:
+        guide = max(1, min(GUIDE_SPEED_MAX_ARCSEC_S, round(speed)))
+        return AxisMotion(direction, TrackerMode.GUIDE, guide, sign * guide / 3600.0)
+    choices = (
+        (float(GUIDE_SPEED_MAX_ARCSEC_S), TrackerMode.GUIDE),
+        (TRACK_ARROW_ARCSEC_S, TrackerMode.TRACK),
+        (UTILITY_ARROW_ARCSEC_S, TrackerMode.UTILITY),
+    )
+    nearest, mode = min(choices, key=lambda choice: abs(choice[0] - speed))
+    guide_speed = GUIDE_SPEED_MAX_ARCSEC_S if mode is TrackerMode.GUIDE else None
+    return AxisMotion(direction, mode, guide_speed, sign * nearest / 3600.0)
+
+
+_GUIDE_BUTTONS: dict[GuideDirection, tuple[MountAxis, Direction]] = {
+    GuideDirection.NORTH: (MountAxis.SECONDARY, Direction.UP),
+    GuideDirection.SOUTH: (MountAxis.SECONDARY, Direction.DOWN),
+    # Facing south, east is to the left: compass azimuth decreasing.
+    GuideDirection.EAST: (MountAxis.PRIMARY, Direction.LEFT),
+    GuideDirection.WEST: (MountAxis.PRIMARY, Direction.RIGHT),
+}
+
+
+def guide_button(direction: GuideDirection) -> tuple[MountAxis, Direction]:
+    """The axis and arrow of a guide pulse: north/south up/down, east/west left/right."""
+    return _GUIDE_BUTTONS[direction]

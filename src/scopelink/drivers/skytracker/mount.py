@@ -1,0 +1,696 @@
+"""``SkyTrackerMount``: the Mount API over the PC <-> Sky Tracker (+ Sky Commander) line.
+
+The Sky Tracker box moves the motors; the Sky Commander behind its bus knows where the scope
+points (J2000, three decimals) and holds the current object. Position reads and object uploads
+go through the bus (``Q`` ... ``q``); modes, arrows, status, guide speed and calibration are
+Sky Tracker commands. Decisions where the spec is silent are in ``docs/drivers-skytracker.md``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from datetime import datetime
+
+from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
+from scopelink.links import Link, LinkError, open_link
+from scopelink.mount import (
+    AlignmentMode,
+    Capabilities,
+    DeviceError,
+    GuideDirection,
+    Identity,
+    InvalidValueError,
+    Limits,
+    Mount,
+    MountAxis,
+    MountError,
+    MountState,
+    NotConnectedError,
+    NotSupportedError,
+    TrackingMode,
+    utc_now,
+)
+from scopelink.mount.scheduling import Priority, WireScheduler
+from scopelink.protocol.skytracker import (
+    Acknowledge,
+    CalibrationReply,
+    Direction,
+    GuideSpeedReply,
+    LoadObject,
+    PositionReply,
+    PressDirection,
+    ReadCalibration,
+    ReadGuideSpeed,
+    ReadPosition,
+    ReadStatus,
+    ReadVersion,
+    Realign,
+    ReleaseDirections,
+    SelectMode,
+    SetCalibration,
+    SetGuideSpeed,
+    StatusReply,
+    TrackerCommand,
+    TrackerMode,
+    TrackerStatus,
+    VersionReply,
+)
+
+from .calibration import CalibrationFactors, CalibrationRuleError
+from .line import (
+    BusRefusedError,
+    LineOptions,
+    ReplyTimeoutError,
+    SkyTrackerLine,
+)
+from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion, axis_motion, guide_button
+
+__all__ = ["SkyTrackerMount", "SlewInProgressError"]
+
+logger = logging.getLogger(__name__)
+
+BAUDRATE = 9600
+STOP_BITS = 2
+"""The Sky Tracker's PC port is unbuffered: two stop bits (or paced sends) keep bytes apart."""
+TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
+"""Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
+_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
+UTILITY_STOP_MARGIN_DEG = 4.5
+"""A 4°/s UTILITY slew down is released this far above the horizon: ramping down from 4°/s at
+2°/s² takes 4°, plus a poll's worth of travel."""
+SLOW_STOP_MARGIN_DEG = 0.05
+GOTO_STATUS_POLL_S = 0.05
+
+
+class SlewInProgressError(MountError):
+    """A GOTO is running: the request would abort it (or needs the bus the GOTO keeps busy)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Position:
+    ra_j2000_hours: float
+    dec_j2000_deg: float
+    read_at: datetime
+
+
+class SkyTrackerMount(Mount):
+    """A Sky Tracker box (with its Sky Commander) on a link.
+
+    ``spec`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
+    ``tcp://HOST:PORT``, a pty path): serial ports are opened 9600 8N2; links without a UART
+    get paced sends (11 bit-times per byte). Pass ``link`` to use an open link as it is.
+    ``guide_speed_arcsec_s`` sets the ``K`` speed used by pulse guiding (default: the box's).
+    """
+
+    poll_interval_s = 0.0
+    """Background polls may run back to back: each takes ~25 ms of wire time."""
+
+    def __init__(
+        self,
+        spec: str,
+        *,
+        site: Site,
+        limits: Limits | None = None,
+        clock: Callable[[], datetime] = utc_now,
+        link: Link | None = None,
+        options: LineOptions | None = None,
+        guide_speed_arcsec_s: int | None = None,
+    ) -> None:
+        super().__init__(site=site, limits=limits, clock=clock)
+        if guide_speed_arcsec_s is not None and not 1 <= guide_speed_arcsec_s <= 255:
+            raise InvalidValueError(f"guide speed {guide_speed_arcsec_s} arcsec/s is not 1-255")
+        self.spec = spec
+        self.options = options or LineOptions()
+        self.scheduler = WireScheduler()
+        self._given_link = link
+        self._line: SkyTrackerLine | None = None
+        self._wanted_guide_speed = guide_speed_arcsec_s
+        self._version = ""
+        self._commander_present: bool | None = None
+        self._mode: TrackerMode | None = None
+        self._status: TrackerStatus | None = None
+        self._position: _Position | None = None
+        self._guide_speeds = (120, 120)
+        """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
+        self._pulse_speeds = (120, 120)
+        self._held: dict[MountAxis, AxisMotion] = {}
+        self._pulses: dict[MountAxis, tuple[Direction, asyncio.Task[None]]] = {}
+        self._rest_mode: TrackerMode | None = None
+        """The mode to return to when the last arrow is released."""
+        self._buttons = asyncio.Lock()
+        self._tracking_choice = TrackingMode.ALT_AZ
+        self._problems: tuple[str, ...] = ()
+        self._below_horizon_alarm = False
+
+    @classmethod
+    async def open(
+        cls,
+        spec: str,
+        *,
+        site: Site,
+        limits: Limits | None = None,
+        clock: Callable[[], datetime] = utc_now,
+        link: Link | None = None,
+        options: LineOptions | None = None,
+        guide_speed_arcsec_s: int | None = None,
+        calibration: CalibrationFactors | None = None,
+    ) -> SkyTrackerMount:
+        """Construct and connect (writing ``calibration`` first, if given)."""
+        mount = cls(
+            spec,
+            site=site,
+            limits=limits,
+            clock=clock,
+            link=link,
+            options=options,
+            guide_speed_arcsec_s=guide_speed_arcsec_s,
+        )
+        await mount.connect(calibration=calibration)
+        return mount
+
+    # --- who and what ----------------------------------------------------------------------------
+
+    @property
+    def capabilities(self) -> Capabilities:
+        commander = self._commander_present is not False
+        return Capabilities(
+            alignment_mode=AlignmentMode.ALT_AZ,
+            can_goto=commander,
+            can_goto_altaz=False,
+            can_sync=commander,
+            can_park=False,
+            can_set_park=False,
+            can_pulse_guide=True,
+            can_move_axis=(True, True),
+            max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
+            tracking_modes=frozenset({TrackingMode.OFF, *TRACKING_MODES}),
+            can_set_site=True,
+            can_set_time=False,
+            can_report_pier_side=False,
+        )
+
+    @property
+    def identity(self) -> Identity:
+        model = "Sky Tracker"
+        if self._commander_present:
+            model += " + Sky Commander"
+        return Identity("skytracker", model, firmware=self._version.strip(), link=self.spec)
+
+    @property
+    def commander_present(self) -> bool | None:
+        """Whether a Sky Commander answered on the bus at connect (None: not known)."""
+        return self._commander_present
+
+    @property
+    def tracker_mode(self) -> TrackerMode | None:
+        """The box's mode as last read or set (None for a flag mix outside the spec's table)."""
+        return self._mode
+
+    @property
+    def line(self) -> SkyTrackerLine:
+        """The open line (for diagnostics: counters of resyncs and stray bytes)."""
+        if self._line is None:
+            raise NotConnectedError(f"the Sky Tracker on {self.spec} is not connected")
+        return self._line
+
+    # --- connection ------------------------------------------------------------------------------
+
+    async def connect(self, *, calibration: CalibrationFactors | None = None) -> None:
+        """Open the link and identify: ``V``, ``k``, ``R`` and a position read through the bus.
+
+        With ``calibration``, ``S`` is sent first of all (the box takes it only as the first
+        command after power-on): a refusal raises :class:`CalibrationRuleError`, not connected.
+        """
+        if self._line is not None:
+            return
+        link = await self._open_link()
+        line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
+        self._line = line
+        try:
+            if calibration is not None:
+                await self._write_calibration_first(line, calibration)
+            version = await line.tracker(ReadVersion())
+            assert isinstance(version, VersionReply)
+            self._version = version.text
+            speeds = await line.tracker(ReadGuideSpeed())
+            assert isinstance(speeds, GuideSpeedReply)
+            self._guide_speeds = (speeds.azimuth_arcsec_per_s, speeds.elevation_arcsec_per_s)
+            if self._wanted_guide_speed is not None:
+                await self._set_guide_speeds((self._wanted_guide_speed,) * 2)
+            self._pulse_speeds = self._guide_speeds
+            self._note_status(await line.tracker(ReadStatus()))
+            await self._detect_commander(line)
+        except BaseException:
+            self._line = None
+            with contextlib.suppress(LinkError):
+                await link.close()
+            raise
+        self._problems = ()
+        self._publish_now()
+
+    async def _open_link(self) -> Link:
+        if self._given_link is not None:
+            return self._given_link
+        try:
+            return await open_link(self.spec, BAUDRATE, stopbits=STOP_BITS, pace=True)
+        except LinkError as error:
+            raise NotConnectedError(f"cannot open the Sky Tracker's link: {error}") from error
+
+    async def _detect_commander(self, line: SkyTrackerLine) -> None:
+        if self._mode is TrackerMode.GOTO:
+            self._commander_present = None  # the bus is refused during a GOTO; it needs one
+            return
+        try:
+            await self._read_position(line, Priority.COMMAND, retry=False)
+        except ReplyTimeoutError as error:
+            logger.warning("no Sky Commander on the bus: %s", error)
+            self._commander_present = False
+            return
+        except BusRefusedError:
+            self._commander_present = None
+            return
+        self._commander_present = True
+
+    async def disconnect(self) -> None:
+        """Release the arrows, abort a GOTO (``U``), close the link. Tracking keeps running."""
+        line = self._line
+        if line is None:
+            return
+        self._cancel_pulses()
+        self._held.clear()
+        try:
+            commands: list[TrackerCommand] = [ReleaseDirections()]
+            if self._mode is TrackerMode.GOTO:
+                commands.append(SelectMode(TrackerMode.UTILITY))
+            await line.tracker_sequence(commands)
+        except (MountError, LinkError) as error:
+            logger.info("could not stop motion before disconnecting: %s", error)
+        finally:
+            self._line = None
+            with contextlib.suppress(LinkError):
+                await line.link.close()
+            self._publish(replace(self.state, connected=False, read_at=self.now()))
+
+    # --- calibration -----------------------------------------------------------------------------
+
+    async def read_calibration(self) -> CalibrationFactors:
+        """``s``: the motor calibration factors (always allowed)."""
+        reply = await self._require_line().tracker(ReadCalibration())
+        assert isinstance(reply, CalibrationReply)
+        return CalibrationFactors(reply.azimuth_factor, reply.elevation_factor)
+
+    async def write_calibration(self, factors: CalibrationFactors) -> None:
+        """``S``: store calibration factors in the box's EEPROM.
+
+        The box takes ``S`` only as the first command after it is switched on, and once. Call
+        this *instead of* :meth:`connect` (it connects, sending ``S`` first); once connected,
+        the rule forbids it and :class:`CalibrationRuleError` is raised without sending anything.
+        """
+        if self._line is not None:
+            raise CalibrationRuleError(
+                f"the Sky Tracker takes 'S' only as the first command after it is switched on, "
+                f"and only once; {self._line.commands_sent} commands have been sent on this "
+                "connection. Disconnect, switch the Sky Tracker off and on, then call "
+                "write_calibration() before connect()"
+            )
+        await self.connect(calibration=factors)
+
+    async def _write_calibration_first(
+        self, line: SkyTrackerLine, factors: CalibrationFactors
+    ) -> None:
+        if line.commands_sent:
+            raise CalibrationRuleError("'S' must be the first command on the line")
+        try:
+            reply = await line.tracker(
+                SetCalibration(factors.azimuth_factor, factors.elevation_factor)
+            )
+        except ReplyTimeoutError:
+            raise CalibrationRuleError(
+                "the Sky Tracker did not acknowledge 'S': it takes calibration only as the first "
+                "command after it is switched on, and once. Something talked to it since "
+                "power-on (an earlier connection?): switch it off and on and try again"
+            ) from None
+        if not isinstance(reply, Acknowledge):
+            raise DeviceError(f"unexpected reply to 'S': {reply}")
+
+    # --- reading ---------------------------------------------------------------------------------
+
+    async def refresh(self) -> MountState:
+        """``R`` status; then, unless a GOTO keeps the bus, the position through the bus."""
+        line = self._require_line()
+        try:
+            self._note_status(await line.tracker(ReadStatus(), Priority.POLL))
+            if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
+                with contextlib.suppress(BusRefusedError):  # a GOTO began since the status
+                    await self._read_position(line, Priority.POLL, retry=False)
+        except (DeviceError, NotConnectedError) as error:
+            self._problems = (str(error),)
+            self._publish_now()
+            raise
+        self._problems = ()
+        state = self._publish_now()
+        await self._guard_horizon(state)
+        return self.state
+
+    async def read_position(self) -> tuple[float, float]:
+        """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
+        position = await self._read_position(self._require_line(), Priority.COMMAND, retry=True)
+        self._publish_now()
+        return position.ra_j2000_hours, position.dec_j2000_deg
+
+    async def _read_position(
+        self, line: SkyTrackerLine, priority: Priority, *, retry: bool
+    ) -> _Position:
+        (reply,) = await line.commander(
+            [ReadPosition()], priority, retry_delays_s=None if retry else ()
+        )
+        assert isinstance(reply, PositionReply)
+        self._position = _Position(reply.ra_hours, reply.dec_degrees, self.now())
+        return self._position
+
+    async def read_status(self) -> TrackerStatus:
+        """``R``: the box's mode flags and pressed arrows now."""
+        reply = await self._require_line().tracker(ReadStatus())
+        self._note_status(reply)
+        assert self._status is not None
+        return self._status
+
+    async def wait_for_goto(self, timeout_s: float | None = None) -> MountState:
+        """Poll ``R`` until the GOTO bit clears (TRACK follows), then refresh everything."""
+        async with asyncio.timeout(timeout_s):
+            while (await self.read_status()).mode is TrackerMode.GOTO:  # noqa: ASYNC110
+                await asyncio.sleep(GOTO_STATUS_POLL_S)
+        return await self.refresh()
+
+    def _note_status(self, reply: object) -> None:
+        assert isinstance(reply, StatusReply)
+        self._status = reply.status
+        self._mode = reply.status.mode
+
+    def _publish_now(self) -> MountState:
+        now = self.now()
+        position = self._position
+        status = self._status
+        coordinates: dict[str, float | None] = {}
+        if position is not None:
+            ra, dec = position.ra_j2000_hours, position.dec_j2000_deg
+            alt, az = j2000_to_observed(ra, dec, position.read_at, self.site)
+            ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, position.read_at)
+            coordinates = {
+                "ra_j2000_hours": ra,
+                "dec_j2000_deg": dec,
+                "ra_of_date_hours": ra_of_date,
+                "dec_of_date_deg": dec_of_date,
+                "alt_deg": alt,
+                "az_deg": az,
+            }
+        pulsing = Direction(0)
+        for direction, _ in self._pulses.values():
+            pulsing |= direction
+        pressed = status.directions if status is not None else Direction(0)
+        state = MountState(
+            read_at=now,
+            connected=self._line is not None,
+            **coordinates,  # type: ignore[arg-type]
+            slewing=self._mode is TrackerMode.GOTO or bool(pressed & ~pulsing),
+            tracking=self._tracking_choice if self._mode in _TRACKING else TrackingMode.OFF,
+            parked=False,
+            aligned=True,
+            pulse_guiding=bool(self._pulses),
+            problems=self._problems,
+        )
+        self._publish(state)
+        return state
+
+    async def _guard_horizon(self, state: MountState) -> None:
+        """Release a slew down (or stop tracking) that reaches the configured horizon."""
+        if state.alt_deg is None or state.az_deg is None:
+            return
+        floor = self.limits.horizon_at(state.az_deg)
+        held = self._held.get(MountAxis.SECONDARY)
+        if held is not None and held.direction is Direction.DOWN:
+            margin = (
+                UTILITY_STOP_MARGIN_DEG
+                if held.mode is TrackerMode.UTILITY
+                else SLOW_STOP_MARGIN_DEG
+            )
+            if state.alt_deg < floor + margin:
+                logger.warning(
+                    "altitude %.2f° near the horizon: stopping the slew down", state.alt_deg
+                )
+                await self._move_axis(MountAxis.SECONDARY, 0.0)
+                self._problems = (f"slew down stopped at altitude {state.alt_deg:.2f}° (horizon)",)
+                self._publish_now()
+        was_below = self._below_horizon_alarm
+        self._below_horizon_alarm = state.alt_deg < floor
+        if self._below_horizon_alarm and not was_below and self._mode in _TRACKING:
+            await self._require_line().tracker(SelectMode(TrackerMode.UTILITY))
+            self._mode = TrackerMode.UTILITY
+            self._problems = (
+                f"tracking stopped: altitude {state.alt_deg:.2f}° is below the configured "
+                f"horizon of {floor:.2f}°",
+            )
+            self._publish_now()
+
+    # --- goto and sync ---------------------------------------------------------------------------
+
+    async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """``U`` if a GOTO runs (re-target), ``Q`` ``L99 ...`` ``q``, then ``G``."""
+        line = self._require_commander()
+        await self._release_all_buttons()
+        if self._mode is TrackerMode.GOTO:
+            await line.tracker(SelectMode(TrackerMode.UTILITY))
+            self._mode = TrackerMode.UTILITY
+        (reply,) = await line.commander([LoadObject.current(ra_j2000_hours, dec_j2000_deg)])
+        if not isinstance(reply, Acknowledge):
+            raise DeviceError(f"the Sky Commander did not acknowledge the object: {reply}")
+        await line.tracker(SelectMode(TrackerMode.GOTO))
+        self._mode = TrackerMode.GOTO
+        self._publish_now()
+
+    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """``Q`` ``L99 ...`` ``N`` ``q``: realign the Sky Commander on this position."""
+        line = self._require_commander()
+        if self._mode is TrackerMode.GOTO:
+            raise SlewInProgressError(
+                "cannot sync during a GOTO: the Sky Tracker lends no bus while it slews; "
+                "wait for the GOTO to end or abort it"
+            )
+        load, _ = await line.commander(
+            [LoadObject.current(ra_j2000_hours, dec_j2000_deg), Realign()]
+        )
+        if not isinstance(load, Acknowledge):
+            raise DeviceError(f"the Sky Commander did not acknowledge the object: {load}")
+        await self._read_position(line, Priority.COMMAND, retry=True)
+        self._publish_now()
+
+    def _require_line(self) -> SkyTrackerLine:
+        if self._line is None:
+            raise NotConnectedError(f"the Sky Tracker on {self.spec} is not connected")
+        return self._line
+
+    def _require_commander(self) -> SkyTrackerLine:
+        line = self._require_line()
+        if self._commander_present is False:
+            raise NotSupportedError(
+                "no Sky Commander answered on the Sky Tracker's bus at connect: goto and sync "
+                "need it (check the cable between the two, then reconnect)"
+            )
+        return line
+
+    # --- abort and tracking ----------------------------------------------------------------------
+
+    async def _abort(self) -> None:
+        """Release every arrow; ``U`` ends a GOTO (motors ramp down, UTILITY mode)."""
+        line = self._require_line()
+        self._cancel_pulses()
+        self._held.clear()
+        commands: list[TrackerCommand] = [ReleaseDirections()]
+        mode = self._mode
+        if mode is TrackerMode.GOTO:
+            mode = TrackerMode.UTILITY
+            commands.append(SelectMode(mode))
+        elif self._rest_mode is not None and self._rest_mode is not mode:
+            mode = self._rest_mode
+            commands.append(SelectMode(mode))
+        await line.tracker_sequence(commands)
+        self._mode = mode
+        self._rest_mode = None
+        await self.refresh()
+
+    async def _set_tracking(self, mode: TrackingMode) -> None:
+        """TRACK (``T``) for sidereal/alt-az tracking; OFF is UTILITY (``U``), motors held."""
+        line = self._require_line()
+        if self._mode is TrackerMode.GOTO:
+            raise SlewInProgressError(
+                "a GOTO is running and ends in tracking by itself; changing tracking now would "
+                "abort it (use abort() to stop it)"
+            )
+        if self._held or self._pulses:
+            raise InvalidValueError("stop moving the axes before changing tracking")
+        target = TrackerMode.UTILITY if mode is TrackingMode.OFF else TrackerMode.TRACK
+        if mode is not TrackingMode.OFF:
+            self._tracking_choice = mode
+        await line.tracker(SelectMode(target))
+        self._mode = target
+        self._publish_now()
+
+    async def standby(self) -> None:
+        """``B``: cut the motor drive to save battery (a GOTO is aborted first with ``U``)."""
+        line = self._require_line()
+        self._cancel_pulses()
+        self._held.clear()
+        commands: list[TrackerCommand] = [ReleaseDirections()]
+        if self._mode is TrackerMode.GOTO:
+            commands.append(SelectMode(TrackerMode.UTILITY))
+        commands.append(SelectMode(TrackerMode.STANDBY))
+        await line.tracker_sequence(commands)
+        self._mode = TrackerMode.STANDBY
+        self._rest_mode = None
+        self._publish_now()
+
+    async def set_guide_speed(self, azimuth_arcsec_s: int, elevation_arcsec_s: int) -> None:
+        """``K`` (confirmed with ``k``): the guide speed of pulses and GUIDE-mode arrows."""
+        for value in (azimuth_arcsec_s, elevation_arcsec_s):
+            if not 1 <= value <= 255:
+                raise InvalidValueError(f"guide speed {value} arcsec/s is not 1-255")
+        self._require_line()
+        self._pulse_speeds = (azimuth_arcsec_s, elevation_arcsec_s)
+        async with self._buttons:
+            await self._set_guide_speeds(self._pulse_speeds)
+
+    async def _set_guide_speeds(self, speeds: tuple[int, int]) -> None:
+        line = self._require_line()
+        await line.tracker(SetGuideSpeed(*speeds))
+        reply = await line.tracker(ReadGuideSpeed())
+        assert isinstance(reply, GuideSpeedReply)
+        self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
+        if self._guide_speeds != speeds:
+            raise DeviceError(f"the Sky Tracker kept guide speed {reply} after 'K' {speeds}")
+
+    # --- arrows: move_axis and pulse_guide ----------------------------------------------------
+
+    async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """Press the arrow of the nearest supported rate (see motion.py); 0 releases it."""
+        self._refuse_during_goto("moving an axis")
+        motion = axis_motion(axis, rate_deg_s)
+        if motion is not None:
+            if axis in self._pulses:
+                raise InvalidValueError(f"the {axis.name.lower()} axis is pulse guiding")
+            other = self._held.get(_other(axis))
+            if other is not None and other.mode is not motion.mode:
+                raise InvalidValueError(
+                    f"the box moves both axes in one mode: the other axis moves in "
+                    f"{other.mode.name}, this rate needs {motion.mode.name}; stop it first"
+                )
+            if self._pulses and motion.mode is not TrackerMode.GUIDE:
+                raise InvalidValueError("a guide pulse is running: wait for it to end")
+            self._held[axis] = motion
+        else:
+            self._held.pop(axis, None)
+        await self._apply_buttons()
+
+    async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        """GUIDE mode (``D``) at the ``K`` speed, press the arrow, release after the duration.
+
+        Returns at once; :attr:`MountState.pulse_guiding` is true until the pulse ends.
+        """
+        self._refuse_during_goto("pulse guiding")
+        if self._mode not in _TRACKING:
+            raise NotSupportedError(
+                "the Sky Tracker guides only while tracking (its arrows slew at 4°/s in UTILITY "
+                "mode): start tracking first"
+            )
+        axis, button = guide_button(direction)
+        held = self._held.get(axis)
+        if held is not None:
+            raise InvalidValueError(f"the {axis.name.lower()} axis is moving: stop it first")
+        if any(m.mode is not TrackerMode.GUIDE for m in self._held.values()):
+            raise InvalidValueError("an axis moves at a TRACK or UTILITY rate: stop it first")
+        if duration_ms == 0:
+            return
+        previous = self._pulses.pop(axis, None)
+        if previous is not None:
+            previous[1].cancel()
+        task = asyncio.create_task(self._end_pulse(axis, duration_ms / 1000.0))
+        self._pulses[axis] = (button, task)
+        try:
+            await self._apply_buttons()
+        except BaseException:
+            task.cancel()
+            self._pulses.pop(axis, None)
+            raise
+
+    async def _end_pulse(self, axis: MountAxis, duration_s: float) -> None:
+        await asyncio.sleep(duration_s)
+        entry = self._pulses.get(axis)
+        if entry is None or entry[1] is not asyncio.current_task():
+            return
+        del self._pulses[axis]
+        try:
+            await self._apply_buttons()
+        except (MountError, LinkError) as error:
+            logger.warning("could not end a guide pulse: %s", error)
+            self._problems = (f"could not end a guide pulse: {error}",)
+            self._publish_now()
+
+    def _cancel_pulses(self) -> None:
+        for _, task in self._pulses.values():
+            task.cancel()
+        self._pulses.clear()
+
+    def _refuse_during_goto(self, what: str) -> None:
+        if self._mode is TrackerMode.GOTO:
+            raise SlewInProgressError(
+                f"a GOTO is running: {what} would abort it (the box ignores arrows during a "
+                "GOTO); wait for it to end or abort() it first"
+            )
+
+    async def _release_all_buttons(self) -> None:
+        self._cancel_pulses()
+        if self._held:
+            self._held.clear()
+            await self._apply_buttons()
+
+    async def _apply_buttons(self) -> None:
+        """Send the mode, ``K`` and arrows that the held motions and pulses call for, in one turn.
+
+        ``b`` releases every arrow, so the arrows still wanted are pressed again after it.
+        """
+        async with self._buttons:
+            line = self._require_line()
+            pressed = [motion.direction for motion in self._held.values()]
+            pressed += [button for button, _ in self._pulses.values()]
+            if pressed and self._rest_mode is None:
+                self._rest_mode = self._mode
+            if self._held:
+                mode = next(iter(self._held.values())).mode
+            elif self._pulses:
+                mode = TrackerMode.GUIDE
+            else:
+                mode = self._rest_mode or self._mode or TrackerMode.UTILITY
+                self._rest_mode = None
+            speeds = list(self._pulse_speeds)
+            for axis, index in ((MountAxis.PRIMARY, 0), (MountAxis.SECONDARY, 1)):
+                held = self._held.get(axis)
+                if held is not None and held.guide_speed_arcsec_s is not None:
+                    speeds[index] = held.guide_speed_arcsec_s
+            commands: list[TrackerCommand] = []
+            if tuple(speeds) != self._guide_speeds:
+                commands.append(SetGuideSpeed(speeds[0], speeds[1]))
+            if mode is not self._mode:
+                commands.append(SelectMode(mode))
+            commands.append(ReleaseDirections())
+            commands += [PressDirection(direction) for direction in pressed]
+            await line.tracker_sequence(commands)
+            self._guide_speeds = (speeds[0], speeds[1])
+            self._mode = mode
+            self._publish_now()
+
+
+def _other(axis: MountAxis) -> MountAxis:
+    return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY

@@ -1,0 +1,92 @@
+"""Helpers for the Sky Tracker driver tests: the real emulator on a pty or TCP, the driver on it."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
+from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
+from scopelink.mount import Limits
+from scopelink.servers.faults import FaultInjector
+from scopelink.servers.skytracker import SkyTrackerEmulator
+from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
+
+SITE = Site(latitude_deg=48.0, longitude_deg=11.0, pressure_hpa=0.0)
+EPOCH = datetime(2026, 1, 1, 20, 0, tzinfo=UTC)
+CLOCK_RATE = 20.0
+"""Simulated seconds per real second: a 30 s GOTO takes 1.5 s."""
+TRANSPORTS = ["pty", "tcp"]
+FAST = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.05, 0.1, 0.2))
+"""Spec timing (100 ms grant), shorter reply timeout and back-off so fault tests stay quick."""
+
+
+def sky_tracker_mount(rate: float = CLOCK_RATE) -> SimulatedMount:
+    """The Sky Tracker alt-az preset on an accelerated clock, level and pointing north."""
+    return SimulatedMount(SKY_TRACKER, site=SITE, clock=SimClock.accelerated(rate, EPOCH))
+
+
+def sky_at(sim: SimulatedMount, alt_deg: float, az_deg: float) -> tuple[float, float]:
+    """J2000 of an observed alt/az now: a target that is where we want it in the sky."""
+    return observed_to_j2000(alt_deg, az_deg, sim.clock.now(), SITE)
+
+
+def separation_deg(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Angle between two J2000 (RA hours, Dec degrees) positions."""
+    return float(angular_separation_deg(a[0] * 15.0, a[1], b[0] * 15.0, b[1]))
+
+
+@dataclass
+class Rig:
+    emulator: SkyTrackerEmulator
+    sim: SimulatedMount
+    driver: SkyTrackerMount
+    spec: str
+
+    def sim_j2000(self) -> tuple[float, float]:
+        return self.sim.j2000_at(self.sim.elapsed())
+
+
+async def serve(emulator: SkyTrackerEmulator, transport: str) -> str:
+    """Serve ``emulator`` on a new pty or TCP port; the driver's link spec for it."""
+    if transport == "pty":
+        return await emulator.on_pty()
+    host, port = await emulator.on_tcp()
+    return f"tcp://{host}:{port}"
+
+
+@asynccontextmanager
+async def rig(
+    data_dir: Path,
+    transport: str,
+    *,
+    faults: FaultInjector | None = None,
+    strict_line: bool = False,
+    options: LineOptions = FAST,
+    connect: bool = True,
+    limits: Limits | None = None,
+    guide_speed_arcsec_s: int | None = None,
+) -> AsyncIterator[Rig]:
+    """Emulator + driver; the driver is disconnected and the emulator stopped afterwards."""
+    sim = sky_tracker_mount()
+    async with SkyTrackerEmulator(
+        sim, data_dir, faults=faults, strict_line=strict_line
+    ) as emulator:
+        spec = await serve(emulator, transport)
+        driver = SkyTrackerMount(
+            spec,
+            site=SITE,
+            clock=sim.clock.now,
+            options=options,
+            limits=limits,
+            guide_speed_arcsec_s=guide_speed_arcsec_s,
+        )
+        if connect:
+            await driver.connect()
+        try:
+            yield Rig(emulator, sim, driver, spec)
+        finally:
+            await driver.disconnect()
