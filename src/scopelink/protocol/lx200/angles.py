@@ -1,0 +1,113 @@
+"""The sexagesimal forms LX200 uses on the wire, in both precisions.
+
+High precision (the default here, and what INDI and Stellarium switch to) gives RA as
+``HH:MM:SS`` and Dec as ``sDD*MM:SS``; low precision gives ``HH:MM.T`` (tenths of a minute) and
+``sDD*MM``. Altitude and azimuth use Meade's ``'`` before the seconds. Every value is rounded once,
+to the last digit shown, so 59.6 s never prints as 60.
+
+Parsing is lenient in what it accepts, as every LX200 clone is: any of ``* : ' °`` (and Meade's
+0xDF degree sign, read as Latin-1) between the fields, an optional sign, optional spaces, and an
+optional decimal fraction on the last field.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Final
+
+__all__ = [
+    "format_altitude",
+    "format_azimuth",
+    "format_dec",
+    "format_ra",
+    "format_signed_degrees_minutes",
+    "parse_sexagesimal",
+]
+
+DEGREE_SIGN: Final = "*"
+"""What we send as the degree sign: Stellarium checks for ``*`` and INDI accepts any separator
+(real Meade handsets send 0xDF)."""
+
+_FIELDS = re.compile(
+    r"^\s*(?P<sign>[+-])?\s*(?P<a>\d{1,3})"
+    r"(?:\s*[*:'\xdf\xb0 ]\s*(?P<b>\d{1,2}(?:\.\d+)?)"
+    r"(?:\s*[:'\" ]\s*(?P<c>\d{1,2}(?:\.\d+)?))?)?\s*$"
+)
+
+
+def parse_sexagesimal(text: str) -> float | None:
+    """``[s]A[sepB[sepC]]`` -> A + B/60 + C/3600 with the sign; None if it is not that shape.
+
+    Minutes and seconds must be below 60; the caller checks the range of the whole value.
+    """
+    match = _FIELDS.match(text)
+    if match is None:
+        return None
+    minutes = float(match["b"]) if match["b"] is not None else 0.0
+    seconds = float(match["c"]) if match["c"] is not None else 0.0
+    if minutes >= 60.0 or seconds >= 60.0:
+        return None
+    if match["c"] is not None and "." in (match["b"] or ""):
+        return None  # a fraction of a minute and then seconds: not a number
+    value = int(match["a"]) + minutes / 60.0 + seconds / 3600.0
+    return -value if match["sign"] == "-" else value
+
+
+def _check(value: float, what: str) -> None:
+    if not math.isfinite(value):
+        raise ValueError(f"{what} {value} is not a number")
+
+
+def format_ra(ra_hours: float, *, high_precision: bool = True) -> str:
+    """``HH:MM:SS`` or ``HH:MM.T``, wrapped into [0, 24 h)."""
+    _check(ra_hours, "right ascension")
+    if high_precision:
+        total = round(ra_hours * 3600.0) % 86400
+        return f"{total // 3600:02d}:{total // 60 % 60:02d}:{total % 60:02d}"
+    tenths = round(ra_hours * 600.0) % 14400
+    return f"{tenths // 600:02d}:{tenths // 10 % 60:02d}.{tenths % 10:d}"
+
+
+def _signed(value_deg: float, high_precision: bool, seconds_separator: str) -> str:
+    limit_deg = 90
+    if high_precision:
+        total = min(round(abs(value_deg) * 3600.0), limit_deg * 3600)
+        sign = "-" if value_deg < 0 and total else "+"
+        return (
+            f"{sign}{total // 3600:02d}{DEGREE_SIGN}{total // 60 % 60:02d}"
+            f"{seconds_separator}{total % 60:02d}"
+        )
+    total = min(round(abs(value_deg) * 60.0), limit_deg * 60)
+    sign = "-" if value_deg < 0 and total else "+"
+    return f"{sign}{total // 60:02d}{DEGREE_SIGN}{total % 60:02d}"
+
+
+def format_dec(dec_deg: float, *, high_precision: bool = True) -> str:
+    """``sDD*MM:SS`` or ``sDD*MM`` (clamped to ±90°)."""
+    _check(dec_deg, "declination")
+    return _signed(dec_deg, high_precision, ":")
+
+
+def format_altitude(alt_deg: float, *, high_precision: bool = True) -> str:
+    """``sDD*MM'SS`` or ``sDD*MM`` (clamped to ±90°)."""
+    _check(alt_deg, "altitude")
+    return _signed(alt_deg, high_precision, "'")
+
+
+def format_azimuth(az_deg: float, *, high_precision: bool = True) -> str:
+    """``DDD*MM'SS`` or ``DDD*MM``, wrapped into [0, 360°)."""
+    _check(az_deg, "azimuth")
+    if high_precision:
+        total = round(az_deg * 3600.0) % (360 * 3600)
+        return f"{total // 3600:03d}{DEGREE_SIGN}{total // 60 % 60:02d}'{total % 60:02d}"
+    total = round(az_deg * 60.0) % (360 * 60)
+    return f"{total // 60:03d}{DEGREE_SIGN}{total % 60:02d}"
+
+
+def format_signed_degrees_minutes(value_deg: float, *, degree_digits: int = 2) -> str:
+    """``sDD*MM`` (latitude) or, with ``degree_digits=3``, ``sDDD*MM`` (longitude)."""
+    _check(value_deg, "angle")
+    total = round(abs(value_deg) * 60.0)
+    sign = "-" if value_deg < 0 and total else "+"
+    return f"{sign}{total // 60:0{degree_digits}d}{DEGREE_SIGN}{total % 60:02d}"
