@@ -251,7 +251,13 @@ class TelescopeDevice:
     def _mode_for(self, rate: DriveRate) -> TrackingMode | None:
         modes = self.mount.capabilities.tracking_modes
         if rate is DriveRate.SIDEREAL:
-            for mode in (TrackingMode.SIDEREAL, TrackingMode.ALT_AZ, TrackingMode.PEC):
+            # An alt-az mount follows the stars on both axes: its own mode (SynScan's "alt-az").
+            preferred = (
+                (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
+                if self.mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
+                else (TrackingMode.SIDEREAL, TrackingMode.PEC, TrackingMode.ALT_AZ)
+            )
+            for mode in preferred:
                 if mode in modes:
                     return mode
             return None
