@@ -13,10 +13,32 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from scopelink import __version__
-from scopelink.cli import decode_command, emulate_command, serve_command
+from scopelink.cli import (
+    config_command,
+    decode_command,
+    emulate_command,
+    goto_command,
+    info_command,
+    motion_commands,
+    ports_command,
+    serve_command,
+    setup_commands,
+    status_command,
+)
 from scopelink.cli.errors import CommandError
 
-SUBCOMMANDS: tuple[ModuleType, ...] = (serve_command, emulate_command, decode_command)
+SUBCOMMANDS: tuple[ModuleType, ...] = (
+    serve_command,
+    emulate_command,
+    decode_command,
+    ports_command,
+    info_command,
+    status_command,
+    goto_command,
+    motion_commands,
+    setup_commands,
+    config_command,
+)
 
 EXIT_USAGE = 2
 

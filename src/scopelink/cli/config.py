@@ -1,0 +1,232 @@
+"""The user's settings file: device, site, horizon, limits and servers (TOML; docs/cli.md).
+
+The file lives in the per-user config directory (``platformdirs.user_config_dir("scopelink")``,
+file ``config.toml``); the ``SCOPELINK_CONFIG`` environment variable names another file. A missing
+file means every default. Command-line flags override what the file says. A bad value is an error
+naming the file, the key and what was expected, never a silent default.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import platformdirs
+
+from scopelink.astro import Site
+from scopelink.mount import InvalidValueError, Limits
+
+__all__ = [
+    "CONFIG_ENV_VAR",
+    "DEFAULT_SERVER_PORTS",
+    "Config",
+    "ConfigError",
+    "ServersConfig",
+    "config_path",
+    "load_config",
+]
+
+CONFIG_ENV_VAR: Final = "SCOPELINK_CONFIG"
+
+DEFAULT_SERVER_PORTS: Final[Mapping[str, int]] = {
+    "alpaca": 11111,  # the ASCOM Alpaca default port
+    "lx200": 4030,  # SkySafari's default for LX200 over TCP
+    "stellarium": 10001,  # Stellarium's telescope-control default
+    "synscan": 11880,  # Sky-Watcher's own SynScan network port
+}
+"""Where each server listens unless the file says otherwise (``false`` turns one off)."""
+
+DEFAULT_SERVER_HOST: Final = "127.0.0.1"
+"""Servers listen on this machine only unless the file says otherwise."""
+
+GREENWICH: Final = Site(51.4779, -0.0015)
+"""A neutral default until the user configures a site."""
+
+
+class ConfigError(Exception):
+    """The settings file cannot be read or holds a bad value (the message names file and key)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ServersConfig:
+    """What ``scopelink serve`` listens on: a TCP port per protocol, ``None`` for off."""
+
+    host: str = DEFAULT_SERVER_HOST
+    alpaca: int | None = DEFAULT_SERVER_PORTS["alpaca"]
+    lx200: int | None = DEFAULT_SERVER_PORTS["lx200"]
+    stellarium: int | None = DEFAULT_SERVER_PORTS["stellarium"]
+    synscan: int | None = DEFAULT_SERVER_PORTS["synscan"]
+
+
+@dataclass(frozen=True, slots=True)
+class Config:
+    """Everything the settings file can say; ``path`` is where it was read from."""
+
+    path: Path | None = None
+    device: str | None = None
+    site: Site = GREENWICH
+    site_configured: bool = False
+    """Whether the file named a site (``site`` pushes only a site the user chose)."""
+    limits: Limits = field(default_factory=Limits)
+    servers: ServersConfig = field(default_factory=ServersConfig)
+
+
+def config_path() -> Path:
+    """The settings file in use: ``$SCOPELINK_CONFIG`` or the per-user config directory's."""
+    override = os.environ.get(CONFIG_ENV_VAR)
+    if override:
+        return Path(override).expanduser()
+    return Path(platformdirs.user_config_dir("scopelink")) / "config.toml"
+
+
+def load_config(path: Path | None = None) -> Config:
+    """Read the settings file (default :func:`config_path`); a missing file gives the defaults."""
+    path = path if path is not None else config_path()
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return Config(path=None)
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{path}: cannot read: {error}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{path}: not valid TOML: {error}") from None
+    return _Reader(path).config(data)
+
+
+_TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers")
+_SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
+_HORIZON_KEYS: Final = ("altitude", "profile")
+_LIMITS_KEYS: Final = ("max_altitude",)
+_SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS)
+
+
+class _Reader:
+    """Reads one parsed file, naming the file and the dotted key in every error."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def error(self, key: str, problem: str) -> ConfigError:
+        return ConfigError(f"{self.path}: {key}: {problem}")
+
+    def config(self, data: dict[str, Any]) -> Config:
+        self.known(data, "", _TOP_KEYS)
+        device = data.get("device")
+        if device is not None and not (isinstance(device, str) and device.strip()):
+            raise self.error(
+                "device", f"expected a device string like 'synscan:/dev/ttyUSB0', got {device!r}"
+            )
+        site_table = self.table(data, "site")
+        site = self.site(site_table) if site_table else GREENWICH
+        return Config(
+            path=self.path,
+            device=device.strip() if isinstance(device, str) else None,
+            site=site,
+            site_configured=bool(site_table),
+            limits=self.limits(self.table(data, "horizon"), self.table(data, "limits")),
+            servers=self.servers(self.table(data, "servers")),
+        )
+
+    def known(self, table: Mapping[str, Any], prefix: str, keys: tuple[str, ...]) -> None:
+        for key in table:
+            if key not in keys:
+                raise self.error(f"{prefix}{key}", f"unknown key (known: {', '.join(keys)})")
+
+    def table(self, data: Mapping[str, Any], key: str) -> dict[str, Any]:
+        value = data.get(key, {})
+        if not isinstance(value, dict):
+            raise self.error(key, f"expected a table ([{key}]), got {type(value).__name__}")
+        return value
+
+    def number(self, table: Mapping[str, Any], key: str, prefix: str) -> float | None:
+        value = table.get(key)
+        if value is None:
+            return None
+        # bool is an int in Python; 'true' as a latitude is a mistake, not 1°.
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.error(f"{prefix}.{key}", f"expected a number, got {value!r}")
+        if not math.isfinite(value):
+            raise self.error(f"{prefix}.{key}", f"expected a finite number, got {value!r}")
+        return float(value)
+
+    def site(self, table: dict[str, Any]) -> Site:
+        self.known(table, "site.", _SITE_KEYS)
+        values = {key: self.number(table, key, "site") for key in _SITE_KEYS}
+        latitude, longitude = values["latitude"], values["longitude"]
+        for key, value in (("latitude", latitude), ("longitude", longitude)):
+            if value is None:
+                raise self.error(f"site.{key}", "missing (a [site] needs latitude and longitude)")
+        assert latitude is not None  # checked just above
+        assert longitude is not None
+        options: dict[str, float] = {}
+        for key, argument in (
+            ("elevation", "elevation_m"),
+            ("pressure", "pressure_hpa"),
+            ("temperature", "temperature_c"),
+            ("humidity", "relative_humidity"),
+        ):
+            value = values[key]
+            if value is not None:
+                options[argument] = value
+        try:
+            return Site(latitude, longitude, **options)
+        except ValueError as error:
+            raise self.error("site", str(error)) from None
+
+    def limits(self, horizon: dict[str, Any], limits: dict[str, Any]) -> Limits:
+        self.known(horizon, "horizon.", _HORIZON_KEYS)
+        self.known(limits, "limits.", _LIMITS_KEYS)
+        altitude = self.number(horizon, "altitude", "horizon")
+        max_altitude = self.number(limits, "max_altitude", "limits")
+        profile = self.profile(horizon.get("profile", []))
+        try:
+            return Limits(
+                horizon_deg=altitude if altitude is not None else 0.0,
+                max_altitude_deg=max_altitude if max_altitude is not None else 90.0,
+                horizon_profile=profile,
+            )
+        except InvalidValueError as error:
+            key = "limits.max_altitude" if "maximum" in str(error) else "horizon"
+            raise self.error(key, str(error)) from None
+
+    def profile(self, value: object) -> tuple[tuple[float, float], ...]:
+        expected = "expected a list of [azimuth, altitude] pairs in degrees"
+        if not isinstance(value, list):
+            raise self.error("horizon.profile", f"{expected}, got {value!r}")
+        points: list[tuple[float, float]] = []
+        for index, point in enumerate(value):
+            if not (
+                isinstance(point, list)
+                and len(point) == 2
+                and all(isinstance(x, int | float) and not isinstance(x, bool) for x in point)
+            ):
+                raise self.error(f"horizon.profile[{index}]", f"{expected}, got {point!r}")
+            points.append((float(point[0]), float(point[1])))
+        return tuple(points)
+
+    def servers(self, table: dict[str, Any]) -> ServersConfig:
+        self.known(table, "servers.", _SERVERS_KEYS)
+        host = table.get("host", DEFAULT_SERVER_HOST)
+        if not (isinstance(host, str) and host):
+            raise self.error("servers.host", f"expected an address like '127.0.0.1', got {host!r}")
+        ports: dict[str, int | None] = {}
+        for name, default in DEFAULT_SERVER_PORTS.items():
+            value = table.get(name, default)
+            if value is False:
+                ports[name] = None
+            elif isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 65535:
+                ports[name] = value
+            else:
+                raise self.error(
+                    f"servers.{name}",
+                    f"expected a TCP port 0-65535 (0 picks a free one) or false (off), "
+                    f"got {value!r}",
+                )
+        return ServersConfig(host=host, **ports)

@@ -1,0 +1,199 @@
+"""What a DEVICE string names, and the :class:`Mount` that drives it (docs/cli.md).
+
+Forms:
+
+- ``sim`` or ``sim:PRESET`` (``sim:eq6``, ``sim:az-gti``, ...): the built-in simulated mount, in
+  this process (it starts afresh every run);
+- ``synscan:LINK``: a SynScan hand control; ``skytracker:LINK``: a Sky Tracker motor box
+  (its Sky Commander, if fitted, answers on the same line);
+- ``LINK`` alone: try SynScan, then Sky Tracker (autodetect).
+
+LINK is anything :func:`scopelink.links.open_link` opens: ``/dev/ttyUSB0``, ``COM3``,
+``tcp://host:11880``, ``socket://host:port``, ``rfc2217://host:port``, a pty path.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Final
+
+from scopelink.astro import Site
+from scopelink.links import LinkError
+from scopelink.mount import Limits, Mount, MountError
+from scopelink.sim import PRESETS, SimClock, SimulatedMount
+
+__all__ = [
+    "AUTODETECT_TIMEOUT_S",
+    "KINDS",
+    "DeviceError",
+    "DeviceSpec",
+    "create_mount",
+    "open_mount",
+    "parse_device",
+]
+
+_log = logging.getLogger(__name__)
+
+KINDS: Final = ("sim", "synscan", "skytracker")
+DEFAULT_SIM_PRESET: Final = "eq6"
+AUTODETECT_TIMEOUT_S: Final = 1.5
+"""Reply timeout while probing a device of unknown kind: long enough for any real hand control
+(replies come within ~100 ms), short enough that trying the second protocol is quick."""
+
+EXAMPLES: Final = (
+    "sim, sim:az-gti, synscan:/dev/ttyUSB0, synscan:tcp://192.168.4.1:11880, "
+    "skytracker:/dev/ttyUSB0, or a bare port to autodetect"
+)
+
+
+class DeviceError(Exception):
+    """The DEVICE string is malformed, or nothing usable answered on it."""
+
+    def __init__(self, message: str, hint: str = "") -> None:
+        super().__init__(message)
+        self.hint = hint
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceSpec:
+    """A parsed DEVICE string: ``kind`` is None when it must be detected; ``target`` is the link
+    spec (or the simulator preset)."""
+
+    kind: str | None
+    target: str
+
+    def __str__(self) -> str:
+        return f"{self.kind}:{self.target}" if self.kind else self.target
+
+
+def parse_device(text: str) -> DeviceSpec:
+    """Split ``kind:target``; a prefix that is no kind belongs to the link (``tcp://...``)."""
+    text = text.strip()
+    if not text:
+        raise DeviceError("empty device", f"give one of: {EXAMPLES}")
+    if text == "sim":
+        return DeviceSpec("sim", DEFAULT_SIM_PRESET)
+    kind, colon, rest = text.partition(":")
+    if colon and kind.lower() in KINDS and not rest.startswith("//"):
+        kind = kind.lower()
+        if not rest.strip():
+            raise DeviceError(f"device {text!r} names no port", f"give one of: {EXAMPLES}")
+        if kind == "sim":
+            preset = rest.strip().lower()
+            if preset not in PRESETS:
+                raise DeviceError(
+                    f"no simulated mount called {preset!r}",
+                    "presets: " + ", ".join(sorted(PRESETS)),
+                )
+            return DeviceSpec("sim", preset)
+        return DeviceSpec(kind, rest.strip())
+    return DeviceSpec(None, text)
+
+
+def create_mount(
+    spec: DeviceSpec,
+    *,
+    site: Site,
+    limits: Limits | None = None,
+    clock_rate: float = 1.0,
+    timeout_s: float | None = None,
+) -> Mount:
+    """The (not yet connected) mount for a spec of known kind. ``clock_rate`` speeds up the
+    simulator's clock; ``timeout_s`` bounds each reply of a real device (driver default if None)."""
+    if spec.kind == "sim":
+        return SimulatedMount(
+            PRESETS[spec.target], site=site, limits=limits, clock=SimClock(rate=clock_rate)
+        )
+    if spec.kind == "synscan":
+        from scopelink.drivers.synscan import SynScanMount  # noqa: PLC0415 - heavy, only if used
+
+        if timeout_s is None:
+            return SynScanMount(spec.target, site=site, limits=limits)
+        return SynScanMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
+    if spec.kind == "skytracker":
+        factory = _sky_tracker_factory()
+        return factory(spec.target, site, limits, timeout_s)
+    raise DeviceError(f"cannot create a mount of unknown kind for {spec}")
+
+
+MountFactory = Callable[[str, Site, Limits | None, float | None], Mount]
+
+
+def _sky_tracker_factory() -> MountFactory:
+    """The Sky Tracker driver, imported only when asked for (it is newer than this module)."""
+    try:
+        module = importlib.import_module("scopelink.drivers.skytracker")
+        driver = module.SkyTrackerMount
+    except (ImportError, AttributeError):
+        raise DeviceError(
+            "this scopelink has no Sky Tracker driver yet",
+            "use synscan:PORT, or 'scopelink decode --protocol skytracker' for traces",
+        ) from None
+
+    def create(link: str, site: Site, limits: Limits | None, timeout_s: float | None) -> Mount:
+        options: dict[str, object] = {"site": site, "limits": limits}
+        if timeout_s is not None:
+            options["timeout_s"] = timeout_s
+        mount: Mount = driver(link, **options)
+        return mount
+
+    return create
+
+
+async def open_mount(
+    spec: str | DeviceSpec,
+    site: Site,
+    limits: Limits | None = None,
+    *,
+    clock_rate: float = 1.0,
+    timeout_s: float | None = None,
+) -> Mount:
+    """The connected mount ``spec`` names (see the module docstring for the forms).
+
+    Without a kind, SynScan is tried first (its echo ``K`` is harmless to a Sky Tracker, whose
+    driver resynchronises the line anyway), then Sky Tracker, each with a short reply timeout.
+    Raises :class:`DeviceError` with a hint when nothing answered or the port cannot be opened.
+    """
+    parsed = parse_device(spec) if isinstance(spec, str) else spec
+    if parsed.kind is not None:
+        mount = create_mount(
+            parsed, site=site, limits=limits, clock_rate=clock_rate, timeout_s=timeout_s
+        )
+        await _connect(mount, parsed)
+        return mount
+    failures: list[str] = []
+    for kind in ("synscan", "skytracker"):
+        candidate = DeviceSpec(kind, parsed.target)
+        try:
+            mount = create_mount(
+                candidate, site=site, limits=limits, timeout_s=timeout_s or AUTODETECT_TIMEOUT_S
+            )
+            await _connect(mount, candidate)
+        except DeviceError as error:
+            _log.debug("autodetect: not %s: %s", kind, error)
+            failures.append(f"{kind}: {error}")
+            continue
+        return mount
+    raise DeviceError(
+        f"nothing recognisable answered on {parsed.target} ({'; '.join(failures)})",
+        "check the cable and that the hand control is powered and past its start-up "
+        "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection",
+    )
+
+
+async def _connect(mount: Mount, spec: DeviceSpec) -> None:
+    try:
+        await mount.connect()
+    except LinkError as error:
+        raise DeviceError(
+            f"cannot open {spec.target}: {error}",
+            "'scopelink ports' lists the serial ports; check the path and your permissions "
+            "(the dialout group on Linux)",
+        ) from None
+    except MountError as error:
+        raise DeviceError(f"{spec}: {error}") from None
+    except TimeoutError:
+        raise DeviceError(f"{spec}: no reply") from None

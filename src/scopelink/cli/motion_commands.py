@@ -1,0 +1,287 @@
+"""``move``, ``stop``, ``track``, ``park``, ``unpark`` and ``guide``: the mount's hand controls."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+from typing import Final
+
+from scopelink.cli.display import position_text
+from scopelink.cli.errors import CommandError
+from scopelink.cli.mount_session import add_device_arguments, run_on_mount
+from scopelink.cli.options import until_stopped
+from scopelink.mount import (
+    AlignmentMode,
+    GuideDirection,
+    Mount,
+    MountAxis,
+    TrackingMode,
+)
+from scopelink.sim import SIDEREAL_RATE_DEG_S
+
+__all__ = ["AXES", "parse_rate", "register"]
+
+AXES: Final = {
+    "primary": MountAxis.PRIMARY,
+    "ra": MountAxis.PRIMARY,
+    "az": MountAxis.PRIMARY,
+    "secondary": MountAxis.SECONDARY,
+    "dec": MountAxis.SECONDARY,
+    "alt": MountAxis.SECONDARY,
+}
+"""Axis names: RA and azimuth are the primary axis, Dec and altitude the secondary."""
+
+_PARK_TIMEOUT_S: Final = 600.0
+_GUIDE_END_MARGIN_S: Final = 5.0
+
+
+def _add(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+    name: str,
+    *,
+    help: str,
+    description: str,
+    examples: str,
+) -> argparse.ArgumentParser:
+    return subparsers.add_parser(
+        name,
+        help=help,
+        description=description,
+        epilog="examples:\n" + examples,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    move = _add(
+        subparsers,
+        "move",
+        help="turn one axis at a rate until Ctrl-C (or for --for seconds), then stop it",
+        description=(
+            "Turn AXIS (ra/az = primary, dec/alt = secondary) at RATE: degrees per second, "
+            "signed (the sign is the direction the axis turns), or a multiple of the sidereal "
+            "rate with an x suffix (16x). The axis stops on Ctrl-C or after --for seconds."
+        ),
+        examples=(
+            "  scopelink move ra 2                 2°/s until Ctrl-C\n"
+            "  scopelink move dec -16x --for 5     16x sidereal the other way, for 5 s\n"
+        ),
+    )
+    move.add_argument("axis", choices=sorted(AXES), metavar="AXIS", help="ra|dec|az|alt|...")
+    move.add_argument("rate", type=str, metavar="RATE", help="°/s (signed), or Nx sidereal")
+    move.add_argument("--for", dest="seconds", type=float, metavar="S", help="stop after S s")
+    add_device_arguments(move)
+    move.set_defaults(run=_run_move)
+
+    stop = _add(
+        subparsers,
+        "stop",
+        help="stop every motion now (gotos and manual moves)",
+        description="Abort any slew and stop both axes. Tracking keeps its setting where the "
+        "protocol allows.",
+        examples=("  scopelink stop\n"),
+    )
+    add_device_arguments(stop)
+    stop.set_defaults(run=_run_stop)
+
+    track = _add(
+        subparsers,
+        "track",
+        help="tracking on, off, or a mode (sidereal, lunar, solar, altaz, pec)",
+        description=(
+            "Set tracking: 'on' picks sidereal for an equatorial mount and altaz for an alt-az "
+            "one; 'off' stops it; or name a mode this mount supports."
+        ),
+        examples=("  scopelink track on\n  scopelink track lunar\n  scopelink track off\n"),
+    )
+    track.add_argument(
+        "mode",
+        choices=["on", *(mode.value for mode in TrackingMode)],
+        metavar="on|off|MODE",
+        help="on, off, " + ", ".join(m.value for m in TrackingMode if m is not TrackingMode.OFF),
+    )
+    add_device_arguments(track)
+    track.set_defaults(run=_run_track)
+
+    park = _add(
+        subparsers,
+        "park",
+        help="move to the park position and stop tracking",
+        description="Park: slew to the park position, stop tracking, refuse motion until "
+        "'scopelink unpark'. Waits for the slew (Ctrl-C stops the mount).",
+        examples=("  scopelink park\n  scopelink park --no-wait\n"),
+    )
+    park.add_argument("--no-wait", action="store_true", help="return once the slew has started")
+    add_device_arguments(park)
+    park.set_defaults(run=_run_park)
+
+    unpark = _add(
+        subparsers,
+        "unpark",
+        help="allow motion again after park",
+        description="Unpark: the mount accepts motion commands again.",
+        examples=("  scopelink unpark && scopelink track on\n"),
+    )
+    add_device_arguments(unpark)
+    unpark.set_defaults(run=_run_unpark)
+
+    guide = _add(
+        subparsers,
+        "guide",
+        help="one guide pulse: DIRECTION (north/south/east/west) for MS milliseconds",
+        description="Nudge the mount at the guide rate towards DIRECTION for MS milliseconds "
+        "(0-60000) and wait for the pulse to end.",
+        examples=("  scopelink guide north 500\n  scopelink guide w 1200\n"),
+    )
+    guide.add_argument("direction", metavar="DIRECTION", help="north|south|east|west (or n/s/e/w)")
+    guide.add_argument("milliseconds", type=int, metavar="MS", help="pulse length in ms")
+    add_device_arguments(guide)
+    guide.set_defaults(run=_run_guide)
+
+
+# --- move and stop ---------------------------------------------------------------------------
+
+
+def parse_rate(text: str) -> float:
+    """Degrees per second from ``"2"``, ``"-0.5"``, or sidereal multiples ``"16x"``, ``"-800x"``."""
+    cleaned = text.strip().lower()
+    try:
+        if cleaned.endswith("x"):
+            return float(cleaned[:-1]) * SIDEREAL_RATE_DEG_S
+        return float(cleaned)
+    except ValueError:
+        raise CommandError(
+            f"cannot read the rate {text!r}", "give degrees per second (2, -0.5) or 16x sidereal"
+        ) from None
+
+
+def _run_move(args: argparse.Namespace) -> int:
+    axis = AXES[args.axis]
+    rate = parse_rate(args.rate)
+    if args.seconds is not None and not args.seconds > 0:
+        raise CommandError(f"--for must be positive, not {args.seconds}")
+
+    async def body(mount: Mount) -> int:
+        async with until_stopped() as stop:
+            await mount.move_axis(axis, rate)
+            try:
+                until = "until Ctrl-C" if args.seconds is None else f"for {args.seconds:g} s"
+                print(f"moving the {axis.name.lower()} axis at {rate:+.4f}°/s {until}", flush=True)
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(stop.wait(), args.seconds)
+            finally:
+                await mount.move_axis(axis, 0.0)
+        state = await mount.refresh()
+        print(f"stopped at {position_text(state)}")
+        return 0
+
+    return run_on_mount(args, body)
+
+
+def _run_stop(args: argparse.Namespace) -> int:
+    async def body(mount: Mount) -> int:
+        await mount.abort()
+        state = await mount.refresh()
+        print(f"stopped at {position_text(state)}")
+        return 0
+
+    return run_on_mount(args, body)
+
+
+# --- tracking ----------------------------------------------------------------------------------
+
+
+def tracking_mode_for(mount: Mount, word: str) -> TrackingMode:
+    """The mode ``word`` names; ``on`` is sidereal, or altaz on an alt-az mount without it."""
+    if word != "on":
+        return TrackingMode(word)
+    modes = mount.capabilities.tracking_modes
+    altaz = mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
+    preferred = (
+        (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
+        if altaz
+        else (TrackingMode.SIDEREAL, TrackingMode.ALT_AZ)
+    )
+    for mode in preferred:
+        if mode in modes:
+            return mode
+    raise CommandError("this mount cannot track", "'scopelink info' shows what it can do")
+
+
+def _run_track(args: argparse.Namespace) -> int:
+    async def body(mount: Mount) -> int:
+        mode = tracking_mode_for(mount, args.mode)
+        await mount.set_tracking(mode)
+        state = await mount.refresh()
+        print(f"tracking: {state.tracking.value}")
+        return 0
+
+    return run_on_mount(args, body)
+
+
+# --- park ------------------------------------------------------------------------------------
+
+
+def _run_park(args: argparse.Namespace) -> int:
+    async def body(mount: Mount) -> int:
+        async with until_stopped() as stop:
+            await mount.park()
+            if args.no_wait:
+                print("parking")
+                return 0
+            slew = asyncio.create_task(mount.wait_for_slew(_PARK_TIMEOUT_S))
+            stopper = asyncio.create_task(stop.wait())
+            done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
+            for task in (slew, stopper):
+                if task not in done:
+                    task.cancel()
+                    with contextlib.suppress(asyncio.CancelledError):
+                        await task
+            if stopper in done:
+                await mount.abort()
+                print("park interrupted: the mount was stopped")
+                return 130
+            state = slew.result()
+        print(f"parked at {position_text(state)}")
+        return 0
+
+    return run_on_mount(args, body)
+
+
+def _run_unpark(args: argparse.Namespace) -> int:
+    async def body(mount: Mount) -> int:
+        await mount.unpark()
+        print("unparked")
+        return 0
+
+    return run_on_mount(args, body)
+
+
+# --- guide -----------------------------------------------------------------------------------
+
+_DIRECTIONS: Final = {
+    **{direction.value: direction for direction in GuideDirection},
+    **{direction.value[0]: direction for direction in GuideDirection},
+}
+
+
+def _run_guide(args: argparse.Namespace) -> int:
+    direction = _DIRECTIONS.get(args.direction.strip().lower())
+    if direction is None:
+        raise CommandError(
+            f"unknown guide direction {args.direction!r}", "give north, south, east or west"
+        )
+
+    async def body(mount: Mount) -> int:
+        await mount.pulse_guide(direction, args.milliseconds)
+        # The driver ends the pulse itself; leaving early would cut it short on disconnect.
+        await asyncio.sleep(args.milliseconds / 1000.0)
+        await mount.wait_for(
+            lambda state: not state.pulse_guiding,
+            timeout_s=_GUIDE_END_MARGIN_S + args.milliseconds / 1000.0,
+        )
+        print(f"guided {direction.value} for {args.milliseconds} ms")
+        return 0
+
+    return run_on_mount(args, body)

@@ -1,0 +1,161 @@
+"""What every device command shares: its options, the config merge, and one run on a mount.
+
+A device command declares its options with :func:`add_device_arguments` and runs its body with
+:func:`run_on_mount`, which reads the config, opens the device, calls the body with the connected
+mount, disconnects, and turns every expected failure into one :class:`CommandError` line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+
+from scopelink.astro import Site
+from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
+from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
+from scopelink.cli.devices import EXAMPLES, DeviceError, DeviceSpec, open_mount, parse_device
+from scopelink.cli.errors import CommandError
+from scopelink.cli.options import parse_site, positive_rate
+from scopelink.links import LinkError
+from scopelink.links.trace import trace_logger
+from scopelink.mount import LimitError, Mount, MountError, NotSupportedError, ParkedError
+
+__all__ = [
+    "DeviceCommand",
+    "add_device_arguments",
+    "mount_error",
+    "read_config",
+    "run_on_mount",
+]
+
+_log = logging.getLogger(__name__)
+
+_HINTS: dict[type[MountError], str] = {
+    LimitError: "the horizon and limits are set in the config file ([horizon], [limits])",
+    ParkedError: "run 'scopelink unpark' first",
+    NotSupportedError: "'scopelink info' shows what this mount can do",
+}
+
+
+def add_device_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--device``, ``--site``, ``--timeout``, ``--clock-rate`` and ``-v`` for a device command."""
+    group = parser.add_argument_group("device")
+    group.add_argument(
+        "-d",
+        "--device",
+        metavar="DEVICE",
+        help=f"what to talk to ({EXAMPLES}); default: the config file's device",
+    )
+    group.add_argument(
+        "--site",
+        metavar="LAT,LON",
+        help="site latitude and east longitude in degrees (default: the config file's site, "
+        "else Greenwich)",
+    )
+    group.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="seconds to wait for each reply of a real device (default: the driver's, 5 s)",
+    )
+    group.add_argument(
+        "--clock-rate",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="sim devices only: simulated time runs X times faster (1 = real time)",
+    )
+    group.add_argument(
+        "-v",
+        "--verbose",
+        dest="trace",
+        action="count",
+        default=0,
+        help="show every byte on the link (logger scopelink.links.trace) on stderr",
+    )
+
+
+def read_config() -> Config:
+    """The settings file, or a :class:`CommandError` naming the file, the key and the problem."""
+    try:
+        return load_config()
+    except ConfigError as error:
+        raise CommandError(
+            str(error), f"fix the file, or point {CONFIG_ENV_VAR} at another one"
+        ) from None
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceCommand:
+    """The merged settings of one device command: flags over the config file."""
+
+    device: DeviceSpec
+    site: Site
+    config: Config
+    clock_rate: float
+    timeout_s: float | None
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> DeviceCommand:
+        config = read_config()
+        text = args.device or config.device
+        if not text:
+            raise CommandError(
+                "no device given",
+                f'add --device DEVICE ({EXAMPLES}) or set device = "..." in {config_path()}',
+            )
+        try:
+            device = parse_device(text)
+        except DeviceError as error:
+            raise CommandError(str(error), error.hint) from None
+        site = parse_site(args.site) if args.site else config.site
+        if args.timeout is not None and not args.timeout > 0:
+            raise CommandError(f"--timeout must be positive, not {args.timeout}")
+        return cls(device, site, config, positive_rate(args.clock_rate), args.timeout)
+
+
+def mount_error(error: Exception) -> CommandError:
+    """The one-line report of a failure the Mount API or the catalogue raised."""
+    if isinstance(error, UnknownObjectError):
+        return CommandError(str(error), "'HIP n', M/NGC/IC numbers, star and planet names work")
+    if isinstance(error, EphemerisRangeError):
+        return CommandError(str(error))
+    if isinstance(error, LinkError):
+        return CommandError(f"the link failed: {error}", "check the cable and the device's power")
+    hint = next((h for kind, h in _HINTS.items() if isinstance(error, kind)), "")
+    return CommandError(str(error), hint)
+
+
+def run_on_mount(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int]]) -> int:
+    """Open the device ``args`` name, run ``body`` on it, disconnect; the body's exit status."""
+    command = DeviceCommand.from_args(args)
+    if args.trace or getattr(args, "verbose", 0):
+        trace_logger.setLevel(logging.DEBUG)
+        if not logging.getLogger().handlers:
+            logging.basicConfig(format="%(asctime)s %(name)s %(message)s")
+    return asyncio.run(_run(command, body))
+
+
+async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
+    try:
+        mount = await open_mount(
+            command.device,
+            command.site,
+            command.config.limits,
+            clock_rate=command.clock_rate,
+            timeout_s=command.timeout_s,
+        )
+    except DeviceError as error:
+        raise CommandError(str(error), error.hint) from None
+    try:
+        return await body(mount)
+    except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:
+        raise mount_error(error) from None
+    finally:
+        try:
+            await mount.disconnect()
+        except (MountError, LinkError) as error:
+            _log.warning("while disconnecting: %s", error)
