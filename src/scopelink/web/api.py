@@ -1,0 +1,221 @@
+"""The dashboard's JSON API: every command goes through the Mount's public, checked methods.
+
+Errors come back as ``{"error": message, "kind": name}`` with a status that says whose fault it
+is: 400 a malformed request, 404 an unknown object (with ``suggestions``), 409 a command the
+mount refuses now (below the horizon, parked, not connected), 501 a command this mount lacks,
+502 a device that failed to answer.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Awaitable, Callable
+from datetime import UTC, datetime
+
+from aiohttp import web
+
+from scopelink.astro import Site
+from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError, lookup, search
+from scopelink.mount import (
+    DeviceError,
+    InvalidValueError,
+    LimitError,
+    Mount,
+    MountAxis,
+    MountError,
+    NotConnectedError,
+    NotSupportedError,
+    ParkedError,
+    TrackingMode,
+)
+from scopelink.web.params import BadRequestError, read_body
+from scopelink.web.snapshot import describe_mount, state_json
+
+__all__ = ["add_api_routes", "error_middleware"]
+
+logger = logging.getLogger(__name__)
+
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+_MAX_SEARCH_RESULTS = 20
+_TIME_SKEW_LIMIT_YEARS = 200
+
+
+def _error(status: int, error: Exception, **extra: object) -> web.Response:
+    return web.json_response(
+        {"error": str(error), "kind": type(error).__name__, **extra}, status=status
+    )
+
+
+@web.middleware
+async def error_middleware(request: web.Request, handler: Handler) -> web.StreamResponse:
+    """Turn refusals into JSON errors the page shows; a bug stays a logged 500."""
+    try:
+        return await handler(request)
+    except (BadRequestError, InvalidValueError, EphemerisRangeError) as error:
+        return _error(400, error)
+    except UnknownObjectError as error:
+        return _error(404, error, suggestions=list(error.suggestions))
+    except (LimitError, ParkedError, NotConnectedError) as error:
+        return _error(409, error)
+    except NotSupportedError as error:
+        return _error(501, error)
+    except (DeviceError, MountError) as error:
+        return _error(502, error)
+
+
+class _Api:
+    def __init__(self, mount: Mount) -> None:
+        self.mount = mount
+
+    def _ok(self) -> web.Response:
+        return web.json_response({"ok": True, "state": state_json(self.mount, self.mount.state)})
+
+    async def state(self, request: web.Request) -> web.Response:
+        return web.json_response(
+            {
+                "mount": describe_mount(self.mount),
+                "state": state_json(self.mount, self.mount.state),
+            }
+        )
+
+    async def search(self, request: web.Request) -> web.Response:
+        prefix = request.query.get("q", "")
+        if len(prefix) > 100:
+            raise BadRequestError("'q' must be at most 100 characters")
+        try:
+            limit = int(request.query.get("limit", "10"))
+        except ValueError:
+            raise BadRequestError("'limit' must be a whole number") from None
+        if not 1 <= limit <= _MAX_SEARCH_RESULTS:
+            raise BadRequestError(f"'limit' must lie in [1, {_MAX_SEARCH_RESULTS}]")
+        matches = search(prefix, limit)
+        return web.json_response(
+            {
+                "matches": [
+                    {
+                        "name": m.name,
+                        "matched": m.matched,
+                        "kind": m.kind.value,
+                        "type": m.type_description,
+                        "mag": m.magnitude,
+                    }
+                    for m in matches
+                ]
+            }
+        )
+
+    async def goto(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        if body.has("name"):
+            found = await self.mount.goto_object(body.text("name"))
+            return web.json_response(
+                {
+                    "ok": True,
+                    "object": {
+                        "name": found.name,
+                        "ra_j2000_hours": found.ra_hours,
+                        "dec_j2000_deg": found.dec_deg,
+                    },
+                }
+            )
+        if body.has("ra_hours") or body.has("dec_deg"):
+            await self.mount.goto_equatorial(
+                body.number("ra_hours", 0.0, 24.0), body.number("dec_deg", -90.0, 90.0)
+            )
+            return self._ok()
+        if body.has("alt_deg") or body.has("az_deg"):
+            await self.mount.goto_horizontal(
+                body.number("alt_deg", -90.0, 90.0), body.number("az_deg", 0.0, 360.0) % 360.0
+            )
+            return self._ok()
+        raise BadRequestError("give 'name', or 'ra_hours' and 'dec_deg', or 'alt_deg' and 'az_deg'")
+
+    async def sync(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        if body.has("name"):
+            found = lookup(body.text("name"), self.mount.now(), self.mount.site)
+            await self.mount.sync_equatorial(found.ra_hours, found.dec_deg)
+        else:
+            await self.mount.sync_equatorial(
+                body.number("ra_hours", 0.0, 24.0), body.number("dec_deg", -90.0, 90.0)
+            )
+        return self._ok()
+
+    async def abort(self, request: web.Request) -> web.Response:
+        await read_body(request)
+        await self.mount.abort()
+        return self._ok()
+
+    async def move(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        axis = body.choice("axis", MountAxis)
+        limit = self.mount.capabilities.max_axis_rate_deg_s
+        await self.mount.move_axis(axis, body.number("rate_deg_s", -limit, limit))
+        return self._ok()
+
+    async def tracking(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        await self.mount.set_tracking(body.choice("mode", TrackingMode))
+        return self._ok()
+
+    async def park(self, request: web.Request) -> web.Response:
+        await read_body(request)
+        await self.mount.park()
+        return self._ok()
+
+    async def unpark(self, request: web.Request) -> web.Response:
+        await read_body(request)
+        await self.mount.unpark()
+        return self._ok()
+
+    async def site(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        current = self.mount.site
+        try:
+            site = Site(
+                latitude_deg=body.number("latitude_deg", -90.0, 90.0),
+                longitude_deg=body.number("longitude_deg", -180.0, 180.0),
+                elevation_m=body.number(
+                    "elevation_m", -500.0, 10000.0, default=current.elevation_m
+                ),
+                pressure_hpa=current.pressure_hpa,
+                temperature_c=current.temperature_c,
+                relative_humidity=current.relative_humidity,
+                wavelength_um=current.wavelength_um,
+            )
+        except ValueError as error:
+            raise BadRequestError(str(error)) from None
+        await self.mount.set_site(site)
+        return web.json_response({"ok": True, "mount": describe_mount(self.mount)})
+
+    async def time(self, request: web.Request) -> web.Response:
+        body = await read_body(request)
+        text = body.text("utc", max_length=40)
+        try:
+            utc = datetime.fromisoformat(text.replace("Z", "+00:00"))
+        except ValueError:
+            raise BadRequestError(
+                f"'utc' must be an ISO 8601 time with a zone, not {text!r}"
+            ) from None
+        if utc.tzinfo is None:
+            raise BadRequestError("'utc' must carry a time zone (end it with Z for UTC)")
+        if abs(utc.year - datetime.now(UTC).year) > _TIME_SKEW_LIMIT_YEARS:
+            raise BadRequestError(f"'utc' {text!r} is not a plausible time")
+        await self.mount.set_time(utc.astimezone(UTC))
+        return self._ok()
+
+
+def add_api_routes(app: web.Application, mount: Mount) -> None:
+    api = _Api(mount)
+    app.router.add_get("/api/state", api.state)
+    app.router.add_get("/api/search", api.search)
+    app.router.add_post("/api/goto", api.goto)
+    app.router.add_post("/api/sync", api.sync)
+    app.router.add_post("/api/abort", api.abort)
+    app.router.add_post("/api/move", api.move)
+    app.router.add_post("/api/tracking", api.tracking)
+    app.router.add_post("/api/park", api.park)
+    app.router.add_post("/api/unpark", api.unpark)
+    app.router.add_post("/api/site", api.site)
+    app.router.add_post("/api/time", api.time)

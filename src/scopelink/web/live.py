@@ -1,0 +1,145 @@
+"""The WebSocket side of the dashboard: one broadcaster for every open page.
+
+While at least one page is connected, one task holds ``mount.watching()`` (so the state cache is
+polled), and every ``interval_s`` sends all pages the same update: the mount's state, the chart's
+objects (every ``sky_every`` updates: they cost ERFA time) and the new traffic lines. A page that
+cannot take an update within ``send_timeout_s`` is closed rather than allowed to stall the others.
+When the last page goes, polling stops.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+
+from aiohttp import WSMsgType, web
+
+from scopelink.mount import Mount
+from scopelink.web.sky import SkyPositions, sky_positions
+from scopelink.web.snapshot import describe_mount, state_json
+from scopelink.web.traffic import TrafficMonitor
+
+__all__ = ["LiveHub"]
+
+logger = logging.getLogger(__name__)
+
+
+class LiveHub:
+    """Open pages and the one task that feeds them."""
+
+    def __init__(
+        self,
+        mount: Mount,
+        traffic: TrafficMonitor | None,
+        *,
+        interval_s: float = 0.25,
+        sky_every: int = 2,
+        send_timeout_s: float = 5.0,
+    ) -> None:
+        self._mount = mount
+        self._traffic = traffic
+        self.interval_s = interval_s
+        self._sky_every = max(1, sky_every)
+        self._send_timeout_s = send_timeout_s
+        self._sockets: set[web.WebSocketResponse] = set()
+        self._task: asyncio.Task[None] | None = None
+        self._sky: SkyPositions | None = None
+        self._traffic_seq = 0
+
+    @property
+    def clients(self) -> int:
+        return len(self._sockets)
+
+    def sky_json(self) -> list[dict[str, object]]:
+        """The chart's objects now, at the mount's site."""
+        now = self._mount.now()
+        if self._sky is None:
+            self._sky = sky_positions(now)
+        return [obj.as_json() for obj in self._sky.at(now, self._mount.site)]
+
+    def _traffic_json(self, since: int) -> tuple[list[dict[str, object]], int]:
+        if self._traffic is None:
+            return [], since
+        lines = self._traffic.since(since)
+        return [line.as_json() for line in lines], (lines[-1].seq if lines else since)
+
+    async def handle(self, request: web.Request) -> web.WebSocketResponse:
+        """One page's WebSocket: a hello with everything, then the shared updates."""
+        ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096)
+        await ws.prepare(request)
+        traffic, _ = self._traffic_json(0)
+        hello = {
+            "type": "hello",
+            "mount": describe_mount(self._mount),
+            "traffic_enabled": self._traffic is not None,
+            "traffic": traffic,
+            "state": state_json(self._mount, self._mount.state),
+            "sky": await asyncio.to_thread(self.sky_json),
+            "interval_s": self.interval_s,
+        }
+        await ws.send_str(json.dumps(hello))
+        self._sockets.add(ws)
+        self._ensure_running()
+        try:
+            async for message in ws:
+                # Commands go through the JSON API (clear status codes); pages send nothing here.
+                if message.type is WSMsgType.ERROR:
+                    break
+        finally:
+            self._sockets.discard(ws)
+        return ws
+
+    def _ensure_running(self) -> None:
+        if self._task is None or self._task.done():
+            self._task = asyncio.create_task(self._run(), name="scopelink dashboard updates")
+
+    async def _run(self) -> None:
+        async with self._mount.watching():
+            tick = 0
+            while self._sockets:
+                await asyncio.sleep(self.interval_s)
+                if not self._sockets:
+                    break
+                tick += 1
+                message = await self._update(with_sky=tick % self._sky_every == 0)
+                await self._broadcast(message)
+
+    async def _update(self, *, with_sky: bool) -> str:
+        traffic, self._traffic_seq = self._traffic_json(self._traffic_seq)
+        update: dict[str, object] = {
+            "type": "update",
+            "state": state_json(self._mount, self._mount.state),
+            "traffic": traffic,
+        }
+        if with_sky:
+            try:
+                update["sky"] = await asyncio.to_thread(self.sky_json)
+            except Exception:  # a chart without objects beats a dead dashboard
+                logger.exception("cannot compute the sky chart's objects")
+        return json.dumps(update)
+
+    async def _broadcast(self, message: str) -> None:
+        async def send(ws: web.WebSocketResponse) -> None:
+            try:
+                async with asyncio.timeout(self._send_timeout_s):
+                    await ws.send_str(message)
+            except (TimeoutError, ConnectionError, RuntimeError):
+                self._sockets.discard(ws)
+                with contextlib.suppress(Exception):
+                    await ws.close()
+
+        await asyncio.gather(*(send(ws) for ws in list(self._sockets)))
+
+    async def close(self) -> None:
+        """Close every page and stop the broadcaster (and so the polling it asked for)."""
+        for ws in list(self._sockets):
+            with contextlib.suppress(Exception):
+                await ws.close(code=1001, message=b"dashboard stopping")
+        self._sockets.clear()
+        task, self._task = self._task, None
+        if task is not None:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task

@@ -1,0 +1,110 @@
+"""The mount as JSON for the browser: state, target, health, identity, capabilities, limits."""
+
+from __future__ import annotations
+
+from scopelink.mount import Limits, Mount, MountState, SlewTarget
+
+__all__ = ["describe_mount", "horizon_outline", "state_json"]
+
+_OUTLINE_STEP_DEG = 2
+
+
+def _round(value: float | None, digits: int) -> float | None:
+    return None if value is None else round(value, digits)
+
+
+def _target_json(target: SlewTarget | None) -> dict[str, object] | None:
+    if target is None:
+        return None
+    return {
+        "name": target.name,
+        "ra_j2000_hours": _round(target.ra_j2000_hours, 6),
+        "dec_j2000_deg": _round(target.dec_j2000_deg, 5),
+        "alt_deg": _round(target.alt_deg, 4),
+        "az_deg": _round(target.az_deg, 4),
+    }
+
+
+def state_json(mount: Mount, state: MountState) -> dict[str, object]:
+    """What the status and health panels show, and where the chart draws the mount and target."""
+    target = mount.target
+    target_altaz: tuple[float, float] | None = None
+    if target is None:
+        pass
+    elif target.ra_j2000_hours is not None and target.dec_j2000_deg is not None:
+        target_altaz = mount.observed_altaz(target.ra_j2000_hours, target.dec_j2000_deg)
+    elif target.alt_deg is not None and target.az_deg is not None:
+        target_altaz = (target.alt_deg, target.az_deg)
+    poller = mount.poller
+    return {
+        "read_at": state.read_at.isoformat(),
+        "connected": state.connected,
+        "ra_j2000_hours": _round(state.ra_j2000_hours, 6),
+        "dec_j2000_deg": _round(state.dec_j2000_deg, 5),
+        "ra_of_date_hours": _round(state.ra_of_date_hours, 6),
+        "dec_of_date_deg": _round(state.dec_of_date_deg, 5),
+        "alt_deg": _round(state.alt_deg, 4),
+        "az_deg": _round(state.az_deg, 4),
+        "pier_side": state.pier_side.name.lower(),
+        "slewing": state.slewing,
+        "tracking": state.tracking.value,
+        "parked": state.parked,
+        "aligned": state.aligned,
+        "pulse_guiding": state.pulse_guiding,
+        "problems": list(state.problems),
+        "target": _target_json(target),
+        "target_altaz": None
+        if target_altaz is None
+        else {"alt": round(target_altaz[0], 4), "az": round(target_altaz[1], 4)},
+        "health": {
+            "polls": poller.polls,
+            "failures": poller.failures,
+            "watchers": poller.watchers,
+        },
+    }
+
+
+def horizon_outline(limits: Limits) -> list[list[float]]:
+    """The lowest allowed altitude every few degrees of azimuth: ``[[az, alt], ...]``."""
+    return [
+        [float(az), round(limits.horizon_at(float(az)), 3)]
+        for az in range(0, 360, _OUTLINE_STEP_DEG)
+    ]
+
+
+def describe_mount(mount: Mount) -> dict[str, object]:
+    """What does not change while a page is open: who the mount is, what it can do, its limits
+    and site."""
+    identity = mount.identity
+    caps = mount.capabilities
+    site = mount.site
+    limits = mount.limits
+    return {
+        "identity": {
+            "protocol": identity.protocol,
+            "model": identity.model,
+            "firmware": identity.firmware,
+            "link": identity.link,
+        },
+        "capabilities": {
+            "alignment_mode": caps.alignment_mode.value,
+            "can_goto": caps.can_goto,
+            "can_sync": caps.can_sync,
+            "can_park": caps.can_park,
+            "can_move_axis": list(caps.can_move_axis),
+            "max_axis_rate_deg_s": caps.max_axis_rate_deg_s,
+            "tracking_modes": sorted(mode.value for mode in caps.tracking_modes),
+            "can_set_site": caps.can_set_site,
+            "can_set_time": caps.can_set_time,
+        },
+        "site": {
+            "latitude_deg": site.latitude_deg,
+            "longitude_deg": site.longitude_deg,
+            "elevation_m": site.elevation_m,
+        },
+        "limits": {
+            "horizon_deg": limits.horizon_deg,
+            "max_altitude_deg": limits.max_altitude_deg,
+            "horizon": horizon_outline(limits),
+        },
+    }

@@ -1,0 +1,577 @@
+// scopelink dashboard. Every piece of data from the server is put on the page with textContent
+// (never innerHTML), commands go to the JSON API, live state comes over the WebSocket.
+"use strict";
+
+const SIDEREAL_DEG_S = 360 / 86164.0905;
+const LOWEST_ALT = -10; // the chart shows a little below the horizon, where limits may lie
+const $ = (id) => document.getElementById(id);
+
+const view = {
+  mount: null, // the hello's description: identity, capabilities, site, limits
+  state: null,
+  sky: [],
+  selected: null, // {name} of an object, or {alt, az} of a point
+  connected: false,
+};
+
+// ---------------------------------------------------------------- messages
+
+let messageTimer = null;
+function showMessage(text, kind = "error") {
+  const box = $("message");
+  box.textContent = text;
+  box.className = kind;
+  box.hidden = false;
+  clearTimeout(messageTimer);
+  messageTimer = setTimeout(() => { box.hidden = true; }, kind === "error" ? 12000 : 4000);
+}
+
+// ---------------------------------------------------------------- API
+
+async function api(path, body) {
+  let response;
+  try {
+    response = await fetch(path, {
+      method: "POST",
+      headers: { "Content-Type": "application/json" },
+      body: JSON.stringify(body || {}),
+    });
+  } catch (error) {
+    showMessage(`cannot reach scopelink: ${error.message}`);
+    return null;
+  }
+  let reply = null;
+  try { reply = await response.json(); } catch (_) { reply = null; }
+  if (!response.ok) {
+    let text = (reply && reply.error) || `${response.status} ${response.statusText}`;
+    showMessage(text);
+    return null;
+  }
+  return reply || {};
+}
+
+// ---------------------------------------------------------------- formatting
+
+function sexagesimal(value, unitMarks, signed, decimals) {
+  const sign = value < 0 ? "−" : signed ? "+" : "";
+  let v = Math.abs(value);
+  const scale = 10 ** decimals;
+  let total = Math.round(v * 3600 * scale);
+  const whole = Math.floor(total / (3600 * scale));
+  total -= whole * 3600 * scale;
+  const minutes = Math.floor(total / (60 * scale));
+  total -= minutes * 60 * scale;
+  const seconds = (total / scale).toFixed(decimals).padStart(decimals ? 3 + decimals : 2, "0");
+  return `${sign}${whole}${unitMarks[0]} ${String(minutes).padStart(2, "0")}${unitMarks[1]} ${seconds}${unitMarks[2]}`;
+}
+const fmtHours = (h) => (h == null ? "—" : sexagesimal(h, ["h", "m", "s"], false, 1));
+const fmtDeg = (d) => (d == null ? "—" : sexagesimal(d, ["°", "′", "″"], true, 0));
+const fmtAngle = (d) => (d == null ? "—" : `${d.toFixed(2)}°`);
+const yesNo = (b) => (b ? "yes" : "no");
+
+// ---------------------------------------------------------------- chart
+
+const palettes = {
+  day: {
+    sky: "#06101f", grid: "#22324d", horizon: "#5b6b86", limit: "rgba(217,83,79,0.22)",
+    limitEdge: "#d9534f", star: "#e8eefc", below: "#3a4458", label: "#9fb0cc",
+    planet: "#ffd27f", moon: "#f4f4f4", sun: "#ffb000", mount: "#5fa8ff", target: "#4caf50",
+    selected: "#ff7ad9",
+  },
+  night: {
+    sky: "#000000", grid: "#2a0000", horizon: "#5a0a0a", limit: "rgba(120,0,0,0.35)",
+    limitEdge: "#7a1010", star: "#d02020", below: "#3a0505", label: "#8a1515",
+    planet: "#e03030", moon: "#e03030", sun: "#e03030", mount: "#ff3030", target: "#b01a1a",
+    selected: "#ff5050",
+  },
+};
+const palette = () => (document.body.classList.contains("night") ? palettes.night : palettes.day);
+
+const chart = {
+  canvas: null, ctx: null, size: 0, cx: 0, cy: 0, radius: 0,
+  // Stereographic: zenith at the centre, the horizon at `radius`; north up, east left (the
+  // sky seen from below, as on a planisphere).
+  project(alt, az) {
+    const r = this.radius * Math.tan(((90 - alt) * Math.PI) / 360);
+    const a = (az * Math.PI) / 180;
+    return [this.cx - r * Math.sin(a), this.cy - r * Math.cos(a)];
+  },
+  unproject(x, y) {
+    const dx = this.cx - x, dy = this.cy - y;
+    const r = Math.hypot(dx, dy) / this.radius;
+    const alt = 90 - (360 / Math.PI) * Math.atan(r);
+    let az = (Math.atan2(dx, dy) * 180) / Math.PI;
+    if (az < 0) az += 360;
+    return [alt, az];
+  },
+};
+
+function resizeChart() {
+  const canvas = chart.canvas;
+  const cssSize = canvas.clientWidth || 600;
+  const ratio = window.devicePixelRatio || 1;
+  const pixels = Math.round(cssSize * ratio);
+  if (canvas.width !== pixels) { canvas.width = pixels; canvas.height = pixels; }
+  chart.ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
+  chart.size = cssSize;
+  chart.cx = chart.cy = cssSize / 2;
+  // Leave room for the band below the horizon down to LOWEST_ALT and the compass letters.
+  chart.radius = (cssSize / 2 - 16) / Math.tan(((90 - LOWEST_ALT) * Math.PI) / 360);
+  drawChart();
+}
+
+function starRadius(mag) {
+  if (mag == null) return 3;
+  return Math.max(0.8, Math.min(4.5, 3.6 - 0.75 * mag));
+}
+
+function objectStyle(obj, colours) {
+  switch (obj.kind) {
+    case "sun": return { colour: colours.sun, radius: 7, label: true };
+    case "moon": return { colour: colours.moon, radius: 6, label: true };
+    case "planet":
+    case "dwarf planet": return { colour: colours.planet, radius: 3.5, label: obj.kind === "planet" };
+    default: return { colour: colours.star, radius: starRadius(obj.mag), label: obj.mag != null && obj.mag < 1.0 };
+  }
+}
+
+function drawChart() {
+  const ctx = chart.ctx;
+  if (!ctx) return;
+  const c = palette();
+  const { cx, cy, radius, size } = chart;
+  ctx.clearRect(0, 0, size, size);
+  const outer = chart.project(LOWEST_ALT, 0)[1];
+  const edge = cy - outer;
+  ctx.fillStyle = c.sky;
+  ctx.beginPath(); ctx.arc(cx, cy, edge, 0, 2 * Math.PI); ctx.fill();
+
+  // Forbidden sky: below the horizon limit (profile by azimuth) and above the maximum altitude.
+  const limits = view.mount && view.mount.limits;
+  if (limits) {
+    ctx.fillStyle = c.limit;
+    ctx.beginPath();
+    ctx.arc(cx, cy, edge, 0, 2 * Math.PI);
+    const outline = limits.horizon.concat([limits.horizon[0]]);
+    outline.forEach(([az, alt], i) => {
+      const [x, y] = chart.project(Math.max(alt, LOWEST_ALT), az);
+      if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+    });
+    ctx.fill("evenodd");
+    ctx.strokeStyle = c.limitEdge; ctx.lineWidth = 1.2; ctx.stroke();
+    if (limits.max_altitude_deg < 90) {
+      const r = cy - chart.project(limits.max_altitude_deg, 0)[1];
+      ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
+    }
+  }
+
+  // Altitude circles every 30°, the horizon, azimuth spokes every 45°.
+  ctx.strokeStyle = c.grid; ctx.lineWidth = 1;
+  for (const alt of [30, 60]) {
+    const r = cy - chart.project(alt, 0)[1];
+    ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.stroke();
+  }
+  for (let az = 0; az < 360; az += 45) {
+    const [x, y] = chart.project(0, az);
+    ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(x, y); ctx.stroke();
+  }
+  ctx.strokeStyle = c.horizon; ctx.lineWidth = 1.5;
+  ctx.beginPath(); ctx.arc(cx, cy, radius, 0, 2 * Math.PI); ctx.stroke();
+  ctx.fillStyle = c.label; ctx.font = "bold 13px system-ui, sans-serif";
+  ctx.textAlign = "center"; ctx.textBaseline = "middle";
+  for (const [letter, az] of [["N", 0], ["E", 90], ["S", 180], ["W", 270]]) {
+    const r = edge + 9;
+    const a = (az * Math.PI) / 180;
+    ctx.fillText(letter, cx - r * Math.sin(a), cy - r * Math.cos(a));
+  }
+
+  // Objects: dim below the horizon, labels for the brightest.
+  ctx.font = "11px system-ui, sans-serif"; ctx.textAlign = "left";
+  for (const obj of view.sky) {
+    if (obj.alt < LOWEST_ALT) continue;
+    const [x, y] = chart.project(obj.alt, obj.az);
+    const style = objectStyle(obj, c);
+    ctx.fillStyle = obj.alt < 0 ? c.below : style.colour;
+    ctx.beginPath(); ctx.arc(x, y, style.radius, 0, 2 * Math.PI); ctx.fill();
+    if (style.label && obj.alt >= 0) {
+      ctx.fillStyle = c.label;
+      ctx.fillText(obj.name, x + style.radius + 3, y);
+    }
+  }
+
+  // The selection, the target and where the mount points.
+  const sel = selectedPosition();
+  if (sel) {
+    const [x, y] = chart.project(sel.alt, sel.az);
+    ctx.strokeStyle = c.selected; ctx.lineWidth = 2;
+    ctx.beginPath(); ctx.arc(x, y, 10, 0, 2 * Math.PI); ctx.stroke();
+  }
+  const state = view.state;
+  if (state && state.target_altaz && state.target_altaz.alt >= LOWEST_ALT) {
+    const [x, y] = chart.project(state.target_altaz.alt, state.target_altaz.az);
+    ctx.strokeStyle = c.target; ctx.lineWidth = 2;
+    ctx.strokeRect(x - 7, y - 7, 14, 14);
+  }
+  if (state && state.alt_deg != null && state.alt_deg >= LOWEST_ALT) {
+    const [x, y] = chart.project(state.alt_deg, state.az_deg);
+    ctx.strokeStyle = c.mount; ctx.lineWidth = 2;
+    ctx.beginPath(); ctx.arc(x, y, 9, 0, 2 * Math.PI); ctx.stroke();
+    ctx.beginPath();
+    ctx.moveTo(x - 15, y); ctx.lineTo(x - 5, y); ctx.moveTo(x + 5, y); ctx.lineTo(x + 15, y);
+    ctx.moveTo(x, y - 15); ctx.lineTo(x, y - 5); ctx.moveTo(x, y + 5); ctx.lineTo(x, y + 15);
+    ctx.stroke();
+  }
+}
+
+function selectedPosition() {
+  const sel = view.selected;
+  if (!sel) return null;
+  if (sel.name) {
+    const obj = view.sky.find((o) => o.name === sel.name);
+    return obj ? { alt: obj.alt, az: obj.az } : null;
+  }
+  return sel;
+}
+
+function objectAt(x, y) {
+  let best = null, bestDistance = 18; // px: a finger-sized target
+  for (const obj of view.sky) {
+    if (obj.alt < LOWEST_ALT) continue;
+    const [ox, oy] = chart.project(obj.alt, obj.az);
+    const d = Math.hypot(ox - x, oy - y);
+    if (d < bestDistance) { best = obj; bestDistance = d; }
+  }
+  return best;
+}
+
+function onChartClick(event) {
+  const rect = chart.canvas.getBoundingClientRect();
+  const x = ((event.clientX - rect.left) / rect.width) * chart.size;
+  const y = ((event.clientY - rect.top) / rect.height) * chart.size;
+  const obj = objectAt(x, y);
+  if (obj) {
+    select({ name: obj.name });
+    return;
+  }
+  const [alt, az] = chart.unproject(x, y);
+  if (alt < LOWEST_ALT) return;
+  select({ alt, az });
+}
+
+function select(selection) {
+  view.selected = selection;
+  renderSelection();
+  drawChart();
+}
+
+function renderSelection() {
+  const sel = view.selected;
+  $("selection").hidden = !sel;
+  if (!sel) return;
+  const where = selectedPosition();
+  $("selection-name").textContent = sel.name ? sel.name : "Point";
+  $("selection-where").textContent = where ? `alt ${fmtAngle(where.alt)}  az ${fmtAngle(where.az)}` : "";
+  $("sync-selected").hidden = !sel.name;
+}
+
+// ---------------------------------------------------------------- panels
+
+function setText(id, text) {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+}
+
+function renderState() {
+  const s = view.state;
+  if (!s) return;
+  setText("st-j2000", `${fmtHours(s.ra_j2000_hours)}  ${fmtDeg(s.dec_j2000_deg)}`);
+  setText("st-jnow", `${fmtHours(s.ra_of_date_hours)}  ${fmtDeg(s.dec_of_date_deg)}`);
+  setText("st-altaz", `${fmtAngle(s.alt_deg)}  ${fmtAngle(s.az_deg)}`);
+  setText("st-pier", s.pier_side);
+  setText("st-slewing", yesNo(s.slewing));
+  setText("st-tracking", s.tracking);
+  setText("st-parked", yesNo(s.parked));
+  setText("st-target", s.target ? s.target.name || targetText(s.target) : "—");
+  setText("hl-connected", yesNo(s.connected));
+  setText("hl-polls", `${s.health.polls} / ${s.health.failures} (watchers ${s.health.watchers})`);
+  setText("hl-read-at", s.read_at.replace("T", " ").replace(/\.\d+/, "").replace("+00:00", " UTC"));
+  setText("mount-time", `mount clock: ${$("hl-read-at").textContent}`);
+  const problems = $("hl-problems");
+  setText("hl-problems", s.problems.length ? s.problems.join("; ") : "none");
+  problems.classList.toggle("bad", s.problems.length > 0);
+  $("status").dataset.slewing = String(s.slewing);
+}
+
+function targetText(t) {
+  if (t.ra_j2000_hours != null) return `${fmtHours(t.ra_j2000_hours)} ${fmtDeg(t.dec_j2000_deg)}`;
+  return `alt ${fmtAngle(t.alt_deg)} az ${fmtAngle(t.az_deg)}`;
+}
+
+function renderMount() {
+  const m = view.mount;
+  if (!m) return;
+  const id = m.identity;
+  const name = [id.model, id.firmware && `firmware ${id.firmware}`].filter(Boolean).join(", ");
+  setText("mount-name", name);
+  setText("hl-identity", `${name} — ${id.protocol}${id.link ? ` on ${id.link}` : ""}`);
+  const select = $("tracking-mode");
+  const current = select.value;
+  select.replaceChildren();
+  for (const mode of m.capabilities.tracking_modes) {
+    const option = document.createElement("option");
+    option.value = mode; option.textContent = mode;
+    select.append(option);
+  }
+  if (current) select.value = current;
+  else if (m.capabilities.tracking_modes.includes("sidereal")) select.value = "sidereal";
+  const site = m.site;
+  for (const [inputId, value] of [["site-lat", site.latitude_deg], ["site-lon", site.longitude_deg], ["site-elev", site.elevation_m]]) {
+    const input = $(inputId);
+    if (document.activeElement !== input) input.value = String(value);
+  }
+}
+
+const traffic = { paused: false, rows: 200 };
+
+function appendTraffic(lines) {
+  if (!lines || !lines.length || traffic.paused) return;
+  const body = $("traffic").tBodies[0];
+  const scroller = body.closest(".traffic-scroll");
+  const atBottom = scroller.scrollTop + scroller.clientHeight >= scroller.scrollHeight - 4;
+  for (const line of lines) {
+    const row = document.createElement("tr");
+    row.className = `from-${line.from}`;
+    const time = new Date(line.at * 1000).toISOString().slice(11, 23);
+    const cells = [
+      ["time", time],
+      ["link", line.link],
+      ["dir", line.from === "pc" ? "PC →" : "← dev"],
+      ["bytes", line.text],
+    ];
+    for (const [cls, text] of cells) {
+      const cell = document.createElement("td");
+      cell.className = cls; cell.textContent = text;
+      if (cls === "bytes") cell.title = line.hex;
+      row.append(cell);
+    }
+    const meaning = document.createElement("td");
+    meaning.className = "meaning";
+    for (const m of line.meanings) {
+      const part = document.createElement("div");
+      part.className = `m-${m.kind}`;
+      part.textContent = m.text;
+      meaning.append(part);
+    }
+    row.append(meaning);
+    body.append(row);
+  }
+  while (body.rows.length > traffic.rows) body.deleteRow(0);
+  if (atBottom) scroller.scrollTop = scroller.scrollHeight;
+}
+
+// ---------------------------------------------------------------- live updates
+
+let socket = null;
+let retryDelay = 500;
+
+function setLinkStatus(ok, text) {
+  const badge = $("link-status");
+  badge.dataset.ok = String(ok);
+  badge.textContent = text;
+}
+
+function connect() {
+  const scheme = location.protocol === "https:" ? "wss:" : "ws:";
+  socket = new WebSocket(`${scheme}//${location.host}/ws`);
+  socket.addEventListener("open", () => { retryDelay = 500; setLinkStatus(true, "live"); });
+  socket.addEventListener("message", (event) => {
+    let message;
+    try { message = JSON.parse(event.data); } catch (_) { return; }
+    if (message.type === "hello") {
+      view.mount = message.mount;
+      $("traffic-off").hidden = message.traffic_enabled;
+      $("traffic").tBodies[0].replaceChildren();
+      renderMount();
+    }
+    if (message.state) { view.state = message.state; renderState(); }
+    if (message.sky) { view.sky = message.sky; renderSelection(); }
+    appendTraffic(message.traffic);
+    drawChart();
+  });
+  socket.addEventListener("close", () => {
+    setLinkStatus(false, "reconnecting…");
+    setTimeout(connect, retryDelay);
+    retryDelay = Math.min(retryDelay * 2, 10000);
+  });
+}
+
+// ---------------------------------------------------------------- controls
+
+function debounce(fn, ms) {
+  let timer = null;
+  return (...args) => { clearTimeout(timer); timer = setTimeout(() => fn(...args), ms); };
+}
+
+let searchSerial = 0;
+async function searchNames(prefix) {
+  const serial = ++searchSerial;
+  const list = $("goto-suggestions");
+  if (!prefix.trim()) { list.replaceChildren(); return; }
+  let reply;
+  try {
+    const response = await fetch(`/api/search?q=${encodeURIComponent(prefix)}&limit=8`);
+    reply = await response.json();
+    if (!response.ok) { showMessage(reply.error || "search failed"); return; }
+  } catch (error) {
+    return;
+  }
+  if (serial !== searchSerial) return; // a later keystroke already asked again
+  list.replaceChildren();
+  for (const match of reply.matches) {
+    const item = document.createElement("li");
+    const button = document.createElement("button");
+    button.type = "button";
+    button.setAttribute("role", "option");
+    const name = document.createElement("span");
+    name.textContent = match.matched === match.name ? match.name : `${match.matched} (${match.name})`;
+    const kind = document.createElement("span");
+    kind.className = "kind";
+    kind.textContent = match.mag != null ? `${match.type}, mag ${match.mag}` : match.type;
+    button.append(name, kind);
+    button.addEventListener("click", () => {
+      $("goto-name").value = match.name;
+      list.replaceChildren();
+      $("goto-name").focus();
+    });
+    item.append(button);
+    list.append(item);
+  }
+}
+
+async function gotoName(name) {
+  const reply = await api("/api/goto", { name });
+  if (reply) showMessage(`slewing to ${reply.object.name}`, "info");
+}
+
+async function gotoSelection() {
+  const sel = view.selected;
+  if (!sel) return;
+  if (sel.name) { await gotoName(sel.name); return; }
+  const reply = await api("/api/goto", { alt_deg: sel.alt, az_deg: sel.az % 360 });
+  if (reply) showMessage(`slewing to alt ${fmtAngle(sel.alt)} az ${fmtAngle(sel.az)}`, "info");
+}
+
+function rateDegS() {
+  const choice = $("rate").value;
+  const max = view.mount ? view.mount.capabilities.max_axis_rate_deg_s : 0;
+  if (choice === "max") return max;
+  return Math.min(max, Number(choice) * SIDEREAL_DEG_S);
+}
+
+function setupPad() {
+  for (const button of document.querySelectorAll("#pad button[data-axis]")) {
+    let held = false;
+    const start = async (event) => {
+      event.preventDefault();
+      if (held) return;
+      held = true;
+      button.classList.add("held");
+      try { button.setPointerCapture(event.pointerId); } catch (_) { /* not a pointer */ }
+      const rate = Number(button.dataset.sign) * rateDegS();
+      const ok = await api("/api/move", { axis: button.dataset.axis, rate_deg_s: rate });
+      if (!ok) stop();
+    };
+    const stop = () => {
+      if (!held) return;
+      held = false;
+      button.classList.remove("held");
+      api("/api/move", { axis: button.dataset.axis, rate_deg_s: 0 });
+    };
+    button.addEventListener("pointerdown", start);
+    button.addEventListener("pointerup", stop);
+    button.addEventListener("pointercancel", stop);
+    button.addEventListener("lostpointercapture", stop);
+    button.addEventListener("contextmenu", (event) => event.preventDefault());
+  }
+  $("pad-stop").addEventListener("click", () => api("/api/abort"));
+}
+
+function setupNight() {
+  const toggle = $("night-toggle");
+  const apply = (on) => {
+    document.body.classList.toggle("night", on);
+    toggle.setAttribute("aria-pressed", String(on));
+    drawChart();
+  };
+  let stored = false;
+  try { stored = localStorage.getItem("scopelink.night") === "1"; } catch (_) { /* private mode */ }
+  apply(stored);
+  toggle.addEventListener("click", () => {
+    const on = !document.body.classList.contains("night");
+    try { localStorage.setItem("scopelink.night", on ? "1" : "0"); } catch (_) { /* private mode */ }
+    apply(on);
+  });
+}
+
+function setup() {
+  chart.canvas = $("sky");
+  chart.ctx = chart.canvas.getContext("2d");
+  setupNight();
+  window.addEventListener("resize", resizeChart);
+  resizeChart();
+  chart.canvas.addEventListener("click", onChartClick);
+
+  $("go-selected").addEventListener("click", gotoSelection);
+  $("sync-selected").addEventListener("click", async () => {
+    const sel = view.selected;
+    if (sel && sel.name && (await api("/api/sync", { name: sel.name }))) {
+      showMessage(`synced on ${sel.name}`, "info");
+    }
+  });
+  $("clear-selected").addEventListener("click", () => select(null));
+
+  const nameInput = $("goto-name");
+  nameInput.addEventListener("input", debounce(() => searchNames(nameInput.value), 120));
+  $("goto-form").addEventListener("submit", (event) => {
+    event.preventDefault();
+    $("goto-suggestions").replaceChildren();
+    const name = nameInput.value.trim();
+    if (name) gotoName(name);
+  });
+
+  $("abort").addEventListener("click", () => api("/api/abort"));
+  $("tracking-apply").addEventListener("click", () => api("/api/tracking", { mode: $("tracking-mode").value }));
+  $("park").addEventListener("click", async () => { if (await api("/api/park")) showMessage("parking", "info"); });
+  $("unpark").addEventListener("click", async () => { if (await api("/api/unpark")) showMessage("unparked", "info"); });
+
+  $("site-form").addEventListener("submit", async (event) => {
+    event.preventDefault();
+    const body = {
+      latitude_deg: Number($("site-lat").value),
+      longitude_deg: Number($("site-lon").value),
+    };
+    if ($("site-elev").value !== "") body.elevation_m = Number($("site-elev").value);
+    const reply = await api("/api/site", body);
+    if (reply) { view.mount = reply.mount; renderMount(); showMessage("site set", "info"); }
+  });
+  $("site-here").addEventListener("click", () => {
+    if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
+    navigator.geolocation.getCurrentPosition(
+      (position) => {
+        $("site-lat").value = position.coords.latitude.toFixed(5);
+        $("site-lon").value = position.coords.longitude.toFixed(5);
+        if (position.coords.altitude != null) $("site-elev").value = position.coords.altitude.toFixed(0);
+      },
+      (error) => showMessage(`no location: ${error.message}`),
+    );
+  });
+  $("time-push").addEventListener("click", async () => {
+    if (await api("/api/time", { utc: new Date().toISOString() })) showMessage("time sent", "info");
+  });
+  $("traffic-pause").addEventListener("change", (event) => { traffic.paused = event.target.checked; });
+
+  setupPad();
+  connect();
+}
+
+document.addEventListener("DOMContentLoaded", setup);
