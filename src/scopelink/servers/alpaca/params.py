@@ -9,6 +9,7 @@ InvalidValue (0x401, :class:`AlpacaError`), which the client reports as a driver
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -18,6 +19,10 @@ __all__ = ["UINT32_MAX", "Params", "parse_transaction_id"]
 
 UINT32_MAX = 2**32 - 1
 
+# ASCII decimals as clients send them (Python's float() would also take "1_0" and other digits).
+_DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_INTEGER = re.compile(r"[+-]?\d+", re.ASCII)
+_NON_FINITE = frozenset({"nan", "inf", "infinity"})
 _TRUE = "true"
 _FALSE = "false"
 
@@ -26,10 +31,11 @@ def parse_transaction_id(name: str, text: str | None) -> int:
     """``ClientID`` or ``ClientTransactionID``: absent means 0; otherwise a uint32 or HTTP 400."""
     if text is None:
         return 0
-    stripped = text.strip()
-    if not stripped.isdigit() or stripped != text or int(stripped) > UINT32_MAX:
+    # ASCII digits only: str.isdigit() also accepts superscripts, which int() refuses.
+    digits_ok = text.isascii() and text.isdigit() and len(text) <= 10
+    if not digits_ok or int(text) > UINT32_MAX:
         raise BadRequest(f"{name} must be an unsigned 32-bit integer, got {text!r}")
-    return int(stripped)
+    return int(text)
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,24 +83,28 @@ class Params:
     def number(self, name: str, low: float = -math.inf, high: float = math.inf) -> float:
         """A finite float within [low, high]; NaN or outside the range is InvalidValue."""
         text = self.text(name)
-        try:
-            value = float(text)
-        except ValueError:
-            raise BadRequest(f"{name} must be a number, got {text!r}") from None
+        stripped = text.strip()
+        if _DECIMAL.fullmatch(stripped):
+            value = float(stripped)
+        elif stripped.lower().lstrip("+-") in _NON_FINITE:
+            value = math.nan  # well formed, but no coordinate or rate: InvalidValue below
+        else:
+            raise BadRequest(f"{name} must be a decimal number, got {text!r}")
         if not (math.isfinite(value) and low <= value <= high):
+            limits = f"[{low:g}, {high:g}]"
             raise AlpacaError(
-                ErrorNumber.INVALID_VALUE, f"{name} {text} must lie within [{low:g}, {high:g}]"
+                ErrorNumber.INVALID_VALUE, f"{name} {stripped[:24]} must lie within {limits}"
             )
         return value
 
     def integer(self, name: str, low: int, high: int) -> int:
         text = self.text(name)
-        try:
-            value = int(text.strip())
-        except ValueError:
-            raise BadRequest(f"{name} must be an integer, got {text!r}") from None
-        if not low <= value <= high:
+        stripped = text.strip()
+        if not _INTEGER.fullmatch(stripped):
+            raise BadRequest(f"{name} must be an integer, got {text!r}")
+        # Length first: Python refuses to convert more than 4300 digits.
+        if len(stripped) > 20 or not low <= int(stripped) <= high:
             raise AlpacaError(
-                ErrorNumber.INVALID_VALUE, f"{name} {value} must lie in {low}..{high}"
+                ErrorNumber.INVALID_VALUE, f"{name} {stripped[:24]} must lie in {low}..{high}"
             )
-        return value
+        return int(stripped)
