@@ -244,6 +244,20 @@ async def test_park_refuses_motion_until_unparked(tmp_path: Path) -> None:
         await blocking(lambda: telescope.MoveAxis(TelescopeAxes.axisPrimary, 0.0))
 
 
+async def test_set_park_stores_the_current_position(tmp_path: Path) -> None:
+    mount = sim_mount()
+    async with serve(mount, state_dir=tmp_path) as server:
+        telescope = client(server)
+        await _connect(telescope)
+        assert await blocking(lambda: telescope.CanSetPark) is True
+        await blocking(lambda: setattr(telescope, "Tracking", False))
+        await blocking(lambda: telescope.SlewToAltAzAsync(100.0, 30.0))
+        await wait_until(lambda: not telescope.Slewing, SLEW_TIMEOUT_S, "the slew's end")
+        await blocking(telescope.SetPark)
+        assert mount.park_position.alt_deg == pytest.approx(30.0, abs=0.01)
+        assert mount.park_position.az_deg == pytest.approx(100.0, abs=0.01)
+
+
 async def test_move_axis_turns_and_stops(tmp_path: Path) -> None:
     mount = sim_mount()
     async with serve(mount, state_dir=tmp_path) as server:

@@ -175,7 +175,6 @@ async def test_unsupported_members_are_not_implemented(tmp_path: Path) -> None:
         await _connect(session)
         puts = {
             "findhome": {},
-            "setpark": {},
             "sideofpier": {"SideOfPier": "0"},
             "rightascensionrate": {"RightAscensionRate": "0"},
             "guideratedeclination": {"GuideRateDeclination": "0.004"},
@@ -189,7 +188,7 @@ async def test_unsupported_members_are_not_implemented(tmp_path: Path) -> None:
             f"{API}/action", data={"Action": "dance", "Parameters": ""}
         ) as response:
             assert (await _json(response))["ErrorNumber"] == ErrorNumber.ACTION_NOT_IMPLEMENTED
-        for flag in ("canfindhome", "cansetpark", "cansetpierside", "cansetguiderates"):
+        for flag in ("canfindhome", "cansetpierside", "cansetguiderates"):
             async with session.get(f"{API}/{flag}") as response:
                 assert (await _json(response))["Value"] is False
 

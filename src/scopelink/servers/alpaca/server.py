@@ -17,7 +17,6 @@ import inspect
 import itertools
 import json
 import logging
-from collections.abc import AsyncIterator
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
@@ -46,7 +45,6 @@ logger = logging.getLogger(__name__)
 ALPACA_PORT = 11111
 MAX_REQUEST_BYTES = 64 * 1024
 """Largest request body accepted (HTTP 413 above it); real Alpaca requests are < 1 KiB."""
-_FALLBACK_POLL_S = 0.1
 _DEVICE_TYPE = "telescope"
 _JSON = "application/json"
 _METHODS = ("GET", "PUT")
@@ -98,7 +96,8 @@ class AlpacaServer:
 
     async def start(self) -> None:
         self.unique_id = load_or_create_unique_id(self.state_dir)
-        await self._stack.enter_async_context(self._fresh_state())
+        # Reads are answered from mount.state: keep the mount's poller running while we serve.
+        await self._stack.enter_async_context(self.mount.watching())
         app = web.Application(client_max_size=self._max_request_bytes)
         app.router.add_route("*", "/api/v1/{device_type}/{device_number}/{member}", self._api)
         app.router.add_get("/management/apiversions", self._api_versions)
@@ -150,31 +149,6 @@ class AlpacaServer:
         traceback: TracebackType | None,
     ) -> None:
         await self.close()
-
-    @contextlib.asynccontextmanager
-    async def _fresh_state(self) -> AsyncIterator[None]:
-        """Keep ``mount.state`` fresh while serving: the mount's own poller when it has one."""
-        watching = getattr(self.mount, "watching", None)
-        if watching is not None:
-            async with watching():
-                yield
-            return
-        task = asyncio.create_task(self._poll_forever(), name="alpaca state refresh")
-        try:
-            yield
-        finally:
-            task.cancel()
-            await asyncio.gather(task, return_exceptions=True)
-
-    async def _poll_forever(self) -> None:
-        interval = float(getattr(self.mount, "poll_interval_s", _FALLBACK_POLL_S))
-        while True:
-            if self.mount.state.connected:
-                try:
-                    await self.mount.refresh()
-                except MountError as error:
-                    logger.warning("position poll failed: %s", error)
-            await asyncio.sleep(max(interval, 0.01))
 
     # --- replies ---------------------------------------------------------------------------------
 

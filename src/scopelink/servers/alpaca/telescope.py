@@ -34,6 +34,7 @@ from scopelink.mount import (
     MountAxis,
     MountError,
     MountState,
+    ParkPosition,
     TrackingMode,
 )
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber, from_mount_error
@@ -567,7 +568,12 @@ class TelescopeDevice:
         await self._call(self.mount.unpark())
 
     def _set_park(self, _: Params) -> None:
-        raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "SetPark is not implemented for this mount")
+        if not self.mount.capabilities.can_set_park:
+            raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount's park position is fixed")
+        state = self.mount.state
+        alt = self._position(state.alt_deg, "position")
+        az = self._position(state.az_deg, "position")
+        self.mount.park_position = ParkPosition(alt, az)
 
     # --- the member table ------------------------------------------------------------------------
 
@@ -608,7 +614,7 @@ class TelescopeDevice:
             "canfindhome": can(False),
             "canpark": can(caps.can_park),
             "canunpark": can(caps.can_park),
-            "cansetpark": can(False),
+            "cansetpark": can(caps.can_set_park),
             "canpulseguide": can(caps.can_pulse_guide),
             "cansetdeclinationrate": can(False),
             "cansetrightascensionrate": can(False),
