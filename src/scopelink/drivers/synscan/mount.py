@@ -51,6 +51,7 @@ from scopelink.mount import (
     MountError,
     MountState,
     NotConnectedError,
+    NotSupportedError,
     ParkPosition,
     Priority,
     TrackingMode,
@@ -170,6 +171,8 @@ class SynScanMount(Mount):
         self._goto_running = False
         self._settle: SettleDetector | None = None
         self._axis_rates: dict[MountAxis, float] = {}
+        self._motion_epoch = 0
+        """Counts gotos and aborts: a poll that overlapped one must not judge it by its L."""
         self._pulses: dict[MountAxis, asyncio.Task[None]] = {}
 
     @classmethod
@@ -269,10 +272,12 @@ class SynScanMount(Mount):
     async def _read_state(self, priority: Priority) -> MountState:
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
+        epoch = self._motion_epoch
         try:
+            # L before e: when L says the goto has ended, the position read next is its landing.
+            goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
-            goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             tracking = await self._ask(GetTrackingMode(), TrackingModeReply, priority)
             if self._capabilities.can_report_pier_side:
                 side = await self._ask(GetPointingState(), PointingState, priority)
@@ -293,7 +298,9 @@ class SynScanMount(Mount):
             problems = (f"unknown tracking mode {tracking.mode} reported",)
             mode = self._tracking
         self._tracking = mode
-        self._goto_running = self._goto_still_running(goto.in_progress, alt, az)
+        if self._motion_epoch == epoch:
+            # A goto sent while this poll waited for the wire is not over whatever L said.
+            self._goto_running = self._goto_still_running(goto.in_progress, alt, az)
         state = MountState(
             read_at=read_at,
             connected=True,
@@ -360,6 +367,7 @@ class SynScanMount(Mount):
 
     def _goto_started(self, altaz_target: tuple[float, float] | None) -> None:
         self._axis_rates.clear()  # a goto takes over from manual motion, as on the keypad
+        self._motion_epoch += 1
         self._goto_running = True
         self._settle = None
         if altaz_target is not None:
@@ -403,6 +411,7 @@ class SynScanMount(Mount):
             if attempt == 1:
                 raise DeviceError("abort: the hand control still reports a goto in progress")
             await self._ask(CancelGoto(), Ack)
+        self._motion_epoch += 1
         self._goto_running = False
         self._settle = None
         self._publish(dataclasses.replace(self.state, slewing=False, pulse_guiding=False))
@@ -458,6 +467,11 @@ class SynScanMount(Mount):
 
     async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """A variable-rate slew at the guide rate on one axis, stopped by a PC timer."""
+        if not self._capabilities.can_pulse_guide:
+            raise NotSupportedError(
+                "guide pulses need an equatorial mount (north and east are no fixed axis "
+                "directions on an alt-az mount)"
+            )
         axis, sign = self._guide_axis(direction)
         self._cancel_pulse(axis)
         if duration_ms == 0:
@@ -468,8 +482,10 @@ class SynScanMount(Mount):
             rate += math.copysign(SIDEREAL_RATE_DEG_S, self.site.latitude_deg)
         command = VariableRateSlew.from_arcsec_per_second(_AXES[axis], rate * 3600.0)
         await self._ask_passthrough(command)
+        # Timed from write to write: the hand control's delay in obeying each command cancels.
+        ends_at = self.wire.last_write_at + duration_ms / 1000.0
         self._pulses[axis] = asyncio.create_task(
-            self._end_pulse(axis, duration_ms / 1000.0), name=f"end guide pulse {axis.name}"
+            self._end_pulse(axis, ends_at), name=f"end guide pulse {axis.name}"
         )
         self._publish(dataclasses.replace(self.state, pulse_guiding=True))
 
@@ -486,8 +502,8 @@ class SynScanMount(Mount):
         sign = -hemisphere if flipped else hemisphere
         return MountAxis.SECONDARY, sign if direction is GuideDirection.NORTH else -sign
 
-    async def _end_pulse(self, axis: MountAxis, seconds: float) -> None:
-        await asyncio.sleep(seconds)
+    async def _end_pulse(self, axis: MountAxis, ends_at: float) -> None:
+        await asyncio.sleep(ends_at - asyncio.get_running_loop().time())
         try:
             await self._send_rate_zero(axis)
             await self._resume_tracking()

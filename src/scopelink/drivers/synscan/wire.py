@@ -95,6 +95,8 @@ class SynScanWire:
         self._codec = SynScanClientConnection()
         self._needs_resync = False
         self._next_echo = 0
+        self.last_write_at = 0.0
+        """Event-loop time at which the last command started to leave (times guide pulses)."""
 
     @property
     def link(self) -> Link | None:
@@ -197,6 +199,7 @@ class SynScanWire:
         self.statistics.exchanges += 1
         completed = False
         try:
+            self.last_write_at = asyncio.get_running_loop().time()
             await link.write(data)
             async with asyncio.timeout(self.timeout_s):
                 reply = await self._read_reply(link, command)
