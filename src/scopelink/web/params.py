@@ -57,12 +57,19 @@ class Body:
         return text
 
     def choice(self, key: str, kind: type[E]) -> E:
-        """One of an enum's values, given as its string value."""
+        """One of an enum's members, given by its string value or its name (any case)."""
         value = self._fields.get(key)
+        spellings = {}
         for member in kind:
-            if member.value == value or (isinstance(value, str) and member.name == value.upper()):
-                return member
-        allowed = ", ".join(str(member.value) for member in kind)
+            spellings[member.name.lower()] = member
+            if isinstance(member.value, str):
+                spellings[member.value.lower()] = member
+        if isinstance(value, str) and value.lower() in spellings:
+            return spellings[value.lower()]
+        allowed = ", ".join(
+            member.value if isinstance(member.value, str) else member.name.lower()
+            for member in kind
+        )
         raise BadRequestError(f"{key!r} must be one of {allowed}, not {value!r}")
 
 
