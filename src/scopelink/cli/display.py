@@ -23,6 +23,16 @@ def _degrees(value: float | None, width: int = 2) -> str:
     return _UNKNOWN if value is None else format_degrees(value, decimals=0, width=width)
 
 
+def _azimuth(value: float | None) -> str:
+    """Azimuth in [0, 360) as shown: 359.99999° rounds to 000°00'00", not 360°."""
+    if value is None:
+        return _UNKNOWN
+    wrapped = value % 360.0
+    if round(wrapped * 3600.0) >= 360 * 3600:
+        wrapped = 0.0
+    return format_degrees(wrapped, decimals=0, width=3)
+
+
 def _yes_no(value: bool) -> str:
     return "yes" if value else "no"
 
@@ -35,7 +45,7 @@ def state_rows(state: MountState) -> list[tuple[str, str]]:
             "RA / Dec of date",
             f"{_hours(state.ra_of_date_hours)}  {_degrees(state.dec_of_date_deg)}",
         ),
-        ("Alt / Az", f"{_degrees(state.alt_deg)}  {_degrees(state.az_deg, width=3)}"),
+        ("Alt / Az", f"{_degrees(state.alt_deg)}  {_azimuth(state.az_deg)}"),
         ("pier side", _PIER_SIDES.get(state.pier_side, str(state.pier_side))),
         ("slewing", _yes_no(state.slewing)),
         ("tracking", state.tracking.value),
@@ -64,7 +74,7 @@ def position_text(state: MountState) -> str:
     """One line: where the mount points."""
     return (
         f"RA {_hours(state.ra_j2000_hours)} Dec {_degrees(state.dec_j2000_deg)} (J2000), "
-        f"Alt {_degrees(state.alt_deg)} Az {_degrees(state.az_deg, width=3)}"
+        f"Alt {_degrees(state.alt_deg)} Az {_azimuth(state.az_deg)}"
     )
 
 
