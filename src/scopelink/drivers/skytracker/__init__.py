@@ -12,7 +12,7 @@ from .line import (
     SkyTrackerLine,
 )
 from .motion import AxisMotion, axis_motion, guide_button
-from .mount import SkyTrackerMount, SlewInProgressError
+from .mount import LinkFactory, SkyTrackerMount, SlewInProgressError
 
 __all__ = [
     "AxisMotion",
@@ -21,6 +21,7 @@ __all__ = [
     "CalibrationFactors",
     "CalibrationRuleError",
     "LineOptions",
+    "LinkFactory",
     "ReplyTimeoutError",
     "SkyTrackerLine",
     "SkyTrackerMount",

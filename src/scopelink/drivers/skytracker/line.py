@@ -101,6 +101,8 @@ class SkyTrackerLine:
         """Commands written since the link opened (the Sky Tracker's ``S`` rule counts them)."""
         self.resyncs = 0
         self.stray_bytes = 0
+        self.bus_refusals = 0
+        self._interrupted = False
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
@@ -144,6 +146,7 @@ class SkyTrackerLine:
                     continue
                 if not answer:
                     refused += 1
+                    self.bus_refusals += 1
                     continue
                 try:
                     return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
@@ -188,6 +191,9 @@ class SkyTrackerLine:
     async def _exchange(
         self, command: TrackerCommand | CommanderCommand, reply_within_s: float
     ) -> Reply | None:
+        if self._interrupted:
+            self._interrupted = False
+            await self.resync()
         self._flush_strays()
         data = self._client.send(command)
         try:
@@ -206,6 +212,12 @@ class SkyTrackerLine:
             ) from None
         except LinkError as error:
             raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
+        except asyncio.CancelledError:
+            # Cancelled mid-exchange (e.g. the poller stopped): the reply may still come, so the
+            # next exchange resynchronises first.
+            self._client.abandon_reply()
+            self._interrupted = True
+            raise
         if isinstance(event, BadReply):
             await self.resync()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, replace
 from datetime import datetime
 
@@ -69,7 +69,10 @@ from .line import (
 )
 from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion, axis_motion, guide_button
 
-__all__ = ["SkyTrackerMount", "SlewInProgressError"]
+__all__ = ["LinkFactory", "SkyTrackerMount", "SlewInProgressError"]
+
+LinkFactory = Callable[[], Awaitable[Link]]
+"""Opens the link to the Sky Tracker (called by every connect)."""
 
 logger = logging.getLogger(__name__)
 
@@ -79,11 +82,13 @@ STOP_BITS = 2
 TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
 """Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
 _TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
-UTILITY_STOP_MARGIN_DEG = 4.5
-"""A 4°/s UTILITY slew down is released this far above the horizon: ramping down from 4°/s at
-2°/s² takes 4°, plus a poll's worth of travel."""
-SLOW_STOP_MARGIN_DEG = 0.05
+UTILITY_RAMP_DOWN_DEG = 4.0
+"""Travel while a 4°/s UTILITY slew ramps down at the box's 2°/s² after its arrow is released."""
+STOP_MARGIN_POLLS = 3.0
+"""A slew down is released this many polls' worth of travel (plus the ramp) above the horizon."""
+STOP_MARGIN_DEG = 0.05
 GOTO_STATUS_POLL_S = 0.05
+NOTHING_PRESSED = Direction(0)
 
 
 class SlewInProgressError(MountError):
@@ -100,9 +105,10 @@ class _Position:
 class SkyTrackerMount(Mount):
     """A Sky Tracker box (with its Sky Commander) on a link.
 
-    ``spec`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
-    ``tcp://HOST:PORT``, a pty path): serial ports are opened 9600 8N2; links without a UART
-    get paced sends (11 bit-times per byte). Pass ``link`` to use an open link as it is.
+    ``link`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
+    ``tcp://HOST:PORT``, a pty path): serial ports are opened 9600 8N2, links without a UART
+    get paced sends (11 bit-times per byte). Or a coroutine function returning an open link,
+    used as it is (wrap it in :func:`scopelink.links.paced` yourself if it has no UART).
     ``guide_speed_arcsec_s`` sets the ``K`` speed used by pulse guiding (default: the box's).
     """
 
@@ -111,22 +117,31 @@ class SkyTrackerMount(Mount):
 
     def __init__(
         self,
-        spec: str,
+        link: str | LinkFactory,
         *,
         site: Site,
         limits: Limits | None = None,
         clock: Callable[[], datetime] = utc_now,
-        link: Link | None = None,
         options: LineOptions | None = None,
         guide_speed_arcsec_s: int | None = None,
+        name: str | None = None,
     ) -> None:
         super().__init__(site=site, limits=limits, clock=clock)
         if guide_speed_arcsec_s is not None and not 1 <= guide_speed_arcsec_s <= 255:
             raise InvalidValueError(f"guide speed {guide_speed_arcsec_s} arcsec/s is not 1-255")
-        self.spec = spec
+        if isinstance(link, str):
+            spec = link
+
+            async def open_spec() -> Link:
+                return await open_link(spec, BAUDRATE, stopbits=STOP_BITS, pace=True)
+
+            self._open: LinkFactory = open_spec
+            self.spec = name or spec
+        else:
+            self._open = link
+            self.spec = name or "Sky Tracker link"
         self.options = options or LineOptions()
         self.scheduler = WireScheduler()
-        self._given_link = link
         self._line: SkyTrackerLine | None = None
         self._wanted_guide_speed = guide_speed_arcsec_s
         self._version = ""
@@ -145,29 +160,31 @@ class SkyTrackerMount(Mount):
         self._tracking_choice = TrackingMode.ALT_AZ
         self._problems: tuple[str, ...] = ()
         self._below_horizon_alarm = False
+        self._poll_s = 0.05
+        """How long the last poll took (seconds on the mount's clock)."""
 
     @classmethod
     async def open(
         cls,
-        spec: str,
+        link: str | LinkFactory,
         *,
         site: Site,
         limits: Limits | None = None,
         clock: Callable[[], datetime] = utc_now,
-        link: Link | None = None,
         options: LineOptions | None = None,
         guide_speed_arcsec_s: int | None = None,
+        name: str | None = None,
         calibration: CalibrationFactors | None = None,
     ) -> SkyTrackerMount:
         """Construct and connect (writing ``calibration`` first, if given)."""
         mount = cls(
-            spec,
+            link,
             site=site,
             limits=limits,
             clock=clock,
-            link=link,
             options=options,
             guide_speed_arcsec_s=guide_speed_arcsec_s,
+            name=name,
         )
         await mount.connect(calibration=calibration)
         return mount
@@ -253,10 +270,8 @@ class SkyTrackerMount(Mount):
         self._publish_now()
 
     async def _open_link(self) -> Link:
-        if self._given_link is not None:
-            return self._given_link
         try:
-            return await open_link(self.spec, BAUDRATE, stopbits=STOP_BITS, pace=True)
+            return await self._open()
         except LinkError as error:
             raise NotConnectedError(f"cannot open the Sky Tracker's link: {error}") from error
 
@@ -286,7 +301,8 @@ class SkyTrackerMount(Mount):
             commands: list[TrackerCommand] = [ReleaseDirections()]
             if self._mode is TrackerMode.GOTO:
                 commands.append(SelectMode(TrackerMode.UTILITY))
-            await line.tracker_sequence(commands)
+            # The status read makes sure the box has taken them before the link closes.
+            await line.tracker_sequence([*commands, ReadStatus()])
         except (MountError, LinkError) as error:
             logger.info("could not stop motion before disconnecting: %s", error)
         finally:
@@ -342,6 +358,7 @@ class SkyTrackerMount(Mount):
     async def refresh(self) -> MountState:
         """``R`` status; then, unless a GOTO keeps the bus, the position through the bus."""
         line = self._require_line()
+        started = self.now()
         try:
             self._note_status(await line.tracker(ReadStatus(), Priority.POLL))
             if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
@@ -353,6 +370,8 @@ class SkyTrackerMount(Mount):
             raise
         self._problems = ()
         state = self._publish_now()
+        # On the mount's clock, so an accelerated simulator gets a margin in simulated time.
+        self._poll_s = (state.read_at - started).total_seconds()
         await self._guard_horizon(state)
         return self.state
 
@@ -433,11 +452,9 @@ class SkyTrackerMount(Mount):
         floor = self.limits.horizon_at(state.az_deg)
         held = self._held.get(MountAxis.SECONDARY)
         if held is not None and held.direction is Direction.DOWN:
-            margin = (
-                UTILITY_STOP_MARGIN_DEG
-                if held.mode is TrackerMode.UTILITY
-                else SLOW_STOP_MARGIN_DEG
-            )
+            speed = abs(held.rate_deg_s)
+            ramp = UTILITY_RAMP_DOWN_DEG if held.mode is TrackerMode.UTILITY else 0.0
+            margin = ramp + speed * STOP_MARGIN_POLLS * self._poll_s + STOP_MARGIN_DEG
             if state.alt_deg < floor + margin:
                 logger.warning(
                     "altitude %.2f° near the horizon: stopping the slew down", state.alt_deg
@@ -456,6 +473,39 @@ class SkyTrackerMount(Mount):
             )
             self._publish_now()
 
+    async def _send_confirmed(
+        self,
+        commands: list[TrackerCommand],
+        *,
+        mode: TrackerMode,
+        pressed: Direction = NOTHING_PRESSED,
+        speeds: tuple[int, int] | None = None,
+    ) -> None:
+        """Send commands without replies, then read back what they set (``R``, and ``k`` after
+        ``K``) in the same turn: a command lost on the unbuffered line becomes a clear error."""
+        line = self._require_line()
+        confirm: list[TrackerCommand] = [ReadStatus()]
+        if speeds is not None:
+            confirm.append(ReadGuideSpeed())
+        replies = await line.tracker_sequence([*commands, *confirm])
+        self._note_status(replies[len(commands)])
+        assert self._status is not None
+        if speeds is not None:
+            reply = replies[-1]
+            assert isinstance(reply, GuideSpeedReply)
+            self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
+        sent = " ".join(c.encode().decode("latin-1") for c in commands)
+        if self._mode is not mode or pressed & ~self._status.directions:
+            raise DeviceError(
+                f"after {sent!r} the Sky Tracker reports {self._status}, not {mode.name} with "
+                f"{pressed!r} pressed: was a command lost on the line?"
+            )
+        if speeds is not None and self._guide_speeds != speeds:
+            raise DeviceError(
+                f"after {sent!r} the Sky Tracker keeps guide speeds {self._guide_speeds}, "
+                f"not {speeds}"
+            )
+
     # --- goto and sync ---------------------------------------------------------------------------
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
@@ -469,7 +519,14 @@ class SkyTrackerMount(Mount):
         if not isinstance(reply, Acknowledge):
             raise DeviceError(f"the Sky Commander did not acknowledge the object: {reply}")
         await line.tracker(SelectMode(TrackerMode.GOTO))
-        self._mode = TrackerMode.GOTO
+        # 'G' has no reply: the status tells that the box took it (GOTO, or TRACK at once when
+        # already on target).
+        self._note_status(await line.tracker(ReadStatus()))
+        if self._mode not in (TrackerMode.GOTO, *_TRACKING):
+            raise DeviceError(
+                f"the Sky Tracker did not start the GOTO (status {self._status}): was 'G' lost "
+                "on the line?"
+            )
         self._publish_now()
 
     async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
@@ -506,7 +563,7 @@ class SkyTrackerMount(Mount):
 
     async def _abort(self) -> None:
         """Release every arrow; ``U`` ends a GOTO (motors ramp down, UTILITY mode)."""
-        line = self._require_line()
+        self._require_line()
         self._cancel_pulses()
         self._held.clear()
         commands: list[TrackerCommand] = [ReleaseDirections()]
@@ -517,14 +574,13 @@ class SkyTrackerMount(Mount):
         elif self._rest_mode is not None and self._rest_mode is not mode:
             mode = self._rest_mode
             commands.append(SelectMode(mode))
-        await line.tracker_sequence(commands)
-        self._mode = mode
         self._rest_mode = None
+        await self._send_confirmed(commands, mode=mode or TrackerMode.UTILITY)
         await self.refresh()
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
         """TRACK (``T``) for sidereal/alt-az tracking; OFF is UTILITY (``U``), motors held."""
-        line = self._require_line()
+        self._require_line()
         if self._mode is TrackerMode.GOTO:
             raise SlewInProgressError(
                 "a GOTO is running and ends in tracking by itself; changing tracking now would "
@@ -535,22 +591,20 @@ class SkyTrackerMount(Mount):
         target = TrackerMode.UTILITY if mode is TrackingMode.OFF else TrackerMode.TRACK
         if mode is not TrackingMode.OFF:
             self._tracking_choice = mode
-        await line.tracker(SelectMode(target))
-        self._mode = target
+        await self._send_confirmed([SelectMode(target)], mode=target)
         self._publish_now()
 
     async def standby(self) -> None:
         """``B``: cut the motor drive to save battery (a GOTO is aborted first with ``U``)."""
-        line = self._require_line()
+        self._require_line()
         self._cancel_pulses()
         self._held.clear()
         commands: list[TrackerCommand] = [ReleaseDirections()]
         if self._mode is TrackerMode.GOTO:
             commands.append(SelectMode(TrackerMode.UTILITY))
         commands.append(SelectMode(TrackerMode.STANDBY))
-        await line.tracker_sequence(commands)
-        self._mode = TrackerMode.STANDBY
         self._rest_mode = None
+        await self._send_confirmed(commands, mode=TrackerMode.STANDBY)
         self._publish_now()
 
     async def set_guide_speed(self, azimuth_arcsec_s: int, elevation_arcsec_s: int) -> None:
@@ -662,7 +716,7 @@ class SkyTrackerMount(Mount):
         ``b`` releases every arrow, so the arrows still wanted are pressed again after it.
         """
         async with self._buttons:
-            line = self._require_line()
+            self._require_line()
             pressed = [motion.direction for motion in self._held.values()]
             pressed += [button for button, _ in self._pulses.values()]
             if pressed and self._rest_mode is None:
@@ -680,15 +734,23 @@ class SkyTrackerMount(Mount):
                 if held is not None and held.guide_speed_arcsec_s is not None:
                     speeds[index] = held.guide_speed_arcsec_s
             commands: list[TrackerCommand] = []
-            if tuple(speeds) != self._guide_speeds:
-                commands.append(SetGuideSpeed(speeds[0], speeds[1]))
+            wanted_speeds = (speeds[0], speeds[1])
+            change_speeds = wanted_speeds != self._guide_speeds
+            if change_speeds:
+                commands.append(SetGuideSpeed(*wanted_speeds))
             if mode is not self._mode:
                 commands.append(SelectMode(mode))
             commands.append(ReleaseDirections())
             commands += [PressDirection(direction) for direction in pressed]
-            await line.tracker_sequence(commands)
-            self._guide_speeds = (speeds[0], speeds[1])
-            self._mode = mode
+            all_pressed = Direction(0)
+            for direction in pressed:
+                all_pressed |= direction
+            await self._send_confirmed(
+                commands,
+                mode=mode,
+                pressed=all_pressed,
+                speeds=wanted_speeds if change_speeds else None,
+            )
             self._publish_now()
 
 
