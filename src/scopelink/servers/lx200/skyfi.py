@@ -12,7 +12,7 @@ import asyncio
 import logging
 import socket
 from types import TracebackType
-from typing import Self
+from typing import Self, cast
 
 from scopelink.protocol.lx200 import SKYFI_PORT, parse_skyfi_query, skyfi_reply
 
@@ -89,8 +89,7 @@ class _Protocol(asyncio.DatagramProtocol):
         self._transport: asyncio.DatagramTransport | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.DatagramTransport)
-        self._transport = transport
+        self._transport = cast("asyncio.DatagramTransport", transport)
 
     def datagram_received(self, data: bytes, addr: tuple[str | int, int]) -> None:
         sender = (str(addr[0]), int(addr[1]))
