@@ -17,9 +17,11 @@ import inspect
 import itertools
 import json
 import logging
+import math
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Self
+from typing import Self
 from urllib.parse import parse_qsl
 
 from aiohttp import web
@@ -45,9 +47,25 @@ logger = logging.getLogger(__name__)
 ALPACA_PORT = 11111
 MAX_REQUEST_BYTES = 64 * 1024
 """Largest request body accepted (HTTP 413 above it); real Alpaca requests are < 1 KiB."""
+_API_PREFIX = "/api/v1/"
 _DEVICE_TYPE = "telescope"
-_JSON = "application/json"
+_JSON_HEADERS = {"Content-Type": "application/json; charset=utf-8"}
 _METHODS = ("GET", "PUT")
+
+
+class RequestTooLarge(BadRequest):
+    """A request body over the size limit: HTTP 413."""
+
+
+def _json_value(value: object) -> str:
+    """JSON for a Value: floats by repr (the shortest exact form), the rest by json.dumps."""
+    if type(value) is float and math.isfinite(value):
+        return repr(value)
+    if value is True:
+        return "true"
+    if value is False:
+        return "false"
+    return json.dumps(value, allow_nan=False)
 
 
 def _text(status: int, message: str) -> web.Response:
@@ -84,7 +102,15 @@ class AlpacaServer:
         self.unique_id = ""
         self._max_request_bytes = max_request_bytes
         self._transactions = itertools.count(1)
-        self._runner: web.AppRunner | None = None
+        self._http: web.Server | None = None
+        self._listener: asyncio.Server | None = None
+        self._pages: dict[str, Callable[[web.BaseRequest], Awaitable[web.Response]]] = {
+            "/management/apiversions": self._api_versions,
+            "/management/v1/description": self._description,
+            "/management/v1/configureddevices": self._configured_devices,
+            "/setup": self._setup,
+            "/setup/v1/telescope/0/setup": self._setup,
+        }
         self._discovery: asyncio.DatagramTransport | None = None
         self._stack = contextlib.AsyncExitStack()
 
@@ -98,21 +124,14 @@ class AlpacaServer:
         self.unique_id = load_or_create_unique_id(self.state_dir)
         # Reads are answered from mount.state: keep the mount's poller running while we serve.
         await self._stack.enter_async_context(self.mount.watching())
-        app = web.Application(client_max_size=self._max_request_bytes)
-        app.router.add_route("*", "/api/v1/{device_type}/{device_number}/{member}", self._api)
-        app.router.add_get("/management/apiversions", self._api_versions)
-        app.router.add_get("/management/v1/description", self._description)
-        app.router.add_get("/management/v1/configureddevices", self._configured_devices)
-        app.router.add_get("/setup", self._setup)
-        app.router.add_get("/setup/v1/telescope/0/setup", self._setup)
-        runner = web.AppRunner(app, access_log=None, handle_signals=False)
-        await runner.setup()
-        self._runner = runner
-        site = web.TCPSite(runner, self.host, self.port, reuse_address=True)
-        await site.start()
-        server = site._server  # aiohttp keeps the bound socket here; port 0 needs it
-        if isinstance(server, asyncio.Server) and server.sockets:
-            self.port = int(server.sockets[0].getsockname()[1])
+        # aiohttp's low-level server with our own dispatch: no router or middleware on the path
+        # of the property reads clients poll many times a second.
+        self._http = web.Server(self._handle, access_log=None)
+        loop = asyncio.get_running_loop()
+        self._listener = await loop.create_server(
+            self._http, self.host, self.port, reuse_address=True
+        )
+        self.port = int(self._listener.sockets[0].getsockname()[1])
         if self.discovery_port is not None:
             transport, _ = await start_discovery(
                 self._discovery_host, self.discovery_port, self.port
@@ -125,9 +144,12 @@ class AlpacaServer:
         if self._discovery is not None:
             self._discovery.close()
             self._discovery = None
-        if self._runner is not None:
-            await self._runner.cleanup()
-            self._runner = None
+        if self._listener is not None:
+            self._listener.close()
+            if self._http is not None:
+                await self._http.shutdown(1.0)
+            await self._listener.wait_closed()
+            self._listener = None
         await self.telescope.close()
         await self._stack.aclose()
 
@@ -160,17 +182,25 @@ class AlpacaServer:
         has_value: bool = False,
         error: AlpacaError | None = None,
     ) -> web.Response:
-        body: dict[str, Any] = {}
-        if has_value and error is None:
-            body["Value"] = value
-        body["ClientTransactionID"] = client_transaction_id
-        body["ServerTransactionID"] = next(self._transactions)
-        body["ErrorNumber"] = int(error.number) if error else 0
-        body["ErrorMessage"] = error.message if error else ""
-        return web.Response(body=json.dumps(body).encode(), content_type=_JSON)
+        # Assembled by hand: property reads are the hot path, and json.dumps of a whole dict
+        # costs more than the rest of our handling together.
+        server_id = next(self._transactions)
+        if error is None:
+            head = f'{{"Value":{_json_value(value)},' if has_value else "{"
+            text = (
+                f'{head}"ClientTransactionID":{client_transaction_id},'
+                f'"ServerTransactionID":{server_id},"ErrorNumber":0,"ErrorMessage":""}}'
+            )
+        else:
+            text = (
+                f'{{"ClientTransactionID":{client_transaction_id},'
+                f'"ServerTransactionID":{server_id},"ErrorNumber":{int(error.number)},'
+                f'"ErrorMessage":{json.dumps(error.message)}}}'
+            )
+        return web.Response(body=text.encode(), headers=_JSON_HEADERS)
 
     @staticmethod
-    def _query_ids(request: web.Request) -> tuple[int, int]:
+    def _query_ids(request: web.BaseRequest) -> tuple[int, int]:
         params = Params.from_pairs(request.query.items(), exact=False)
         client_id = parse_transaction_id("ClientID", params.optional("ClientID"))
         transaction = parse_transaction_id(
@@ -180,15 +210,29 @@ class AlpacaServer:
 
     # --- device API ------------------------------------------------------------------------------
 
-    async def _api(self, request: web.Request) -> web.Response:
-        info = request.match_info
-        if info["device_type"] != _DEVICE_TYPE:
-            return _text(404, f"no device of type {info['device_type']!r} here (only 'telescope')")
-        if info["device_number"] != "0":
-            return _text(404, f"no telescope number {info['device_number']!r} here (only 0)")
-        member = self.telescope.members.get(info["member"])
+    async def _handle(self, request: web.BaseRequest) -> web.Response:
+        path = request.path
+        if path.startswith(_API_PREFIX):
+            parts = path[len(_API_PREFIX) :].split("/")
+            if len(parts) == 3:
+                return await self._api(request, *parts)
+        page = self._pages.get(path)
+        if page is None:
+            return _text(404, f"nothing at {path} (Alpaca devices are under {_API_PREFIX})")
+        if request.method != "GET":
+            return _text(405, f"{path} is read with GET")
+        return await page(request)
+
+    async def _api(
+        self, request: web.BaseRequest, device_type: str, number: str, name: str
+    ) -> web.Response:
+        if device_type != _DEVICE_TYPE:
+            return _text(404, f"no device of type {device_type!r} here (only 'telescope')")
+        if number != "0":
+            return _text(404, f"no telescope number {number!r} here (only 0)")
+        member = self.telescope.members.get(name)
         if member is None:
-            return _text(404, f"the telescope has no member {info['member']!r}")
+            return _text(404, f"the telescope has no member {name!r}")
         if request.method not in _METHODS:
             return _text(405, f"{request.method} is not an Alpaca method: use GET or PUT")
         try:
@@ -201,13 +245,22 @@ class AlpacaServer:
             transaction = parse_transaction_id(
                 "ClientTransactionID", params.optional("ClientTransactionID")
             )
-            return await self._invoke(request.method, member, info["member"], params, transaction)
+            return await self._invoke(request.method, member, name, params, transaction)
+        except RequestTooLarge as error:
+            return _text(413, str(error))
         except BadRequest as error:
             return _text(400, str(error))
 
-    @staticmethod
-    async def _form(request: web.Request) -> Params:
-        body = await request.read()
+    async def _form(self, request: web.BaseRequest) -> Params:
+        limit = self._max_request_bytes
+        too_large = RequestTooLarge(f"request bodies are limited to {limit} bytes")
+        if (request.content_length or 0) > limit:
+            raise too_large
+        body = b""
+        while chunk := await request.content.read(limit + 1 - len(body)):
+            body += chunk
+            if len(body) > limit:
+                raise too_large
         try:
             text = body.decode("utf-8")
             pairs = parse_qsl(text, keep_blank_values=True, strict_parsing=False)
@@ -243,17 +296,17 @@ class AlpacaServer:
 
     # --- management API and setup pages ----------------------------------------------------------
 
-    async def _management(self, request: web.Request, value: object) -> web.Response:
+    async def _management(self, request: web.BaseRequest, value: object) -> web.Response:
         try:
             _, transaction = self._query_ids(request)
         except BadRequest as error:
             return _text(400, str(error))
         return self._reply(transaction, value=value, has_value=True)
 
-    async def _api_versions(self, request: web.Request) -> web.Response:
+    async def _api_versions(self, request: web.BaseRequest) -> web.Response:
         return await self._management(request, [1])
 
-    async def _description(self, request: web.Request) -> web.Response:
+    async def _description(self, request: web.BaseRequest) -> web.Response:
         description = {
             "ServerName": "scopelink",
             "Manufacturer": "scopelink developers",
@@ -264,7 +317,7 @@ class AlpacaServer:
         }
         return await self._management(request, description)
 
-    async def _configured_devices(self, request: web.Request) -> web.Response:
+    async def _configured_devices(self, request: web.BaseRequest) -> web.Response:
         devices = [
             {
                 "DeviceName": self.config.name,
@@ -275,7 +328,7 @@ class AlpacaServer:
         ]
         return await self._management(request, devices)
 
-    async def _setup(self, _: web.Request) -> web.Response:
+    async def _setup(self, _: web.BaseRequest) -> web.Response:
         page = render_setup_page(
             self.mount,
             self.config,
