@@ -1,0 +1,159 @@
+"""The dashboard end to end in headless Chromium (Debian's, driven by Playwright; no browser is
+downloaded): load, goto by clicking an object on the chart, watch the mount move, abort; a goto
+below the horizon shows the error; search as you type; night mode survives a reload; hostile
+text stays text. Screenshots go to ``test-artifacts/web/`` (printed)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import pytest
+import pytest_asyncio
+from playwright.async_api import Browser, Page, async_playwright, expect
+
+from scopelink.astro import angular_separation_deg
+from scopelink.astro.catalog import lookup
+from tests.conftest import require_executable
+from tests.test_web_support import HIGH_UP, NEVER_UP, Served, served, sim_mount
+
+ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts" / "web"
+TIMEOUT_MS = 10_000
+
+
+# One browser for the whole file (launching costs a second or two): the tests share its loop.
+pytestmark = pytest.mark.asyncio(loop_scope="module")
+
+
+@pytest_asyncio.fixture(loop_scope="module", scope="module")
+async def browser() -> AsyncIterator[Browser]:
+    executable = require_executable("chromium")
+    async with async_playwright() as playwright:
+        launched = await playwright.chromium.launch(executable_path=executable)
+        try:
+            yield launched
+        finally:
+            await launched.close()
+
+
+async def screenshot(page: Page, name: str) -> None:
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    path = ARTIFACTS / f"{name}.png"
+    await page.screenshot(path=str(path), full_page=True)
+    print(f"screenshot: {path}")
+
+
+@asynccontextmanager
+async def open_page(
+    browser: Browser, s: Served, width: int = 1300, height: int = 1000
+) -> AsyncIterator[Page]:
+    """A fresh browser context on the dashboard, live; no script error may happen meanwhile."""
+    context = await browser.new_context(viewport={"width": width, "height": height})
+    try:
+        page = await context.new_page()
+        errors: list[str] = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        await page.goto(s.dashboard.url)
+        await expect(page.locator("#link-status")).to_have_text("live", timeout=TIMEOUT_MS)
+        await expect(page.locator("#hl-connected")).to_have_text("yes", timeout=TIMEOUT_MS)
+        yield page
+        assert errors == []
+    finally:
+        await context.close()
+
+
+async def click_object(page: Page, name: str) -> None:
+    """Click where the chart draws ``name`` (computed by the page's own projection)."""
+    await page.wait_for_function(
+        "(name) => view.sky.some((o) => o.name === name)", arg=name, timeout=TIMEOUT_MS
+    )
+    x, y = await page.evaluate(
+        "(name) => { const o = view.sky.find((s) => s.name === name);"
+        " return chart.project(o.alt, o.az); }",
+        name,
+    )
+    box = await page.locator("#sky").bounding_box()
+    assert box is not None
+    scale = box["width"] / await page.evaluate("chart.size")
+    await page.mouse.click(box["x"] + x * scale, box["y"] + y * scale)
+
+
+async def test_goto_by_clicking_the_chart_watch_it_move_then_abort(browser: Browser) -> None:
+    async with served(sim_mount(rate=3.0), interval_s=0.1) as s, open_page(browser, s) as page:
+        await screenshot(page, "01-loaded")
+        await click_object(page, HIGH_UP)
+        await expect(page.locator("#selection-name")).to_have_text(HIGH_UP)
+        await page.click("#go-selected")
+        await expect(page.locator("#st-slewing")).to_have_text("yes", timeout=TIMEOUT_MS)
+        await expect(page.locator("#st-target")).to_have_text(HIGH_UP)
+        first = await page.locator("#st-altaz").text_content()
+        await expect(page.locator("#st-altaz")).not_to_have_text(first or "", timeout=TIMEOUT_MS)
+        second = await page.locator("#st-altaz").text_content()
+        await expect(page.locator("#st-altaz")).not_to_have_text(second or "", timeout=TIMEOUT_MS)
+        await screenshot(page, "02-slewing")
+        await page.click("#abort")
+        await expect(page.locator("#st-slewing")).to_have_text("no", timeout=TIMEOUT_MS)
+        state = await s.mount.refresh()
+        assert not state.slewing
+        capella = lookup(HIGH_UP, s.mount.now(), s.mount.site)
+        assert state.ra_j2000_hours is not None
+        assert state.dec_j2000_deg is not None
+        distance = angular_separation_deg(
+            state.ra_j2000_hours * 15, state.dec_j2000_deg, capella.ra_hours * 15, capella.dec_deg
+        )
+        assert distance > 1.0  # stopped on the way, not arrived
+        await screenshot(page, "03-aborted")
+
+
+async def test_a_goto_below_the_horizon_shows_the_error_and_moves_nothing(
+    browser: Browser,
+) -> None:
+    async with served() as s, open_page(browser, s) as page:
+        await page.fill("#goto-name", NEVER_UP)
+        await page.click("#goto-button")
+        message = page.locator("#message")
+        await expect(message).to_be_visible(timeout=TIMEOUT_MS)
+        await expect(message).to_contain_text("below the configured horizon")
+        await expect(message).to_have_class("error")
+        assert s.mount.target is None
+        assert not (await s.mount.refresh()).slewing
+        await screenshot(page, "04-below-horizon")
+
+
+async def test_search_as_you_type_fills_the_goto_box(browser: Browser) -> None:
+    async with served() as s, open_page(browser, s) as page:
+        await page.locator("#goto-name").press_sequentially("betel", delay=30)
+        suggestion = page.locator("#goto-suggestions button").first
+        await expect(suggestion).to_contain_text("Betelgeuse", timeout=TIMEOUT_MS)
+        await suggestion.click()
+        await expect(page.locator("#goto-name")).to_have_value("Betelgeuse")
+        await page.click("#goto-button")
+        await expect(page.locator("#st-target")).to_have_text("Betelgeuse", timeout=TIMEOUT_MS)
+
+
+async def test_night_mode_is_remembered_and_the_page_fits_a_phone(browser: Browser) -> None:
+    async with served() as s, open_page(browser, s, width=390, height=844) as page:
+        await page.click("#night-toggle")
+        await expect(page.locator("body")).to_have_class(re.compile("night"))
+        await page.reload()
+        await expect(page.locator("body")).to_have_class(re.compile("night"), timeout=TIMEOUT_MS)
+        overflow = await page.evaluate(
+            "document.documentElement.scrollWidth - document.documentElement.clientWidth"
+        )
+        assert overflow <= 0  # nothing wider than the phone
+        stop = await page.locator("#abort").bounding_box()
+        assert stop is not None
+        assert stop["height"] >= 44  # a finger-sized STOP
+        await screenshot(page, "05-phone-night")
+
+
+async def test_hostile_text_is_shown_as_text(browser: Browser) -> None:
+    async with served() as s, open_page(browser, s) as page:
+        hostile = '<img src=x onerror="window.pwned=1">'
+        await page.fill("#goto-name", hostile)
+        await page.click("#goto-button")
+        await expect(page.locator("#message")).to_contain_text(hostile, timeout=TIMEOUT_MS)
+        assert await page.locator("#message img").count() == 0
+        assert await page.evaluate("window.pwned === undefined")
