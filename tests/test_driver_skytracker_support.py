@@ -10,15 +10,15 @@ from pathlib import Path
 
 from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
 from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
-from scopelink.mount import Limits
+from scopelink.mount import Limits, MountAxis
 from scopelink.servers.faults import FaultInjector
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
 
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0, pressure_hpa=0.0)
 EPOCH = datetime(2026, 1, 1, 20, 0, tzinfo=UTC)
-CLOCK_RATE = 20.0
-"""Simulated seconds per real second: a 30 s GOTO takes 1.5 s."""
+CLOCK_RATE = 40.0
+"""Simulated seconds per real second: a 30 s GOTO takes 0.75 s."""
 TRANSPORTS = ["pty", "tcp"]
 FAST = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.05, 0.1, 0.2))
 """Spec timing (100 ms grant), shorter reply timeout and back-off so fault tests stay quick."""
@@ -49,6 +49,13 @@ class Rig:
     def sim_j2000(self) -> tuple[float, float]:
         return self.sim.j2000_at(self.sim.elapsed())
 
+    def point(self, alt_deg: float, az_deg: float) -> tuple[float, float]:
+        """Put the scope at an alt/az at once (no GOTO: quicker where the GOTO is not tested);
+        returns the J2000 position there."""
+        self.sim.set_axis_position(MountAxis.PRIMARY, az_deg)
+        self.sim.set_axis_position(MountAxis.SECONDARY, alt_deg)
+        return self.sim_j2000()
+
 
 async def serve(emulator: SkyTrackerEmulator, transport: str) -> str:
     """Serve ``emulator`` on a new pty or TCP port; the driver's link spec for it."""
@@ -69,9 +76,10 @@ async def rig(
     connect: bool = True,
     limits: Limits | None = None,
     guide_speed_arcsec_s: int | None = None,
+    clock_rate: float = CLOCK_RATE,
 ) -> AsyncIterator[Rig]:
     """Emulator + driver; the driver is disconnected and the emulator stopped afterwards."""
-    sim = sky_tracker_mount()
+    sim = sky_tracker_mount(clock_rate)
     async with SkyTrackerEmulator(
         sim, data_dir, faults=faults, strict_line=strict_line
     ) as emulator:
