@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import io
 import json
 import os
 import re
@@ -10,9 +11,11 @@ import signal
 import subprocess
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 from pathlib import Path
 from typing import Any
+
+from scopelink.cli.main import main
 
 RUN_TIMEOUT_S = 60
 START_TIMEOUT_S = 20
@@ -36,11 +39,22 @@ def scopelink(config: Path, *args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def state_of(config: Path, device: str) -> dict[str, Any]:
-    """The mount's state as ``scopelink status --json`` prints it."""
-    result = scopelink(config, "status", "--json", "--device", device)
-    assert result.returncode == 0, result.stderr
-    state: dict[str, Any] = json.loads(result.stdout)
+def state_of(config: Path, device: str | None = None) -> dict[str, Any]:
+    """The mount's state as ``scopelink status --json`` prints it (run in this process: a
+    subprocess per reading would make the tests slow; the commands under test run apart)."""
+    output = io.StringIO()
+    saved = os.environ.get("SCOPELINK_CONFIG")
+    os.environ["SCOPELINK_CONFIG"] = str(config)
+    try:
+        with redirect_stdout(output):
+            status = main(["status", "--json", *(["--device", device] if device else [])])
+    finally:
+        if saved is None:
+            del os.environ["SCOPELINK_CONFIG"]
+        else:
+            os.environ["SCOPELINK_CONFIG"] = saved
+    assert status == 0, output.getvalue()
+    state: dict[str, Any] = json.loads(output.getvalue())
     return state
 
 
