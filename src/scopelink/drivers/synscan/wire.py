@@ -111,7 +111,12 @@ class SynScanWire:
         """Open the link and check the stream with a unique echo."""
         async with self.scheduler.turn(Priority.COMMAND):
             await self._reopen()
-            await self._resynchronise("checking the link")
+            try:
+                await self._resynchronise("checking the link")
+            except DeviceError as error:
+                # One lost echo is not a dead device: a second unique echo decides.
+                logger.info("%s: %s; trying once more", self.name, error)
+                await self._resynchronise("checking the link")
 
     async def close(self) -> None:
         """Close the link (idempotent)."""
