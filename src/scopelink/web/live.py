@@ -103,10 +103,11 @@ class LiveHub:
                 if not self._sockets:
                     break
                 tick += 1
-                message = await self._update(with_sky=tick % self._sky_every == 0)
+                message = await self.build_update(with_sky=tick % self._sky_every == 0)
                 await self._broadcast(message)
 
-    async def _update(self, *, with_sky: bool) -> str:
+    async def build_update(self, *, with_sky: bool) -> str:
+        """One update message as sent to every page (JSON text)."""
         traffic, self._traffic_seq = self._traffic_json(self._traffic_seq)
         update: dict[str, object] = {
             "type": "update",
