@@ -190,11 +190,12 @@ class SynScanWire:
         self._needs_resync = False
 
     def _echo_value(self) -> int:
-        while True:
+        for _ in _ECHO_VALUES:
             value = _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]
             self._next_echo += 1
             if value not in self.avoid_echo:
                 return value
+        return _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]  # everything avoided: any will do
 
     async def _exchange(self, command: AnyCommand) -> AnyReply:
         link = self._link
