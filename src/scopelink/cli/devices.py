@@ -184,16 +184,20 @@ async def open_mount(
     )
 
 
+_PORT_HINT: Final = (
+    "'scopelink ports' lists the serial ports; check the path and your permissions "
+    "(the dialout group on Linux)"
+)
+
+
 async def _connect(mount: Mount, spec: DeviceSpec) -> None:
     try:
         await mount.connect()
     except LinkError as error:
-        raise DeviceError(
-            f"cannot open {spec.target}: {error}",
-            "'scopelink ports' lists the serial ports; check the path and your permissions "
-            "(the dialout group on Linux)",
-        ) from None
+        raise DeviceError(f"cannot open {spec.target}: {error}", _PORT_HINT) from None
     except MountError as error:
-        raise DeviceError(f"{spec}: {error}") from None
+        # Drivers report a port that would not open as a MountError saying "cannot open".
+        hint = _PORT_HINT if "cannot open" in str(error) else ""
+        raise DeviceError(f"{spec}: {error}", hint) from None
     except TimeoutError:
         raise DeviceError(f"{spec}: no reply") from None

@@ -47,18 +47,39 @@ def parse_target(words: list[str], *, altaz: bool = False) -> Target:
     tokens = text.split()
     looks_like_angles = all(_ANGLE_WORD.match(token) for token in tokens)
     if altaz or looks_like_angles:
-        if not (looks_like_angles and len(tokens) in (2, 4, 6)):
-            what = "ALT AZ in degrees" if altaz else "RA DEC"
-            raise CommandError(
-                f"cannot read {text!r} as two angles",
-                f"give {what}, e.g. '{'45 180' if altaz else '05:35:17 -05:23:28'}'",
-            )
-        half = len(tokens) // 2
-        first_text, second_text = " ".join(tokens[:half]), " ".join(tokens[half:])
-        try:
-            if altaz:
-                return Coordinates(parse_degrees(first_text), parse_degrees(second_text), True)
-            return Coordinates(parse_hours(first_text), parse_degrees(second_text))
-        except ValueError as error:
-            raise CommandError(f"cannot read {text!r}: {error}") from None
+        if not looks_like_angles or len(tokens) < 2:
+            raise _not_two_angles(text, altaz)
+        return _split_angles(text, tokens, altaz)
     return Named(text)
+
+
+def _not_two_angles(text: str, altaz: bool, why: str = "") -> CommandError:
+    what = "ALT AZ in degrees" if altaz else "RA DEC"
+    example = "45 180" if altaz else "05:35:17 -05:23:28"
+    return CommandError(
+        f"cannot read {text!r} as two angles{why}", f"give {what}, e.g. '{example}'"
+    )
+
+
+def _split_angles(text: str, tokens: list[str], altaz: bool) -> Coordinates:
+    """The one way to cut the words into two angles: where the second carries a sign, else in
+    half, else the only cut that reads; several readable cuts and no sign are ambiguous."""
+    first_parser = parse_degrees if altaz else parse_hours
+    readings: dict[int, Coordinates] = {}
+    for cut in range(1, len(tokens)):
+        try:
+            first = first_parser(" ".join(tokens[:cut]))
+            second = parse_degrees(" ".join(tokens[cut:]))
+        except ValueError:
+            continue
+        readings[cut] = Coordinates(first, second, altaz)
+    signed = [cut for cut in readings if tokens[cut][0] in "+-"]
+    if len(signed) == 1:
+        return readings[signed[0]]
+    if len(tokens) % 2 == 0 and len(tokens) // 2 in readings:
+        return readings[len(tokens) // 2]
+    if len(readings) == 1:
+        return next(iter(readings.values()))
+    if readings:
+        raise _not_two_angles(text, altaz, ": ambiguous (give the second a sign, or use colons)")
+    raise _not_two_angles(text, altaz)
