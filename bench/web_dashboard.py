@@ -71,10 +71,12 @@ async def fan_out(pages: int, seconds: float) -> None:
                 counts[index] += 1
 
         readers = [asyncio.create_task(count(i, ws)) for i, ws in enumerate(sockets)]
+        await asyncio.sleep(INTERVAL_S)  # drain what queued while the pages connected
+        baseline = list(counts)
         cpu, wall = time.process_time(), time.perf_counter()
         await asyncio.sleep(seconds)
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-        received = list(counts)
+        received = [now - before for now, before in zip(counts, baseline, strict=True)]
         for task in readers:
             task.cancel()
         for ws in sockets:

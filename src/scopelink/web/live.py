@@ -96,10 +96,14 @@ class LiveHub:
             self._task = asyncio.create_task(self._run(), name="scopelink dashboard updates")
 
     async def _run(self) -> None:
+        loop = asyncio.get_running_loop()
         async with self._mount.watching():
             tick = 0
+            due = loop.time()
             while self._sockets:
-                await asyncio.sleep(self.interval_s)
+                # A fixed cadence: the time spent building and sending is not added to the period.
+                due = max(due + self.interval_s, loop.time())
+                await asyncio.sleep(due - loop.time())
                 if not self._sockets:
                     break
                 tick += 1
