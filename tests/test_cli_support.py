@@ -88,8 +88,15 @@ async def read_line_matching(stream: asyncio.StreamReader | None, pattern: str) 
 @contextmanager
 def synscan_emulator(*options: str) -> Iterator[str]:
     """A ``scopelink emulate synscan`` subprocess on a free TCP port; yields its device string."""
+    with emulator("synscan", *options) as device:
+        yield device
+
+
+@contextmanager
+def emulator(kind: str, *options: str) -> Iterator[str]:
+    """A ``scopelink emulate KIND`` subprocess on a free TCP port; yields its device string."""
     process = subprocess.Popen(
-        [sys.executable, "-m", "scopelink", "emulate", "synscan", "--tcp", "127.0.0.1:0", *options],
+        [sys.executable, "-m", "scopelink", "emulate", kind, "--tcp", "127.0.0.1:0", *options],
         stdout=subprocess.PIPE,
         stdin=subprocess.DEVNULL,
         text=True,
@@ -100,7 +107,7 @@ def synscan_emulator(*options: str) -> Iterator[str]:
         line = process.stdout.readline()
         match = re.search(r"listening on (127\.0\.0\.1:\d+)", line)
         assert match, f"the emulator printed {line!r}"
-        yield f"synscan:tcp://{match.group(1)}"
+        yield f"{kind}:tcp://{match.group(1)}"
     finally:
         process.send_signal(signal.SIGTERM)
         try:

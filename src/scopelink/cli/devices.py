@@ -14,9 +14,7 @@ LINK is anything :func:`scopelink.links.open_link` opens: ``/dev/ttyUSB0``, ``CO
 
 from __future__ import annotations
 
-import importlib
 import logging
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
@@ -114,33 +112,14 @@ def create_mount(
             return SynScanMount(spec.target, site=site, limits=limits)
         return SynScanMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
     if spec.kind == "skytracker":
-        factory = _sky_tracker_factory()
-        return factory(spec.target, site, limits, timeout_s)
+        from scopelink.drivers.skytracker import (  # noqa: PLC0415 - only if used
+            LineOptions,
+            SkyTrackerMount,
+        )
+
+        options = LineOptions() if timeout_s is None else LineOptions(reply_timeout_s=timeout_s)
+        return SkyTrackerMount(spec.target, site=site, limits=limits, options=options)
     raise DeviceError(f"cannot create a mount of unknown kind for {spec}")
-
-
-MountFactory = Callable[[str, Site, Limits | None, float | None], Mount]
-
-
-def _sky_tracker_factory() -> MountFactory:
-    """The Sky Tracker driver, imported only when asked for (it is newer than this module)."""
-    try:
-        module = importlib.import_module("scopelink.drivers.skytracker")
-        driver = module.SkyTrackerMount
-    except (ImportError, AttributeError):
-        raise DeviceError(
-            "this scopelink has no Sky Tracker driver yet",
-            "use synscan:PORT, or 'scopelink decode --protocol skytracker' for traces",
-        ) from None
-
-    def create(link: str, site: Site, limits: Limits | None, timeout_s: float | None) -> Mount:
-        options: dict[str, object] = {"site": site, "limits": limits}
-        if timeout_s is not None:
-            options["timeout_s"] = timeout_s
-        mount: Mount = driver(link, **options)
-        return mount
-
-    return create
 
 
 async def open_mount(

@@ -9,6 +9,8 @@ import json
 from typing import Any
 
 from scopelink.cli.mount_session import add_device_arguments, run_on_mount
+from scopelink.drivers.skytracker import SkyTrackerMount
+from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Capabilities, Mount
 
 __all__ = ["register", "run"]
@@ -88,9 +90,14 @@ def describe(mount: Mount) -> dict[str, Any]:
         "link": identity.link,
         "capabilities": _capabilities(mount.capabilities),
     }
-    details = getattr(mount, "info", None)
-    if details is not None:
-        report["details"] = _plain(details)
+    if isinstance(mount, SynScanMount) and mount.info is not None:
+        report["details"] = _plain(mount.info)
+    elif isinstance(mount, SkyTrackerMount):
+        report["details"] = {
+            "sky_tracker_version": mount.identity.firmware,
+            "sky_commander_present": mount.commander_present,
+            "mode": None if mount.tracker_mode is None else mount.tracker_mode.name.lower(),
+        }
     report["aligned"] = mount.state.aligned
     return report
 
