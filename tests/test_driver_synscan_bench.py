@@ -1,0 +1,31 @@
+"""The SynScan driver benchmark still runs and prints its tables (so the benchmark cannot rot)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.timeout(90)
+def test_quick_driver_benchmark_prints_its_tables() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "bench.drivers_synscan", "--quick"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=90,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    refresh = next(line for line in lines if line.startswith("refresh (L e t p)"))
+    assert refresh.endswith("%"), refresh
+    assert any(line.startswith("e polls") for line in lines), result.stdout
+    assert any(line.startswith("scopelink SynScanMount.wire") for line in lines), result.stdout
+    assert any(line.startswith("nexstar 0.0.5 getPosition") for line in lines), result.stdout
+    assert any(line.startswith("pyserial write/read") for line in lines), result.stdout
