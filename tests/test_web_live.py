@@ -193,3 +193,20 @@ def test_trace_lines_parse_back_to_their_bytes(link: str, arrow: str, data: byte
 def test_any_other_log_text_is_ignored_or_parsed_without_raising(text: str) -> None:
     parsed = parse_trace_line(text)
     assert parsed is None or isinstance(parsed[2], bytes)
+
+
+async def test_a_site_change_reaches_every_open_page() -> None:
+    async with served(interval_s=0.1) as s, s.http.ws_connect("/ws") as ws:
+        hello = await receive(ws)
+        assert hello["mount"]["site"]["latitude_deg"] == 45.0
+        status, _ = await s.post("/api/site", {"latitude_deg": -31.3, "longitude_deg": 149.1})
+        assert status == 200
+        async with asyncio.timeout(5):
+            while True:
+                update = await receive(ws)
+                if "mount" in update:
+                    break
+        assert update["mount"]["site"]["latitude_deg"] == -31.3
+        sky = {obj["name"]: obj for obj in update.get("sky") or []}
+        assert sky, "the chart's objects come with the same update"
+        assert sky["Acrux"]["alt"] > 0  # the Southern Cross is up from Siding Spring

@@ -47,6 +47,7 @@ class LiveHub:
         self._task: asyncio.Task[None] | None = None
         self._sky: SkyPositions | None = None
         self._traffic_seq = 0
+        self._described: dict[str, object] | None = None
 
     @property
     def clients(self) -> int:
@@ -119,6 +120,11 @@ class LiveHub:
             "traffic": traffic,
         }
         if with_sky:
+            # Site and limits can change (another page, the CLI): resend them when they do.
+            described = describe_mount(self._mount)
+            if described != self._described:
+                self._described = described
+                update["mount"] = described
             try:
                 update["sky"] = await asyncio.to_thread(self.sky_json)
             except Exception:  # a chart without objects beats a dead dashboard

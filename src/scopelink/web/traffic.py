@@ -145,7 +145,8 @@ class TrafficMonitor(logging.Handler):
 
     def since(self, seq: int) -> list[TrafficLine]:
         """The kept lines newer than ``seq`` (0: all of them), oldest first."""
-        return [line for line in self._lines if line.seq > seq]
+        with self.lock:  # emit() may run on another thread (a blocking facade's loop)
+            return [line for line in self._lines if line.seq > seq]
 
     @contextmanager
     def attached(self) -> Iterator[TrafficMonitor]:

@@ -366,6 +366,7 @@ function appendTraffic(lines) {
     body.append(row);
   }
   while (body.rows.length > traffic.rows) body.deleteRow(0);
+  $("traffic-empty").hidden = body.rows.length > 0;
   if (atBottom) scroller.scrollTop = scroller.scrollHeight;
 }
 
@@ -391,8 +392,10 @@ function connect() {
       view.mount = message.mount;
       $("traffic-off").hidden = message.traffic_enabled;
       $("traffic").tBodies[0].replaceChildren();
+      $("traffic-empty").hidden = !message.traffic_enabled;
       renderMount();
     }
+    if (message.type === "update" && message.mount) { view.mount = message.mount; renderMount(); }
     if (message.state) { view.state = message.state; renderState(); }
     if (message.sky) { view.sky = message.sky; renderSelection(); }
     appendTraffic(message.traffic);
