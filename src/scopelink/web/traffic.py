@@ -14,6 +14,7 @@ from __future__ import annotations
 import itertools
 import logging
 import re
+import threading
 import time
 from collections import deque
 from collections.abc import Iterator
@@ -109,6 +110,7 @@ class TrafficMonitor(logging.Handler):
         super().__init__(logging.DEBUG)
         self.protocol = protocol
         self._lines: deque[TrafficLine] = deque(maxlen=capacity)
+        self._lines_lock = threading.Lock()
         self._decoders: dict[str, _LinkDecoder] = {}
         self._seq = itertools.count(1)
 
@@ -132,20 +134,20 @@ class TrafficMonitor(logging.Handler):
         except Exception:  # the decoder never raises by contract; keep the line if it does
             annotations = []
             self.handleError(record)
-        self._lines.append(
-            TrafficLine(
-                seq=next(self._seq),
-                at=record.created or time.time(),
-                link=link,
-                sender=sender,
-                data=data,
-                meanings=tuple((a.kind.value, a.meaning) for a in annotations),
-            )
+        line = TrafficLine(
+            seq=next(self._seq),
+            at=record.created or time.time(),
+            link=link,
+            sender=sender,
+            data=data,
+            meanings=tuple((a.kind.value, a.meaning) for a in annotations),
         )
+        with self._lines_lock:
+            self._lines.append(line)
 
     def since(self, seq: int) -> list[TrafficLine]:
         """The kept lines newer than ``seq`` (0: all of them), oldest first."""
-        with self.lock:  # emit() may run on another thread (a blocking facade's loop)
+        with self._lines_lock:  # emit() may run on another thread (a blocking facade's loop)
             return [line for line in self._lines if line.seq > seq]
 
     @contextmanager
