@@ -329,6 +329,18 @@ def test_formatted_coordinates_parse_back_within_half_a_unit(value: float) -> No
     assert abs(parsed - dec) <= 0.5 / 3600 + 1e-9
 
 
+@given(st.floats(-720.0, 720.0), st.booleans())
+def test_altitude_and_azimuth_parse_back_within_half_a_unit(value: float, precise: bool) -> None:
+    unit = 1.0 / 3600 if precise else 1.0 / 60
+    az = parse_sexagesimal(format_azimuth(value, high_precision=precise))
+    assert az is not None
+    assert abs((az - value % 360.0 + 180.0) % 360.0 - 180.0) <= unit / 2 + 1e-9
+    alt_value = max(-90.0, min(90.0, value / 8.0))
+    alt = parse_sexagesimal(format_altitude(alt_value, high_precision=precise))
+    assert alt is not None
+    assert abs(alt - alt_value) <= unit / 2 + 1e-9
+
+
 @given(st.lists(commands, max_size=8), st.data())
 def test_chunking_and_stray_hashes_do_not_change_the_commands(
     sent: list[AnyCommand], data: st.DataObject

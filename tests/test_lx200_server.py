@@ -367,3 +367,57 @@ async def test_skyfi_auto_detect_answers_on_127_0_0_1() -> None:
                 async with asyncio.timeout(0.3):
                     await loop.sock_recvfrom(udp, 256)
         assert responder.answered == 2
+
+
+def stellarium_reads_ra(buffer: bytes) -> tuple[float, bytes]:
+    """Stellarium's Lx200CommandGetRa: skip one leading '#', then HH:MM:SS# exactly."""
+    if buffer[:1] == b"#":
+        buffer = buffer[1:]
+    text, rest = buffer[:9], buffer[9:]
+    assert text[2:3] == b":"
+    assert text[5:6] == b":"
+    assert text[8:9] == b"#"
+    return int(text[:2]) + int(text[3:5]) / 60 + int(text[6:8]) / 3600, rest
+
+
+def stellarium_reads_dec(buffer: bytes) -> tuple[float, bytes]:
+    """Stellarium's Lx200CommandGetDec: sign, DD, '*', MM, ':', SS, '#'."""
+    if buffer[:1] == b"#":
+        buffer = buffer[1:]
+    text, rest = buffer[:10], buffer[10:]
+    assert text[:1] in (b"+", b"-")
+    assert text[3:4] == b"*"
+    assert text[6:7] == b":"
+    assert text[9:10] == b"#"
+    value = int(text[1:3]) + int(text[4:6]) / 60 + int(text[7:9]) / 3600
+    return (-value if text[:1] == b"-" else value), rest
+
+
+async def test_a_stellarium_shaped_session() -> None:
+    """The bytes Stellarium's direct LX200 client writes, read back the way it reads them."""
+    mount = simulated_mount()
+    async with serving(mount) as (_, client):
+        await client.send(b"#:GR#")
+        await client.send(b"#:GD#")
+        async with asyncio.timeout(5):
+            buffer = await client.reader.readuntil(b"#") + await client.reader.readuntil(b"#")
+        ra, buffer = stellarium_reads_ra(buffer)
+        dec, buffer = stellarium_reads_dec(buffer)
+        assert buffer == b""
+        assert separation((ra, dec), jnow_of(mount)) < TOLERANCE_DEG
+        # goto: no space after the code, Stellarium's own digits
+        target = jnow_up_in_the_south(mount, 50.0)
+        await client.set_target(*target)
+        assert await client.char(b":MS#") == b"0"
+        await mount.wait_for(lambda s: not s.slewing, timeout_s=15)
+        # sync: Stellarium takes the first byte as the status, the '#' is skipped later
+        assert await client.char(b":CM#") == b"0"
+        await client.send(b"#:GR#")
+        async with asyncio.timeout(5):
+            buffer = await client.reader.readuntil(b"#")
+            buffer += await client.reader.readuntil(b"#")
+        ra, buffer = stellarium_reads_ra(buffer)
+        assert buffer == b""
+        assert abs(ra - target[0]) < 0.001
+        await client.send(b"#:Q#")
+        assert await client.nothing_more()
