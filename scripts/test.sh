@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # Debian packages used by tests that talk to real third-party programs.
-debian_packages=(socat indi-bin chromium)
+debian_packages=(socat indi-bin chromium wrk)
 missing=()
 for pkg in "${debian_packages[@]}"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
