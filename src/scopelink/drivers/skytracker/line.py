@@ -22,6 +22,7 @@ from scopelink.protocol.skytracker import (
     NEED_DATA,
     BadReply,
     BusAnswer,
+    BusState,
     CommanderCommand,
     ReleaseBus,
     Reply,
@@ -65,7 +66,16 @@ class BadReplyError(DeviceError):
 
 
 class BusRefusedError(DeviceError):
-    """The Sky Tracker would not lend the Sky Commander bus within the retry schedule."""
+    """The Sky Tracker would not lend the Sky Commander bus within the retry schedule.
+
+    ``refused`` counts NUL answers (a GOTO is running), ``unanswered`` requests that got no
+    good answer in time.
+    """
+
+    def __init__(self, message: str, *, refused: int, unanswered: int) -> None:
+        super().__init__(message)
+        self.refused = refused
+        self.unanswered = unanswered
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,9 +146,12 @@ class SkyTrackerLine:
         """
         delays = self.options.bus_retry_delays_s if retry_delays_s is None else retry_delays_s
         refused = unanswered = 0
-        for attempt in range(len(delays) + 1):
+        retried_commands = False
+        attempt = 0
+        while attempt <= len(delays):
             if attempt:
                 await asyncio.sleep(delays[attempt - 1])
+            attempt += 1
             async with self.scheduler.turn(priority):
                 answer = await self._request_bus()
                 if answer is None:
@@ -150,6 +163,14 @@ class SkyTrackerLine:
                     continue
                 try:
                     return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
+                except (ReplyTimeoutError, BadReplyError) as error:
+                    # Loading an object, realigning on it and reading the position can all be
+                    # repeated: one more try (the resync has ended any partial line).
+                    if retried_commands:
+                        raise
+                    retried_commands = True
+                    attempt -= 1
+                    logger.info("Sky Commander exchange failed, trying once more: %s", error)
                 finally:
                     await self._release_bus()
         waited = sum(delays)
@@ -166,7 +187,9 @@ class SkyTrackerLine:
             )
         raise BusRefusedError(
             f"the Sky Tracker on {self.link.name} did not lend the Sky Commander bus for "
-            f"{what!r} in {attempt + 1} request(s) over {waited:.2f} s: {cause}"
+            f"{what!r} in {attempt + 1} request(s) over {waited:.2f} s: {cause}",
+            refused=refused,
+            unanswered=unanswered,
         )
 
     async def _request_bus(self) -> bool | None:
@@ -211,6 +234,8 @@ class SkyTrackerLine:
                 f"{self.link.name}: is the Sky Tracker on, at 9600 baud, and the cable plugged in?"
             ) from None
         except LinkError as error:
+            self._client.abandon_reply()
+            self._interrupted = True
             raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
         except asyncio.CancelledError:
             # Cancelled mid-exchange (e.g. the poller stopped): the reply may still come, so the
@@ -246,9 +271,12 @@ class SkyTrackerLine:
     async def resync(self) -> None:
         """Release the bus (in case), drain late bytes until quiet, start a fresh codec."""
         self.resyncs += 1
+        # Inside a grant, CR first ends any partial 'L' line the Sky Commander holds (lost bytes
+        # on the unbuffered port); without one it asks for a position, drained below.
+        held = self._client.bus is BusState.HELD
         self._client = TrackerClient()
         try:
-            await self.link.write(ReleaseBus().encode())
+            await self.link.write(b"\rq" if held else ReleaseBus().encode())
             self.commands_sent += 1
             discarded = await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
         except LinkError as error:

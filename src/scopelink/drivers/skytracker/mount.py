@@ -298,6 +298,8 @@ class SkyTrackerMount(Mount):
         self._cancel_pulses()
         self._held.clear()
         try:
+            if line.link.closed:
+                raise NotConnectedError(f"the link {line.link.name} is closed")
             commands: list[TrackerCommand] = [ReleaseDirections()]
             if self._mode is TrackerMode.GOTO:
                 commands.append(SelectMode(TrackerMode.UTILITY))
@@ -362,10 +364,11 @@ class SkyTrackerMount(Mount):
         try:
             self._note_status(await line.tracker(ReadStatus(), Priority.POLL))
             if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
-                with contextlib.suppress(BusRefusedError):  # a GOTO began since the status
-                    await self._read_position(line, Priority.POLL, retry=False)
+                await self._poll_position(line)
         except (DeviceError, NotConnectedError) as error:
             self._problems = (str(error),)
+            if line.link.closed:  # the link is gone: so is the connection
+                self._line = None
             self._publish_now()
             raise
         self._problems = ()
@@ -374,6 +377,19 @@ class SkyTrackerMount(Mount):
         self._poll_s = (state.read_at - started).total_seconds()
         await self._guard_horizon(state)
         return self.state
+
+    async def _poll_position(self, line: SkyTrackerLine) -> None:
+        """The position for a poll: one immediate retry after a garbled or missing grant; a
+        refusal means a GOTO began since the status read (the position is then kept)."""
+        try:
+            (reply,) = await line.commander([ReadPosition()], Priority.POLL, retry_delays_s=(0.0,))
+        except BusRefusedError as error:
+            if error.unanswered:
+                raise
+            self._mode = TrackerMode.GOTO
+            return
+        assert isinstance(reply, PositionReply)
+        self._position = _Position(reply.ra_hours, reply.dec_degrees, self.now())
 
     async def read_position(self) -> tuple[float, float]:
         """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
