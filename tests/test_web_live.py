@@ -129,7 +129,7 @@ async def test_traffic_between_the_driver_and_the_emulator_is_decoded_live() -> 
                 http.ws_connect("/ws") as ws,
             ):
                 assert dashboard.traffic is not None
-                assert dashboard.traffic.protocol is Protocol.SYNSCAN
+                assert dashboard.traffic.protocol_for(f"tcp {host}:{port}") is Protocol.SYNSCAN
                 await receive(ws)
                 pc_meanings: list[str] = []
                 device_meanings: list[str] = []
@@ -210,3 +210,17 @@ async def test_a_site_change_reaches_every_open_page() -> None:
         sky = {obj["name"]: obj for obj in update.get("sky") or []}
         assert sky, "the chart's objects come with the same update"
         assert sky["Acrux"]["alt"] > 0  # the Southern Cross is up from Siding Spring
+
+
+def test_a_chooser_decodes_each_link_as_its_own_protocol_or_not_at_all() -> None:
+    def chooser(link: str) -> Protocol | None:
+        return Protocol.SYNSCAN if link.endswith(":11880") else None
+
+    monitor = TrafficMonitor(chooser)
+    with monitor.attached():
+        trace_transfer("-->", "tcp 127.0.0.1:11880", b"V")
+        trace_transfer("-->", "tcp 127.0.0.1:4030", b"#:GR#")
+    synscan, lx200 = monitor.since(0)
+    assert synscan.meanings == (("command", "get hand control version"),)
+    assert lx200.meanings == ()
+    assert lx200.data == b"#:GR#"

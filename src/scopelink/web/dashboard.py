@@ -22,7 +22,7 @@ from scopelink.decode import Protocol
 from scopelink.mount import Mount
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
-from scopelink.web.traffic import DEFAULT_CAPACITY, TrafficMonitor
+from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
 
 __all__ = ["Dashboard", "static_dir"]
 
@@ -44,10 +44,12 @@ def static_dir() -> Path:
     return Path(str(resources.files("scopelink.web") / "static"))
 
 
-def _trace_protocol(mount: Mount, trace: bool | Protocol) -> Protocol | None:
+def _trace_protocol(
+    mount: Mount, trace: bool | Protocol | ProtocolChooser
+) -> Protocol | ProtocolChooser | None:
     if trace is False:
         return None
-    if isinstance(trace, Protocol):
+    if trace is not True:
         return trace
     try:
         return Protocol(mount.identity.protocol)
@@ -79,7 +81,9 @@ class Dashboard:
 
     ``trace`` shows the live byte traffic with its decoded meaning: ``True`` decodes it as the
     mount's protocol (SynScan for the simulator, whose traffic is that of the servers in front of
-    it), a :class:`~scopelink.decode.Protocol` forces one, ``False`` hides the panel. The mount is
+    it), a :class:`~scopelink.decode.Protocol` forces one, a function of the link's trace name
+    chooses per link (``None``: show that link's bytes undecoded, e.g. an LX200 server's), and
+    ``False`` hides the panel. The mount is
     used as it is: connect it before, disconnect it after.
     """
 
@@ -89,7 +93,7 @@ class Dashboard:
         host: str = "127.0.0.1",
         port: int = 8080,
         *,
-        trace: bool | Protocol = True,
+        trace: bool | Protocol | ProtocolChooser = True,
         update_interval_s: float = 0.25,
         traffic_lines: int = DEFAULT_CAPACITY,
     ) -> None:

@@ -17,7 +17,7 @@ import re
 import threading
 import time
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -27,7 +27,7 @@ from scopelink.decode.skytracker_session import SkyTrackerSession
 from scopelink.decode.synscan_session import SynScanSession
 from scopelink.links.trace import escape_text, trace_logger
 
-__all__ = ["TrafficLine", "TrafficMonitor", "parse_trace_line"]
+__all__ = ["ProtocolChooser", "TrafficLine", "TrafficMonitor", "parse_trace_line"]
 
 DEFAULT_CAPACITY = 200
 
@@ -80,13 +80,19 @@ def _new_session(protocol: Protocol) -> Session:
     return SkyTrackerSession(behind_bus=protocol is Protocol.SKYTRACKER)
 
 
+ProtocolChooser = Callable[[str], Protocol | None]
+"""Which protocol a link (by its trace name) speaks; None: show its bytes undecoded."""
+
+
 class _LinkDecoder:
-    def __init__(self, protocol: Protocol) -> None:
-        self._session = _new_session(protocol)
+    def __init__(self, protocol: Protocol | None) -> None:
+        self._session = None if protocol is None else _new_session(protocol)
         self._offset = 0
 
     def feed(self, sender: Direction, data: bytes) -> list[Annotation]:
         session = self._session
+        if session is None:
+            return []
         for byte in data:
             if sender is Direction.PC:
                 session.from_pc(byte, self._offset)
@@ -106,9 +112,13 @@ class TrafficMonitor(logging.Handler):
     to the root logger, so the console is not flooded; both settings are restored on exit.
     """
 
-    def __init__(self, protocol: Protocol, capacity: int = DEFAULT_CAPACITY) -> None:
+    def __init__(
+        self, protocol: Protocol | ProtocolChooser, capacity: int = DEFAULT_CAPACITY
+    ) -> None:
         super().__init__(logging.DEBUG)
-        self.protocol = protocol
+        self.protocol_for: ProtocolChooser = (
+            (lambda _link: protocol) if isinstance(protocol, Protocol) else protocol
+        )
         self._lines: deque[TrafficLine] = deque(maxlen=capacity)
         self._lines_lock = threading.Lock()
         self._decoders: dict[str, _LinkDecoder] = {}
@@ -128,7 +138,7 @@ class TrafficMonitor(logging.Handler):
         sender = Direction.DEVICE if sent_by_us == we_are_device else Direction.PC
         decoder = self._decoders.get(link)
         if decoder is None:
-            decoder = self._decoders[link] = _LinkDecoder(self.protocol)
+            decoder = self._decoders[link] = _LinkDecoder(self.protocol_for(link))
         try:
             annotations = decoder.feed(sender, data)
         except Exception:  # the decoder never raises by contract; keep the line if it does
