@@ -1,0 +1,209 @@
+"""Sky Tracker driver benchmarks: position polls per second against the 9600-baud wire limit, and
+CPU per command over an in-memory link, each beside a bare codec client measured in the same run.
+
+Run ``.venv/bin/python -m bench.drivers_skytracker`` (about half a minute) or with ``--quick`` (a
+few seconds, what the smoke test runs). See ``docs/benchmarks.md`` and
+``docs/drivers-skytracker.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import time
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from tempfile import TemporaryDirectory
+
+from scopelink.astro import Site
+from scopelink.drivers.skytracker import SkyTrackerMount
+from scopelink.links import Link, paced
+from scopelink.mount import Priority
+from scopelink.protocol.skytracker import (
+    NEED_DATA,
+    PositionReply,
+    ReadPosition,
+    ReadStatus,
+    ReleaseBus,
+    Reply,
+    RequestBus,
+    StatusReply,
+    TrackerClient,
+    TrackerCommand,
+)
+from scopelink.protocol.skytracker.commander_messages import CommanderCommand
+from scopelink.servers.skytracker import SkyTrackerEmulator
+from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
+
+SITE = Site(48.0, 11.0, pressure_hpa=0.0)
+START = datetime(2026, 1, 1, 20, 0, tzinfo=UTC)
+BAUD = 9600
+PC_BITS = 11
+"""The PC sends 8N2 (the Sky Tracker's unbuffered port needs two stop bits)."""
+BOX_BITS = 10
+"""The box answers 8N1."""
+POSITION_POLL_BITS = 3 * PC_BITS + (1 + 16) * BOX_BITS
+"""``Q`` ``A`` ``\\r`` + 16-byte position + ``q``: 203 bits, 21.1 ms."""
+REFRESH_BITS = POSITION_POLL_BITS + PC_BITS + BOX_BITS
+"""A driver refresh adds ``R`` and its status byte: 224 bits, 23.3 ms."""
+
+
+@dataclass(frozen=True, slots=True)
+class Sizes:
+    polls: int
+    commands: int
+
+
+FULL = Sizes(polls=200, commands=2000)
+QUICK = Sizes(polls=15, commands=100)
+
+
+def new_sim() -> SimulatedMount:
+    return SimulatedMount(SKY_TRACKER, site=SITE, clock=SimClock.accelerated(1.0, START))
+
+
+class BareClient:
+    """The peer: our codec on the link and nothing else (no scheduler, timeouts or astronomy)."""
+
+    def __init__(self, link: Link) -> None:
+        self.link = link
+        self.codec = TrackerClient()
+
+    async def ask(self, command: TrackerCommand | CommanderCommand) -> Reply | None:
+        await self.link.write(self.codec.send(command))
+        if command.reply is None:
+            return None
+        while (event := self.codec.next_event()) is NEED_DATA:
+            self.codec.receive_data(await self.link.read())
+        if not isinstance(event, Reply):
+            raise RuntimeError(f"unexpected reply to {command}: {event}")
+        return event
+
+    async def position(self) -> None:
+        await self.ask(RequestBus())
+        reply = await self.ask(ReadPosition())
+        await self.ask(ReleaseBus())
+        assert isinstance(reply, PositionReply)
+
+    async def status(self) -> None:
+        assert isinstance(await self.ask(ReadStatus()), StatusReply)
+
+
+async def rate_per_s(count: int, action: Callable[[], Awaitable[object]]) -> float:
+    started = time.perf_counter()
+    for _ in range(count):
+        await action()
+    return count / (time.perf_counter() - started)
+
+
+async def cpu_us_per_call(count: int, action: Callable[[], Awaitable[object]]) -> float:
+    for _ in range(10):  # warm up
+        await action()
+    started = time.process_time()
+    for _ in range(count):
+        await action()
+    return (time.process_time() - started) / count * 1e6
+
+
+@dataclass(frozen=True, slots=True)
+class Row:
+    what: str
+    driver: float
+    peer: float
+    limit: float | None = None
+
+
+async def measure(sizes: Sizes, data_dir: Path, *, pace: bool) -> list[Row]:
+    """Driver and bare client on one emulator over a memory link: paced both ways (the wire) or
+    not at all (CPU)."""
+    sim = new_sim()
+    async with SkyTrackerEmulator(sim, data_dir, pace=pace) as emulator:
+        driver_link = await emulator.on_memory()
+        peer_emulator = SkyTrackerEmulator(sim, data_dir, pace=pace)
+        async with peer_emulator:
+            peer_link = await peer_emulator.on_memory()
+            if pace:
+                driver_link = paced(driver_link, BAUD, PC_BITS)
+                peer_link = paced(peer_link, BAUD, PC_BITS)
+            link = driver_link
+
+            async def factory() -> Link:
+                return link
+
+            mount = SkyTrackerMount(factory, site=SITE, clock=sim.clock.now, name="memory")
+            await mount.connect()
+            line = mount.line
+            peer = BareClient(peer_link)
+
+            async def driver_position() -> None:
+                await line.commander([ReadPosition()], Priority.POLL, retry_delays_s=())
+
+            async def driver_status() -> None:
+                await line.tracker(ReadStatus(), Priority.POLL)
+
+            measure_one = rate_per_s if pace else cpu_us_per_call
+            count = sizes.polls if pace else sizes.commands
+            rows = [
+                Row(
+                    "position poll (Q \\r q)",
+                    await measure_one(count, driver_position),
+                    await measure_one(count, peer.position),
+                    BAUD / POSITION_POLL_BITS if pace else None,
+                ),
+                Row(
+                    "refresh (R + position)",
+                    await measure_one(count, mount.refresh),
+                    await measure_one(count, lambda: _both(peer)),
+                    BAUD / REFRESH_BITS if pace else None,
+                ),
+                Row(
+                    "status (R)",
+                    await measure_one(count, driver_status),
+                    await measure_one(count, peer.status),
+                    BAUD / (PC_BITS + BOX_BITS) if pace else None,
+                ),
+            ]
+            await mount.disconnect()
+    return rows
+
+
+async def _both(peer: BareClient) -> None:
+    await peer.status()
+    await peer.position()
+
+
+def print_wire(rows: list[Row]) -> None:
+    print("9600-baud wire (PC 8N2 paced, box 8N1)  driver/s    bare/s    limit/s   driver %limit")
+    for row in rows:
+        assert row.limit is not None
+        print(
+            f"{row.what:<38} {row.driver:8.1f} {row.peer:9.1f} {row.limit:10.1f}"
+            f" {100 * row.driver / row.limit:14.1f}%"
+        )
+
+
+def print_cpu(rows: list[Row]) -> None:
+    print("CPU per command, memory link, unpaced   driver µs   bare µs   driver/bare")
+    print("(each figure includes the emulator, which runs in the same process)")
+    for row in rows:
+        print(f"{row.what:<38} {row.driver:10.0f} {row.peer:9.0f} {row.driver / row.peer:12.2f}x")
+
+
+async def main_async(sizes: Sizes) -> None:
+    with TemporaryDirectory() as data_dir:
+        print_wire(await measure(sizes, Path(data_dir), pace=True))
+        print()
+        print_cpu(await measure(sizes, Path(data_dir), pace=False))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small counts (smoke test)")
+    arguments = parser.parse_args()
+    asyncio.run(main_async(QUICK if arguments.quick else FULL))
+
+
+if __name__ == "__main__":
+    main()
