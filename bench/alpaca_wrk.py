@@ -306,7 +306,8 @@ async def main_async(seconds: float, peer_executable: str | None, rounds: int, q
             wire_limit = 9600 / POLL_BITS
             wire_note = (
                 f"polls/s over the 9600-baud limit ({wire_limit:.1f}/s): "
-                f"{idle_polls_per_s / wire_limit:.2f} idle, {polls_per_s / wire_limit:.2f} under wrk"
+                f"{idle_polls_per_s / wire_limit:.2f} idle, "
+                f"{polls_per_s / wire_limit:.2f} under wrk"
             )
     ours = _best(ours_runs)
     peer = _best(peer_runs) if peer_runs else None
