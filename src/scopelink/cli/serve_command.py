@@ -1,7 +1,10 @@
 """``scopelink serve``: a mount, and the servers that put it into the software astronomers use.
 
-With no device given, the mount is the built-in simulator, so the command runs on a bare machine.
-Servers listen on 127.0.0.1 unless ``--host`` says otherwise.
+With no device given (flag or config file), the mount is the built-in simulator, so the command
+runs on a bare machine. Every server listens on 127.0.0.1 unless ``--host`` (or the config's
+``servers.host``) says otherwise; exposing the mount beyond this machine is logged as a warning.
+Ports come from the config file's ``[servers]`` table, flags override it; 0 picks a free port
+and -1 turns a server off.
 """
 
 from __future__ import annotations
@@ -10,30 +13,51 @@ import argparse
 import asyncio
 import ipaddress
 import logging
+from contextlib import AsyncExitStack
+from dataclasses import dataclass
+from pathlib import Path
 
+from scopelink.cli.config import DEFAULT_SERVER_PORTS
+from scopelink.cli.devices import DeviceError, DeviceSpec, open_mount, parse_device
 from scopelink.cli.errors import CommandError
-from scopelink.cli.options import (
-    add_site_and_clock_arguments,
-    parse_site,
-    positive_rate,
-    until_stopped,
+from scopelink.cli.mount_session import (
+    DeviceCommand,
+    add_device_arguments,
+    mount_error,
+    read_config,
 )
+from scopelink.cli.options import parse_site, positive_rate, until_stopped
 from scopelink.links import LinkError
+from scopelink.links.trace import trace_logger
+from scopelink.mount import AlignmentMode, Mount, MountError
+from scopelink.protocol.lx200 import SKYFI_PORT
+from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
+from scopelink.servers.lx200 import LX200Server
+from scopelink.servers.stellarium import Equinox, StellariumServer
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
-from scopelink.sim import PRESETS, SimClock, SimulatedMount
+from scopelink.sim import PRESETS, SimulatedMount
+from scopelink.web import Dashboard
 
-__all__ = ["DEFAULT_SYNSCAN_PORT", "register", "run"]
+__all__ = ["DEFAULT_DASHBOARD_PORT", "DEFAULT_SYNSCAN_PORT", "register", "run"]
 
-DEFAULT_SYNSCAN_PORT = 11880
+DEFAULT_SYNSCAN_PORT = DEFAULT_SERVER_PORTS["synscan"]
 """Sky-Watcher's own SynScan network port number, so users recognise it."""
+DEFAULT_DASHBOARD_PORT = 8080
 
 _log = logging.getLogger(__name__)
 
 _EXAMPLES = """\
 examples:
-  scopelink serve                          simulated EQ6; SynScan on 127.0.0.1:11880
-  scopelink serve --mount az-gti --site 40.4,-3.7
-  scopelink serve --synscan-pty /tmp/synscan   also a serial-like device for INDI or Stellarium
+  scopelink serve                          simulated EQ6: Alpaca, LX200, Stellarium, SynScan
+                                           and the dashboard on 127.0.0.1
+  scopelink serve --device synscan:/dev/ttyUSB0 --site 40.4,-3.7
+  scopelink serve --device skytracker:/dev/ttyUSB0 --lx200-pty /tmp/lx200
+  scopelink serve --device sim:az-gti --alpaca-port 0 --synscan-port -1
+  scopelink serve --host 0.0.0.0          reachable from the LAN (logged as a warning)
+
+ports: 0 picks a free one, -1 turns that server off; defaults come from the config file
+('scopelink config path'), else Alpaca 11111 (+ discovery 32227), LX200 4030 (+ SkyFi 4031),
+Stellarium 10001, SynScan 11880, dashboard 8080.
 """
 
 
@@ -42,51 +66,133 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "serve",
         help="run a mount with its servers (the simulated mount when no device is given)",
         description=(
-            "Run a mount and the servers that let astronomy software drive it, until Ctrl-C. "
+            "Run a mount and the servers that let astronomy software drive it (ASCOM Alpaca, "
+            "LX200, Stellarium, SynScan, and the web dashboard), until Ctrl-C. "
             "It prints what listens where."
         ),
         epilog=_EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument(
-        "--host",
-        default="127.0.0.1",
-        help="address the servers listen on (default 127.0.0.1, this machine only; "
-        "0.0.0.0 exposes the mount to the network)",
-    )
+    add_device_arguments(parser)
     parser.add_argument(
         "--mount",
-        default="eq6",
-        choices=sorted(
-            name for name, model in PRESETS.items() if model.synscan_model_code is not None
-        ),
-        help="simulated mount preset (default eq6)",
+        metavar="PRESET",
+        choices=sorted(PRESETS),
+        help="shorthand for --device sim:PRESET (simulated mount preset, e.g. eq6, az-gti)",
     )
-    parser.add_argument(
-        "--synscan-port",
-        type=int,
-        default=DEFAULT_SYNSCAN_PORT,
-        metavar="PORT",
-        help=f"TCP port of the SynScan server (default {DEFAULT_SYNSCAN_PORT}; 0 picks a free "
-        "one; -1 turns it off)",
+    net = parser.add_argument_group("servers")
+    net.add_argument(
+        "--host",
+        help="address the servers listen on (default: the config's, else 127.0.0.1, this "
+        "machine only; 0.0.0.0 exposes the mount to the network)",
     )
-    parser.add_argument(
+    _port(net, "--alpaca-port", "ASCOM Alpaca HTTP (NINA, SharpCap, KStars via INDI Alpaca)")
+    _port(net, "--discovery-port", "Alpaca UDP discovery", DISCOVERY_PORT)
+    _port(net, "--lx200-port", "LX200 over TCP (SkySafari, Stellarium, INDI LX200)")
+    _port(net, "--skyfi-port", "SkySafari's SkyFi UDP auto-detect", SKYFI_PORT)
+    _port(net, "--stellarium-port", "Stellarium's binary telescope protocol")
+    _port(net, "--synscan-port", "the SynScan protocol over TCP (SkySafari, INDI, Stellarium)")
+    _port(net, "--dashboard-port", "the web dashboard", DEFAULT_DASHBOARD_PORT)
+    net.add_argument(
+        "--lx200-pty",
+        nargs="?",
+        const="",
+        metavar="SYMLINK",
+        help="also serve LX200 on a pseudo-terminal, optionally reachable as SYMLINK",
+    )
+    net.add_argument(
         "--synscan-pty",
         nargs="?",
         const="",
         metavar="SYMLINK",
         help="also serve SynScan on a pseudo-terminal, optionally reachable as SYMLINK",
     )
-    add_site_and_clock_arguments(parser)
+    net.add_argument(
+        "--stellarium-frame",
+        choices=[frame.value.lower() for frame in Equinox],
+        default="j2000",
+        help="coordinates Stellarium's telescope is configured for (default j2000)",
+    )
+    net.add_argument(
+        "--state-dir",
+        type=Path,
+        metavar="DIR",
+        help="where the Alpaca UniqueID is kept (default $XDG_STATE_HOME/scopelink)",
+    )
     parser.set_defaults(run=run)
 
 
+def _port(group: argparse._ArgumentGroup, flag: str, what: str, default: int | None = None) -> None:
+    shown = f"default {default}" if default is not None else "default from the config file"
+    group.add_argument(flag, type=int, metavar="PORT", help=f"{what} ({shown}; -1 off)")
+
+
+@dataclass(frozen=True, slots=True)
+class ServePlan:
+    """Every server's port after merging flags over the config file; ``None`` is off."""
+
+    host: str
+    alpaca: int | None
+    discovery: int | None
+    lx200: int | None
+    skyfi: int | None
+    stellarium: int | None
+    synscan: int | None
+    dashboard: int | None
+    lx200_pty: str | None
+    synscan_pty: str | None
+
+    def runs_nothing(self) -> bool:
+        listeners = (self.alpaca, self.lx200, self.stellarium, self.synscan, self.dashboard)
+        return all(port is None for port in listeners) and (
+            self.lx200_pty is None and self.synscan_pty is None
+        )
+
+
+def _merge_port(flag: int | None, configured: int | None, name: str) -> int | None:
+    if flag is None:
+        return configured
+    if not -1 <= flag <= 65535:
+        raise CommandError(f"--{name}-port {flag} is not a port", "use 0-65535, or -1 (off)")
+    return None if flag < 0 else flag
+
+
+def plan_from(args: argparse.Namespace) -> tuple[DeviceCommand, ServePlan]:
+    config = read_config()
+    if args.mount and args.device:
+        raise CommandError("give --device or --mount, not both")
+    text = f"sim:{args.mount}" if args.mount else (args.device or config.device or "sim")
+    try:
+        device: DeviceSpec = parse_device(text)
+    except DeviceError as error:
+        raise CommandError(str(error), error.hint) from None
+    if args.timeout is not None and not args.timeout > 0:
+        raise CommandError(f"--timeout must be positive, not {args.timeout}")
+    site = parse_site(args.site) if args.site else config.site
+    command = DeviceCommand(device, site, config, positive_rate(args.clock_rate), args.timeout)
+    servers = config.servers
+    plan = ServePlan(
+        host=args.host or servers.host,
+        alpaca=_merge_port(args.alpaca_port, servers.alpaca, "alpaca"),
+        discovery=_merge_port(args.discovery_port, DISCOVERY_PORT, "discovery"),
+        lx200=_merge_port(args.lx200_port, servers.lx200, "lx200"),
+        skyfi=_merge_port(args.skyfi_port, SKYFI_PORT, "skyfi"),
+        stellarium=_merge_port(args.stellarium_port, servers.stellarium, "stellarium"),
+        synscan=_merge_port(args.synscan_port, servers.synscan, "synscan"),
+        dashboard=_merge_port(args.dashboard_port, DEFAULT_DASHBOARD_PORT, "dashboard"),
+        lx200_pty=args.lx200_pty,
+        synscan_pty=args.synscan_pty,
+    )
+    if plan.runs_nothing():
+        raise CommandError("no server to run", "leave at least one port on (not -1) or add a pty")
+    return command, plan
+
+
 def run(args: argparse.Namespace) -> int:
-    if not -1 <= args.synscan_port <= 65535:
-        raise CommandError(f"--synscan-port {args.synscan_port} is not a TCP port")
-    if args.synscan_port < 0 and args.synscan_pty is None:
-        raise CommandError("no server to run", "drop --synscan-port -1 or add --synscan-pty")
-    return asyncio.run(_serve(args))
+    command, plan = plan_from(args)
+    if args.trace:
+        trace_logger.setLevel(logging.DEBUG)
+    return asyncio.run(_serve(command, plan, args))
 
 
 def _exposes_beyond_this_machine(host: str) -> bool:
@@ -96,33 +202,111 @@ def _exposes_beyond_this_machine(host: str) -> bool:
         return host != "localhost"
 
 
-async def _serve(args: argparse.Namespace) -> int:
-    preset = PRESETS[args.mount]
-    site = parse_site(args.site)
-    clock = SimClock(rate=positive_rate(args.clock_rate))
-    mount = SimulatedMount(preset, site=site, clock=clock)
-    config = SynScanConfig(model=preset.synscan_model_code or 0)
-    # A network client is not a serial line: no 9600-baud pacing on the server side.
-    synscan = SynScanEmulator(mount, config, wire=None)
+def synscan_model_code(mount: Mount) -> int:
+    """The ``m`` code the SynScan server reports: the preset's for a simulated mount, else the
+    family clients expect for this geometry (EQ6 for equatorials, AZ-GTi for alt-az)."""
+    if isinstance(mount, SimulatedMount) and mount.model.synscan_model_code is not None:
+        return mount.model.synscan_model_code
+    if mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
+        return 165
+    return 0
+
+
+def _describe(mount: Mount) -> str:
+    if isinstance(mount, SimulatedMount):
+        return f"simulated {mount.model.name}"
+    identity = mount.identity
+    firmware = f" firmware {identity.firmware}" if identity.firmware else ""
+    return f"{identity.model}{firmware} on {identity.link or identity.protocol}"
+
+
+async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
     try:
-        async with until_stopped() as stop, synscan:
+        mount = await open_mount(
+            command.device,
+            command.site,
+            command.config.limits,
+            clock_rate=command.clock_rate,
+            timeout_s=command.timeout_s,
+        )
+    except DeviceError as error:
+        raise CommandError(str(error), error.hint) from None
+    if _exposes_beyond_this_machine(plan.host):
+        _log.warning("servers listen on %s: the mount can be driven from other machines", plan.host)
+    try:
+        async with until_stopped() as stop, AsyncExitStack() as stack:
+            site = mount.site
             print(
-                f"scopelink serve: simulated {preset.name} at "
+                f"scopelink serve: {_describe(mount)} at "
                 f"{site.latitude_deg:+.4f}°, {site.longitude_deg:+.4f}°",
                 flush=True,
             )
-            if args.synscan_port >= 0:
-                if _exposes_beyond_this_machine(args.host):
-                    _log.warning("SynScan server exposed beyond this machine on %s", args.host)
-                host, port = await synscan.on_tcp(args.host, args.synscan_port)
-                print(f"  SynScan    tcp {host}:{port}", flush=True)
-            if args.synscan_pty is not None:
-                path = await synscan.on_pty(args.synscan_pty or None)
-                print(f"  SynScan    pty {path}", flush=True)
+            # One poller for every front end: reads come from the state cache.
+            await stack.enter_async_context(mount.watching())
+            for line in await _start_servers(stack, mount, plan, args):
+                print(f"  {line}", flush=True)
             print("Ctrl-C stops.", flush=True)
             await stop.wait()
     except LinkError as error:
         raise CommandError(str(error), "is another program using that port?") from None
     except OSError as error:
-        raise CommandError(f"cannot listen on {args.host}: {error}") from None
+        raise CommandError(
+            f"cannot listen on {plan.host}: {error}",
+            "is another program using that port? -1 turns a server off, 0 picks a free port",
+        ) from None
+    except MountError as error:
+        raise mount_error(error) from None
+    finally:
+        try:
+            await mount.disconnect()
+        except (MountError, LinkError) as error:
+            _log.warning("while disconnecting: %s", error)
     return 0
+
+
+async def _start_servers(
+    stack: AsyncExitStack, mount: Mount, plan: ServePlan, args: argparse.Namespace
+) -> list[str]:
+    """Start every planned server; the lines saying what listens where."""
+    host = plan.host
+    lines: list[str] = []
+    if plan.alpaca is not None:
+        alpaca = AlpacaServer(
+            mount,
+            host=host,
+            port=plan.alpaca,
+            discovery_port=plan.discovery,
+            state_dir=args.state_dir,
+        )
+        await stack.enter_async_context(alpaca)
+        lines.append(f"Alpaca      http://{host}:{alpaca.port}/  (telescope/0)")
+        if alpaca.discovery_port is not None:
+            lines.append(f"Alpaca      discovery udp {host}:{alpaca.discovery_port}")
+    if plan.lx200 is not None or plan.lx200_pty is not None:
+        lx200 = await stack.enter_async_context(LX200Server(mount))
+        if plan.lx200 is not None:
+            bound_host, port = await lx200.on_tcp(host, plan.lx200)
+            lines.append(f"LX200       tcp {bound_host}:{port}")
+            if plan.skyfi is not None:
+                skyfi = await lx200.on_skyfi(host, plan.skyfi)
+                lines.append(f"LX200       SkyFi auto-detect udp {host}:{skyfi.port}")
+        if plan.lx200_pty is not None:
+            lines.append(f"LX200       pty {await lx200.on_pty(plan.lx200_pty or None)}")
+    if plan.stellarium is not None:
+        frame = Equinox.JNOW if args.stellarium_frame == "jnow" else Equinox.J2000
+        stellarium = StellariumServer(mount, host, plan.stellarium, frame=frame)
+        await stack.enter_async_context(stellarium)
+        lines.append(f"Stellarium  tcp {host}:{stellarium.port}  ({frame.value})")
+    if plan.synscan is not None or plan.synscan_pty is not None:
+        config = SynScanConfig(model=synscan_model_code(mount))
+        # A network client is not a serial line: no 9600-baud pacing on the server side.
+        synscan = await stack.enter_async_context(SynScanEmulator(mount, config, wire=None))
+        if plan.synscan is not None:
+            bound_host, port = await synscan.on_tcp(host, plan.synscan)
+            lines.append(f"SynScan     tcp {bound_host}:{port}")
+        if plan.synscan_pty is not None:
+            lines.append(f"SynScan     pty {await synscan.on_pty(plan.synscan_pty or None)}")
+    if plan.dashboard is not None:
+        dashboard = await stack.enter_async_context(Dashboard(mount, host, plan.dashboard))
+        lines.append(f"Dashboard   {dashboard.url}")
+    return lines

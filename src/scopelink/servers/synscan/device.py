@@ -242,7 +242,10 @@ class SynScanHandControl:
         await self.mount.goto_equatorial(*_fold_over_pole(ra_hours, dec_deg, 12.0))
         self._goto_running, self._goto_sticky = True, False
         self._goto_sent_at = self.mount.now()
-        if self.mount.state.tracking is TrackingMode.OFF:
+        state = self.mount.state
+        # A mount that tracks after a goto by itself (the simulator, a Sky Tracker's GOTO)
+        # reports slewing now; changing its tracking mid-goto could abort the goto.
+        if state.tracking is TrackingMode.OFF and not state.slewing:
             await self.mount.set_tracking(self._sky_tracking_mode())
 
     async def _goto_az_alt(self, az_deg: float, alt_deg: float) -> None:
