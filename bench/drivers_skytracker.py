@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import statistics
 import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
@@ -56,7 +57,7 @@ class Sizes:
     commands: int
 
 
-FULL = Sizes(polls=200, commands=2000)
+FULL = Sizes(polls=250, commands=2500)
 QUICK = Sizes(polls=15, commands=100)
 
 
@@ -107,6 +108,26 @@ async def cpu_us_per_call(count: int, action: Callable[[], Awaitable[object]]) -
     return (time.process_time() - started) / count * 1e6
 
 
+BLOCKS = 5
+"""Driver and peer run in alternating blocks; each figure is the median block, so a burst of
+load from other processes hits both sides alike and skews neither."""
+
+
+async def compare(
+    count: int,
+    driver: Callable[[], Awaitable[object]],
+    peer: Callable[[], Awaitable[object]],
+    measure_one: Callable[[int, Callable[[], Awaitable[object]]], Awaitable[float]],
+) -> tuple[float, float]:
+    block = max(1, count // BLOCKS)
+    driver_figures: list[float] = []
+    peer_figures: list[float] = []
+    for _ in range(BLOCKS):
+        driver_figures.append(await measure_one(block, driver))
+        peer_figures.append(await measure_one(block, peer))
+    return statistics.median(driver_figures), statistics.median(peer_figures)
+
+
 @dataclass(frozen=True, slots=True)
 class Row:
     what: str
@@ -145,33 +166,24 @@ async def measure(sizes: Sizes, data_dir: Path, *, pace: bool) -> list[Row]:
 
             measure_one = rate_per_s if pace else cpu_us_per_call
             count = sizes.polls if pace else sizes.commands
-            rows = [
-                Row(
-                    "position poll (Q \\r q)",
-                    await measure_one(count, driver_position),
-                    await measure_one(count, peer.position),
-                    BAUD / POSITION_POLL_BITS if pace else None,
-                ),
-                Row(
-                    "refresh (R + position)",
-                    await measure_one(count, mount.refresh),
-                    await measure_one(count, lambda: _both(peer)),
-                    BAUD / REFRESH_BITS if pace else None,
-                ),
-                Row(
-                    "status (R)",
-                    await measure_one(count, driver_status),
-                    await measure_one(count, peer.status),
-                    BAUD / (PC_BITS + BOX_BITS) if pace else None,
-                ),
-            ]
+
+            async def peer_refresh() -> None:
+                await peer.status()
+                await peer.position()
+
+            pairs = (
+                ("position poll (Q \\r q)", driver_position, peer.position, POSITION_POLL_BITS),
+                ("refresh (R + position)", mount.refresh, peer_refresh, REFRESH_BITS),
+                ("status (R)", driver_status, peer.status, PC_BITS + BOX_BITS),
+            )
+            rows = []
+            for what, driver_action, peer_action, bits in pairs:
+                driver_figure, peer_figure = await compare(
+                    count, driver_action, peer_action, measure_one
+                )
+                rows.append(Row(what, driver_figure, peer_figure, BAUD / bits if pace else None))
             await mount.disconnect()
     return rows
-
-
-async def _both(peer: BareClient) -> None:
-    await peer.status()
-    await peer.position()
 
 
 def print_wire(rows: list[Row]) -> None:
