@@ -13,6 +13,8 @@ the link itself sets.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import os
 import re
 import signal
@@ -47,6 +49,29 @@ def _timed(command: Sequence[str], env: dict[str, str]) -> tuple[float, str]:
 
 def _median(command: Sequence[str], env: dict[str, str], runs: int) -> float:
     return statistics.median(_timed(command, env)[0] for _ in range(runs))
+
+
+def _median_in_process(argv: list[str], env: dict[str, str], runs: int) -> float:
+    """``scopelink ARGV`` through :func:`main` in this (warm) process: the command's own cost."""
+    from scopelink.cli.main import main as scopelink_main
+
+    saved = os.environ.get("SCOPELINK_CONFIG")
+    os.environ["SCOPELINK_CONFIG"] = env["SCOPELINK_CONFIG"]
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            scopelink_main(argv)  # warm-up: first-use costs belong to start-up
+            times = []
+            for _ in range(runs):
+                started = time.perf_counter()
+                if scopelink_main(argv) != 0:
+                    raise RuntimeError(f"scopelink {' '.join(argv)} failed")
+                times.append(time.perf_counter() - started)
+    finally:
+        if saved is None:
+            del os.environ["SCOPELINK_CONFIG"]
+        else:
+            os.environ["SCOPELINK_CONFIG"] = saved
+    return statistics.median(times)
 
 
 @contextmanager
@@ -102,6 +127,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                     seconds,
                     f"{seconds / floor:.1f}x; wire floor {wire_s * 1000:.0f} ms "
                     f"({wire_bytes} bytes): {seconds / wire_s:.1f}x",
+                )
+            )
+            in_process = _median_in_process(["status", "--json", "--device", device], env, runs)
+            rows.append(
+                (
+                    "  the same in a warm process (no start-up)",
+                    in_process,
+                    f"wire floor {wire_s * 1000:.0f} ms: {in_process / wire_s:.1f}x",
                 )
             )
     print(f"median of {runs} run(s), wall clock")
