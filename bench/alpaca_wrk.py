@@ -47,9 +47,10 @@ PATH = "/api/v1/telescope/0/rightascension?ClientID=1&ClientTransactionID=1"
 PEER_VENV = Path.home() / ".cache" / "scopelink" / "alpaca-simulators-venv"
 GOAL_RATIO = 20.0
 GOAL_P99_MS = 10.0
-POLL_BITS = (3 + 19 + 3 + 3) * 10
-"""One SynScan driver poll of a German mount at 8N1: ``L`` (goto in progress, 1 + 2 bytes),
-``e`` (RA/Dec, 1 + 18), ``t`` (tracking mode, 1 + 2) and ``p`` (pier side, 1 + 2)."""
+POLL_BITS = (2 + 18 + 2 + 2) * 10
+"""The wire time of one SynScan driver poll of a German mount at 8N1, counted in the replies the
+emulator paces (the PC's 1-byte commands cross TCP at once): ``L`` (goto in progress, 2 bytes),
+``e`` (RA/Dec, 18), ``t`` (tracking mode, 2) and ``p`` (pier side, 2)."""
 
 
 @dataclass(frozen=True)
@@ -305,7 +306,7 @@ async def main_async(seconds: float, peer_executable: str | None, rounds: int, q
                 polls_per_s = (driver.poller.polls - polls_before) / (time.monotonic() - started)
             wire_limit = 9600 / POLL_BITS
             wire_note = (
-                f"polls/s over the 9600-baud limit ({wire_limit:.1f}/s): "
+                f"polls/s over the 9600-baud reply limit ({wire_limit:.1f}/s): "
                 f"{idle_polls_per_s / wire_limit:.2f} idle, "
                 f"{polls_per_s / wire_limit:.2f} under wrk"
             )
