@@ -3,12 +3,19 @@
 from __future__ import annotations
 
 import json
+import os
+import pty
+import select
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
 from scopelink.cli.main import main
-from tests.test_cli_support import degrees_in, scopelink
+from tests.test_cli_support import degrees_in, environment, scopelink
 
 GREENWICH_LATITUDE = 51.4779
 
@@ -50,7 +57,7 @@ def test_status_table_has_every_row(config: Path, capsys: pytest.CaptureFixture[
 
 def test_goto_altaz_arrives_and_reports_progress(config: Path) -> None:
     result = scopelink(
-        config, "goto", "--altaz", "40", "150", "--device", "sim", "--clock-rate", "20"
+        config, "goto", "--altaz", "40", "150", "--device", "sim", "--clock-rate", "50"
     )
     assert result.returncode == 0, result.stderr
     assert "slewing to Alt 40° Az 150°" in result.stdout
@@ -60,22 +67,24 @@ def test_goto_altaz_arrives_and_reports_progress(config: Path) -> None:
     assert "° to go" in result.stderr  # progress lines (no terminal: one a second)
 
 
-def test_goto_by_name_reaches_the_object(config: Path) -> None:
+def test_goto_by_name_reaches_the_object(config: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # Polaris is always up at Greenwich, so the test does not depend on the hour it runs.
-    result = scopelink(config, "goto", "Polaris", "--device", "sim", "--clock-rate", "30")
-    assert result.returncode == 0, result.stderr
-    assert "slewing to Polaris" in result.stdout
-    arrived = result.stdout.split("arrived:")[1]
-    assert degrees_in(arrived, "Dec") == pytest.approx(89.264, abs=0.01)
+    status, out, err = run_here(capsys, "goto", "Polaris", "--device", "sim", "--clock-rate", "30")
+    assert status == 0, err
+    assert "slewing to Polaris" in out
+    assert degrees_in(out.split("arrived:")[1], "Dec") == pytest.approx(89.264, abs=0.01)
 
 
-def test_goto_below_the_horizon_is_refused_with_one_line(config: Path) -> None:
-    result = scopelink(config, "goto", "--altaz", "-5", "100", "--device", "sim")
-    assert result.returncode == 1
-    assert "below the configured horizon" in result.stderr
-    assert "nothing was sent" in result.stderr
-    assert "Traceback" not in result.stderr
-    assert "hint:" in result.stderr
+def test_goto_below_the_horizon_is_refused_with_one_line(
+    config: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    status, _, err = run_here(capsys, "goto", "--altaz", "-5", "100", "--device", "sim")
+    assert status == 1
+    message, hint = err.strip().splitlines()
+    assert message.startswith("scopelink goto: target is at altitude -5.00°")
+    assert "below the configured horizon" in message
+    assert "nothing was sent" in message
+    assert hint.startswith("  hint: the horizon and limits are set in the config file")
 
 
 def test_goto_an_unknown_name_suggests(config: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -145,3 +154,45 @@ def test_info_describes_the_simulated_mount(
     assert report["model"] == "AZ-GTi"
     assert report["capabilities"]["alignment_mode"] == "altaz"
     assert "altaz" in report["capabilities"]["tracking_modes"]
+
+
+def test_on_a_terminal_goto_draws_a_progress_bar_and_ctrl_c_stops(config: Path) -> None:
+    """stdout and stderr on a real pseudo-terminal: rich draws the bar; SIGINT aborts."""
+    controller, terminal = pty.openpty()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "scopelink", "goto", "--altaz", "30", "250", "--device", "sim"],
+        stdin=subprocess.DEVNULL,
+        stdout=terminal,
+        stderr=terminal,
+        env=environment(config),
+    )
+    os.close(terminal)
+    seen = b""
+    try:
+        deadline = time.monotonic() + 30
+        while b"ETA" not in seen and time.monotonic() < deadline:
+            ready, _, _ = select.select([controller], [], [], 1.0)
+            if ready:
+                seen += os.read(controller, 4096)
+        assert b"ETA" in seen, seen
+        assert "° to go".encode() in seen
+        assert b"\x1b[" in seen  # drawn with terminal control sequences, not plain lines
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=20) == 130
+        while True:
+            ready, _, _ = select.select([controller], [], [], 1.0)
+            if not ready:
+                break
+            try:
+                chunk = os.read(controller, 4096)
+            except OSError:  # the terminal closed with the process
+                break
+            if not chunk:
+                break
+            seen += chunk
+        assert b"slew aborted" in seen
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        os.close(controller)
