@@ -22,7 +22,7 @@ from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import SimClock, SimulatedMount
 from scopelink.web import Dashboard
 from scopelink.web.traffic import TrafficMonitor, parse_trace_line
-from tests.test_web_support import HIGH_UP, SITE, START, served
+from tests.test_web_support import HIGH_UP, SITE, START, served, sim_mount
 
 
 def polling(mount: Mount) -> bool:
@@ -74,12 +74,14 @@ async def test_updates_flow_while_a_page_is_open_and_polling_stops_after() -> No
 
 
 async def test_a_goto_shows_in_the_live_state_until_arrival() -> None:
-    async with served(interval_s=0.1) as s, s.http.ws_connect("/ws") as ws:
+    # x3: this slew lasts a few simulated seconds, so that updates 10 times a second show it
+    # whatever the machine's load (at x30 it can end between two updates).
+    async with served(sim_mount(rate=3.0), interval_s=0.1) as s, s.http.ws_connect("/ws") as ws:
         await receive(ws)
         status, _ = await s.post("/api/goto", {"name": HIGH_UP})
         assert status == 200
         seen_slewing = False
-        async with asyncio.timeout(30):
+        async with asyncio.timeout(60):
             while True:
                 state = (await receive(ws))["state"]
                 seen_slewing |= state["slewing"]
