@@ -14,6 +14,7 @@ LINK is anything :func:`scopelink.links.open_link` opens: ``/dev/ttyUSB0``, ``CO
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from dataclasses import dataclass
 from typing import Final
@@ -146,14 +147,17 @@ async def open_mount(
     failures: list[str] = []
     for kind in ("synscan", "skytracker"):
         candidate = DeviceSpec(kind, parsed.target)
+        mount = create_mount(
+            candidate, site=site, limits=limits, timeout_s=timeout_s or AUTODETECT_TIMEOUT_S
+        )
         try:
-            mount = create_mount(
-                candidate, site=site, limits=limits, timeout_s=timeout_s or AUTODETECT_TIMEOUT_S
-            )
             await _connect(mount, candidate)
         except DeviceError as error:
             _log.debug("autodetect: not %s: %s", kind, error)
             failures.append(f"{kind}: {error}")
+            # A failed probe may leave its link open; the next kind needs the port to itself.
+            with contextlib.suppress(MountError, LinkError):
+                await mount.disconnect()
             continue
         return mount
     raise DeviceError(

@@ -154,6 +154,11 @@ async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) 
         return await body(mount)
     except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:
         raise mount_error(error) from None
+    except TimeoutError:
+        raise CommandError(
+            "the mount did not report the end of the command in time",
+            "'scopelink status' shows what it is doing; 'scopelink stop' stops it",
+        ) from None
     finally:
         try:
             await mount.disconnect()
