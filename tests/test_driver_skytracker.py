@@ -7,6 +7,7 @@ where the simulator says the scope points.
 from __future__ import annotations
 
 import asyncio
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -234,3 +235,19 @@ async def test_blocking_facade_over_the_driver(tmp_path: Path, transport: str) -
 
         landed = await asyncio.to_thread(script)
         assert separation_deg(landed, target) < POSITION_TOLERANCE_DEG
+
+
+async def test_abort_goes_before_waiting_polls(tmp_path: Path, transport: str) -> None:
+    """While the poller keeps the wire busy, a command takes the next turn (Priority.COMMAND)."""
+    async with rig(tmp_path, transport) as r:
+        await r.driver.goto_equatorial(*sky_at(r.sim, 60.0, 200.0))
+        async with r.driver.watching():
+            await r.driver.wait_for(lambda s: s.slewing, 5.0)
+            polls = r.driver.poller.polls
+            started = time.monotonic()
+            await r.driver.abort()
+            assert time.monotonic() - started < 1.0  # generous: an abort is ~3 bytes of wire
+            assert box_mode(r) is TrackerMode.UTILITY
+            state = await r.driver.wait_for(lambda s: not s.slewing, 5.0)
+            assert r.driver.poller.polls > polls
+        assert state.tracking is TrackingMode.OFF

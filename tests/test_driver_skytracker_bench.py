@@ -25,7 +25,7 @@ def test_quick_benchmark_prints_its_tables() -> None:
     lines = result.stdout.splitlines()
     wire = [line for line in lines if line.startswith("position poll") and line.endswith("%")]
     assert len(wire) == 1, result.stdout
-    driver, bare, limit = (float(field) for field in wire[0].split()[-4:-1])
+    driver, bare, limit = (float(field) for field in wire[0].split()[-5:-2])
     assert 0 < driver <= limit * 1.02  # the emulated line never beats the wire
     assert 0 < bare <= limit * 1.02
     assert any(line.startswith("status (R)") and line.endswith("x") for line in lines)

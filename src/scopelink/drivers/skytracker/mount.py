@@ -247,6 +247,9 @@ class SkyTrackerMount(Mount):
         link = await self._open_link()
         line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
         self._line = line
+        self._held.clear()
+        self._rest_mode = None
+        self._below_horizon_alarm = False
         try:
             if calibration is not None:
                 await self._write_calibration_first(line, calibration)
