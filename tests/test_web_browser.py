@@ -81,7 +81,8 @@ async def click_object(page: Page, name: str) -> None:
 
 
 async def test_goto_by_clicking_the_chart_watch_it_move_then_abort(browser: Browser) -> None:
-    async with served(sim_mount(rate=1.0), interval_s=0.1) as s, open_page(browser, s) as page:
+    # x2: the slew to Capella takes ~8 s, time enough to see it move and stop it on the way.
+    async with served(sim_mount(rate=2.0), interval_s=0.1) as s, open_page(browser, s) as page:
         await screenshot(page, "01-loaded")
         await click_object(page, HIGH_UP)
         await expect(page.locator("#selection-name")).to_have_text(HIGH_UP)
