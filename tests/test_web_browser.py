@@ -5,6 +5,7 @@ text stays text. Screenshots go to ``test-artifacts/web/`` (printed)."""
 
 from __future__ import annotations
 
+import asyncio
 import re
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -158,3 +159,43 @@ async def test_hostile_text_is_shown_as_text(browser: Browser) -> None:
         await expect(page.locator("#message")).to_contain_text(hostile, timeout=TIMEOUT_MS)
         assert await page.locator("#message img").count() == 0
         assert await page.evaluate("window.pwned === undefined")
+
+
+async def axis_speeds(s: Served, seconds: float = 0.3) -> tuple[float, float]:
+    """How fast the RA and Dec readings change now (degrees per simulated second)."""
+    first = await s.mount.refresh()
+    before = s.mount.elapsed()
+    await asyncio.sleep(seconds)
+    second = await s.mount.refresh()
+    elapsed = s.mount.elapsed() - before
+    assert first.ra_j2000_hours is not None
+    assert second.ra_j2000_hours is not None
+    assert first.dec_j2000_deg is not None
+    assert second.dec_j2000_deg is not None
+    ra = abs(second.ra_j2000_hours - first.ra_j2000_hours) * 15 / elapsed
+    dec = abs(second.dec_j2000_deg - first.dec_j2000_deg) / elapsed
+    return ra, dec
+
+
+async def test_the_pad_moves_while_held_by_pointer_or_key(browser: Browser) -> None:
+    async with served(sim_mount(rate=2.0)) as s, open_page(browser, s) as page:
+        await page.select_option("#rate", "400")
+        await page.locator(".pad-down").hover()
+        await page.mouse.down()
+        await expect(page.locator(".pad-down")).to_have_class(re.compile("held"))
+        await asyncio.sleep(0.5)  # past the acceleration ramp
+        _, dec_speed = await axis_speeds(s)
+        assert dec_speed > 0.5  # 400x sidereal is 1.67°/s
+        await page.mouse.up()
+        await expect(page.locator(".pad-down")).not_to_have_class(re.compile("held"))
+        await asyncio.sleep(1.0)  # the deceleration ramp
+        assert (await axis_speeds(s))[1] < 0.01
+
+        await page.locator("#sky").focus()
+        await page.keyboard.down("ArrowRight")
+        await asyncio.sleep(0.6)
+        ra_speed, _ = await axis_speeds(s)
+        assert ra_speed > 0.5
+        await page.keyboard.up("ArrowRight")
+        await asyncio.sleep(1.0)
+        assert (await axis_speeds(s))[0] < 0.01

@@ -471,15 +471,20 @@ function rateDegS() {
   return Math.min(max, Number(choice) * SIDEREAL_DEG_S);
 }
 
+const KEYS = { ArrowUp: "pad-up", ArrowDown: "pad-down", ArrowLeft: "pad-left", ArrowRight: "pad-right" };
+
 function setupPad() {
+  const holds = new Map(); // class name -> {start, stop}
   for (const button of document.querySelectorAll("#pad button[data-axis]")) {
     let held = false;
     const start = async (event) => {
-      event.preventDefault();
+      if (event) event.preventDefault();
       if (held) return;
       held = true;
       button.classList.add("held");
-      try { button.setPointerCapture(event.pointerId); } catch (_) { /* not a pointer */ }
+      if (event && event.pointerId !== undefined) {
+        try { button.setPointerCapture(event.pointerId); } catch (_) { /* not a pointer */ }
+      }
       const rate = Number(button.dataset.sign) * rateDegS();
       const ok = await api("/api/move", { axis: button.dataset.axis, rate_deg_s: rate });
       if (!ok) stop();
@@ -495,8 +500,23 @@ function setupPad() {
     button.addEventListener("pointercancel", stop);
     button.addEventListener("lostpointercapture", stop);
     button.addEventListener("contextmenu", (event) => event.preventDefault());
+    holds.set(button.className.split(" ")[0], { start, stop });
   }
   $("pad-stop").addEventListener("click", () => api("/api/abort"));
+  // Arrow keys move while held, Escape stops everything; not while typing in a field.
+  const typing = (event) => ["INPUT", "SELECT", "TEXTAREA"].includes(event.target.tagName);
+  document.addEventListener("keydown", (event) => {
+    if (typing(event)) return;
+    if (event.key === "Escape") { api("/api/abort"); return; }
+    const hold = holds.get(KEYS[event.key]);
+    if (hold) { event.preventDefault(); if (!event.repeat) hold.start(null); }
+  });
+  document.addEventListener("keyup", (event) => {
+    const hold = holds.get(KEYS[event.key]);
+    if (hold) hold.stop();
+  });
+  // A key released while the window had no focus never sends keyup: stop on losing focus.
+  window.addEventListener("blur", () => { for (const hold of holds.values()) hold.stop(); });
 }
 
 function setupNight() {
