@@ -108,7 +108,11 @@ class LiveHub:
                 if not self._sockets:
                     break
                 tick += 1
-                message = await self.build_update(with_sky=tick % self._sky_every == 0)
+                try:
+                    message = await self.build_update(with_sky=tick % self._sky_every == 0)
+                except Exception:  # pages keep their last view; the next tick tries again
+                    logger.exception("cannot build the dashboard update")
+                    continue
                 await self._broadcast(message)
 
     async def build_update(self, *, with_sky: bool) -> str:
