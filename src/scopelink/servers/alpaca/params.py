@@ -40,31 +40,30 @@ def parse_transaction_id(name: str, text: str | None) -> int:
 
 @dataclass(frozen=True, slots=True)
 class Params:
-    """One request's parameters. ``exact`` is True for PUT (names case-sensitive)."""
+    """One request's parameters. ``exact`` is True for PUT (names case-sensitive); for GET the
+    names are kept lower-cased, so a lookup folds only the name asked for."""
 
     values: Mapping[str, str]
-    folded: Mapping[str, str]
     exact: bool
 
     @classmethod
     def from_pairs(cls, pairs: Iterable[tuple[str, str]], *, exact: bool) -> Params:
         values: dict[str, str] = {}
-        folded: dict[str, str] = {}
         for name, value in pairs:
-            values.setdefault(name, value)
-            folded.setdefault(name.lower(), value)
-        return cls(values, folded, exact)
+            values.setdefault(name if exact else name.lower(), value)
+        return cls(values, exact)
 
     def optional(self, name: str) -> str | None:
         """The raw value of ``name``, or None when absent (spelt another way, for PUT)."""
-        return self.values.get(name) if self.exact else self.folded.get(name.lower())
+        return self.values.get(name if self.exact else name.lower())
 
     def text(self, name: str) -> str:
         value = self.optional(name)
         if value is not None:
             return value
-        if self.exact and name.lower() in self.folded:
-            spelt = next(key for key in self.values if key.lower() == name.lower())
+        folded = name.lower()
+        spelt = next((key for key in self.values if key.lower() == folded), None)
+        if spelt is not None:
             raise BadRequest(
                 f"form parameter {spelt!r} must be spelt {name!r}: PUT parameter names are "
                 "case-sensitive"

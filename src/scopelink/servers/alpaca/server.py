@@ -274,7 +274,7 @@ class AlpacaServer:
         handler = member.get if method == "GET" else member.put
         if handler is None:
             other = "PUT" if method == "GET" else "GET"
-            return _text(405, f"{name} is read with {other}, not {method}")
+            return _text(405, f"{name} takes {other}, not {method}")
         try:
             if member.needs_connection:
                 self.telescope.require_connected()
