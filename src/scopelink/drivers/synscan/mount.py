@@ -278,7 +278,11 @@ class SynScanMount(Mount):
             goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
-            tracking = await self._ask(GetTrackingMode(), TrackingModeReply, priority)
+            place = _Place(position, read_at, self.site)
+            # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
+            tracking = await self._ask(
+                GetTrackingMode(), TrackingModeReply, priority, meanwhile=place.compute
+            )
             if self._capabilities.can_report_pier_side:
                 side = await self._ask(GetPointingState(), PointingState, priority)
                 self._pier_side = self._pier_side_of(side)
@@ -287,11 +291,7 @@ class SynScanMount(Mount):
         except DeviceError as error:
             self._report_problem(str(error))
             raise
-        ra, dec = position.ra_hours, position.dec_degrees
-        if position.flipped:  # Dec read beyond the pole: the same direction is RA + 12 h
-            ra = (ra + 12.0) % 24.0
-        alt, az = j2000_to_observed(ra, dec, read_at, self.site)
-        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
+        ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
         mode = mount_tracking(tracking.mode)
         problems: tuple[str, ...] = ()
         if mode is None:
@@ -568,9 +568,14 @@ class SynScanMount(Mount):
     # --- exchanges ----------------------------------------------------------------------------
 
     async def _ask(
-        self, command: AnyCommand, expected: type[R], priority: Priority = Priority.COMMAND
+        self,
+        command: AnyCommand,
+        expected: type[R],
+        priority: Priority = Priority.COMMAND,
+        *,
+        meanwhile: Callable[[], object] | None = None,
     ) -> R:
-        reply = await self.wire.ask(command, priority)
+        reply = await self.wire.ask(command, priority, meanwhile=meanwhile)
         if not isinstance(reply, expected):
             raise DeviceError(
                 f"{self.wire.name}: {command.describe()!r} answered {reply.describe()!r}"
@@ -584,6 +589,27 @@ class SynScanMount(Mount):
                 f"{command.describe()!r}: the motor controller did not answer the hand control "
                 "(failed passthrough)"
             )
+
+
+class _Place:
+    """One ``e`` reading and, computed once on demand, what it means: J2000, observed, of date."""
+
+    def __init__(self, position: Position, read_at: datetime, site: Site) -> None:
+        self._position = position
+        self._read_at = read_at
+        self._site = site
+        self._result: tuple[float, float, float, float, float, float] | None = None
+
+    def compute(self) -> tuple[float, float, float, float, float, float]:
+        """(RA J2000 h, Dec J2000°, alt°, az°, RA of date h, Dec of date°)."""
+        if self._result is None:
+            ra, dec = self._position.ra_hours, self._position.dec_degrees
+            if self._position.flipped:  # Dec read beyond the pole: the same direction is RA + 12 h
+                ra = (ra + 12.0) % 24.0
+            alt, az = j2000_to_observed(ra, dec, self._read_at, self._site)
+            ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, self._read_at)
+            self._result = (ra, dec, alt, az, ra_of_date, dec_of_date)
+        return self._result
 
 
 def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float) -> float:

@@ -124,17 +124,29 @@ class SynScanWire:
         if link is not None:
             await link.close()
 
-    async def ask(self, command: AnyCommand, priority: Priority = Priority.COMMAND) -> AnyReply:
-        """Send ``command`` and return its reply; recovers once, else raises DeviceError."""
-        async with self.scheduler.turn(priority):
-            return await self._ask_holding_the_wire(command)
+    async def ask(
+        self,
+        command: AnyCommand,
+        priority: Priority = Priority.COMMAND,
+        *,
+        meanwhile: Callable[[], object] | None = None,
+    ) -> AnyReply:
+        """Send ``command`` and return its reply; recovers once, else raises DeviceError.
 
-    async def _ask_holding_the_wire(self, command: AnyCommand) -> AnyReply:
+        ``meanwhile`` runs right after the command has been written (again if it is re-sent): CPU
+        work that then overlaps the device's answer instead of leaving the wire idle.
+        """
+        async with self.scheduler.turn(priority):
+            return await self._ask_holding_the_wire(command, meanwhile)
+
+    async def _ask_holding_the_wire(
+        self, command: AnyCommand, meanwhile: Callable[[], object] | None
+    ) -> AnyReply:
         failure: _ExchangeError | None = None
         for _attempt in range(2):
             await self._recover_if_needed(command, failure)
             try:
-                return await self._exchange(command)
+                return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
                 self.statistics.failures += 1
                 self._needs_resync = True
@@ -197,7 +209,9 @@ class SynScanWire:
                 return value
         return _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]  # everything avoided: any will do
 
-    async def _exchange(self, command: AnyCommand) -> AnyReply:
+    async def _exchange(
+        self, command: AnyCommand, meanwhile: Callable[[], object] | None = None
+    ) -> AnyReply:
         link = self._link
         if link is None or link.closed:
             raise _ExchangeError(f"{self.name} is closed")
@@ -207,6 +221,8 @@ class SynScanWire:
         try:
             self.last_write_at = asyncio.get_running_loop().time()
             await link.write(data)
+            if meanwhile is not None:
+                meanwhile()
             async with asyncio.timeout(self.timeout_s):
                 reply = await self._read_reply(link, command)
             completed = True
