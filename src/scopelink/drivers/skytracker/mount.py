@@ -15,7 +15,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, replace
 from datetime import datetime
 
-from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
+from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, j2000_to_observed
 from scopelink.links import Link, LinkError, open_link
 from scopelink.mount import (
     AlignmentMode,
@@ -89,6 +89,9 @@ STOP_MARGIN_POLLS = 3.0
 STOP_MARGIN_DEG = 0.05
 GOTO_STATUS_POLL_S = 0.05
 NOTHING_PRESSED = Direction(0)
+SYNC_TOLERANCE_DEG = 0.05
+"""After a sync the position read back must lie this close to the synced one (3-decimal
+coordinates both ways, and the sky's drift during the read)."""
 
 
 class SlewInProgressError(MountError):
@@ -561,8 +564,17 @@ class SkyTrackerMount(Mount):
         )
         if not isinstance(load, Acknowledge):
             raise DeviceError(f"the Sky Commander did not acknowledge the object: {load}")
-        await self._read_position(line, Priority.COMMAND, retry=True)
+        # 'N' has no reply: the position read back tells whether the realign took.
+        after = await self._read_position(line, Priority.COMMAND, retry=True)
         self._publish_now()
+        off_by = angular_separation_deg(
+            after.ra_j2000_hours * 15.0, after.dec_j2000_deg, ra_j2000_hours * 15.0, dec_j2000_deg
+        )
+        if off_by > SYNC_TOLERANCE_DEG:
+            raise DeviceError(
+                f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced "
+                "position after 'N' (was 'N' lost on the line?)"
+            )
 
     def _require_line(self) -> SkyTrackerLine:
         if self._line is None:
