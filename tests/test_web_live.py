@@ -14,14 +14,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from scopelink.decode import Protocol
+from scopelink.decode import Direction, Protocol
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.links.trace import format_transfer, trace_logger, trace_transfer
 from scopelink.mount import Mount
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import SimClock, SimulatedMount
 from scopelink.web import Dashboard
-from scopelink.web.traffic import TrafficMonitor, parse_trace_line
+from scopelink.web.traffic import TrafficMonitor, parse_trace_line, protocol_by_port
 from tests.test_web_support import HIGH_UP, SITE, START, served, sim_mount
 
 
@@ -226,3 +226,17 @@ def test_a_chooser_decodes_each_link_as_its_own_protocol_or_not_at_all() -> None
     assert synscan.meanings == (("command", "get hand control version"),)
     assert lx200.meanings == ()
     assert lx200.data == b"#:GR#"
+
+
+def test_protocol_by_port_decodes_each_server_as_its_own() -> None:
+    monitor = TrafficMonitor(protocol_by_port({11880: Protocol.SYNSCAN}, Protocol.SKYTRACKER))
+    with monitor.attached():
+        trace_transfer("<--", "tcp 127.0.0.1:50000 on :11880", b"V")
+        trace_transfer("<--", "tcp 127.0.0.1:50001 on :4030", b"#:GR#")
+        trace_transfer("-->", "/dev/ttyUSB0", b"V")
+    synscan, lx200, skytracker = monitor.since(0)
+    assert synscan.meanings == (("command", "get hand control version"),)
+    assert synscan.sender is Direction.PC
+    assert lx200.meanings == ()
+    assert skytracker.meanings
+    assert skytracker.meanings != synscan.meanings

@@ -5,5 +5,6 @@
 """
 
 from scopelink.web.dashboard import Dashboard
+from scopelink.web.traffic import ProtocolChooser, protocol_by_port
 
-__all__ = ["Dashboard"]
+__all__ = ["Dashboard", "ProtocolChooser", "protocol_by_port"]

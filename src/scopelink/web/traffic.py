@@ -17,7 +17,7 @@ import re
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -27,9 +27,18 @@ from scopelink.decode.skytracker_session import SkyTrackerSession
 from scopelink.decode.synscan_session import SynScanSession
 from scopelink.links.trace import escape_text, trace_logger
 
-__all__ = ["ProtocolChooser", "TrafficLine", "TrafficMonitor", "parse_trace_line"]
+__all__ = [
+    "ProtocolChooser",
+    "TrafficLine",
+    "TrafficMonitor",
+    "parse_trace_line",
+    "protocol_by_port",
+]
 
 DEFAULT_CAPACITY = 200
+
+ProtocolChooser = Callable[[str], Protocol | None]
+"""Which protocol a link (by its trace name) speaks; None: show its bytes undecoded."""
 
 _LINE = re.compile(r"^(?P<link>.+) (?P<arrow>-->|<--) \d+ bytes?: (?P<hex>[0-9a-f ]*) \| ")
 
@@ -69,6 +78,28 @@ def parse_trace_line(message: str) -> tuple[str, str, bytes] | None:
     return match["link"], match["arrow"], data
 
 
+_ACCEPTED_ON_PORT = re.compile(r" on :(\d+)$")
+
+
+def protocol_by_port(
+    ports: Mapping[int, Protocol], others: Protocol | None = None
+) -> ProtocolChooser:
+    """A chooser for a process serving several protocols: connections accepted on a port of
+    ``ports`` are decoded as its protocol, every other link as ``others`` (None: undecoded).
+
+    ``scopelink serve`` with SynScan on 11880 and LX200 on 4030:
+    ``protocol_by_port({11880: Protocol.SYNSCAN})``.
+    """
+
+    def choose(link_name: str) -> Protocol | None:
+        match = _ACCEPTED_ON_PORT.search(link_name)
+        if match is not None:
+            return ports.get(int(match[1]))
+        return others
+
+    return choose
+
+
 def this_process_is_device(link_name: str) -> bool:
     """Whether this process is the device end of the link (an emulator's pty or accepted TCP)."""
     return link_name.startswith("pty ") or " on :" in link_name
@@ -78,10 +109,6 @@ def _new_session(protocol: Protocol) -> Session:
     if protocol is Protocol.SYNSCAN:
         return SynScanSession()
     return SkyTrackerSession(behind_bus=protocol is Protocol.SKYTRACKER)
-
-
-ProtocolChooser = Callable[[str], Protocol | None]
-"""Which protocol a link (by its trace name) speaks; None: show its bytes undecoded."""
 
 
 class _LinkDecoder:
