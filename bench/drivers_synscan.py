@@ -1,5 +1,6 @@
 """SynScan driver benchmarks: polls per second against the 9600-baud wire limit, and CPU per
-command side by side with PyPI ``nexstar`` and a minimal blocking pyserial client.
+command side by side with PyPI ``nexstar`` and a minimal blocking pyserial client, each against
+the emulated hand control running in a separate process (as the real one is a separate machine).
 
 Run ``.venv/bin/python -m bench.drivers_synscan`` (about half a minute) or with ``--quick`` (a few
 seconds, what the smoke test runs). See ``docs/benchmarks.md`` and ``docs/drivers-synscan.md``.
@@ -10,17 +11,20 @@ from __future__ import annotations
 import argparse
 import asyncio
 import functools
+import multiprocessing
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from multiprocessing.connection import Connection
 
 import serial
 
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import Link, paced
+from scopelink.links import open_link
 from scopelink.mount import Priority
 from scopelink.protocol.synscan import GetRaDec, Position
 from scopelink.servers.hosting import SERIAL_9600_8N1
@@ -55,35 +59,69 @@ def new_sim() -> SimulatedMount:
 # --- 1. wire utilisation -----------------------------------------------------------------------
 
 
-async def wire_utilisation(sizes: Sizes) -> list[tuple[str, float, float]]:
-    """Refresh cycles and bare ``e`` polls per second over a memory link paced at 9600 8N1 in both
-    directions (the emulator's replies by its host, the driver's commands by ``paced``)."""
-    sim = new_sim()
-    async with SynScanEmulator(sim) as emulator:
-        device_side = await emulator.on_memory()
-        handed_out = False
+def serve_emulator_process(pipe: Connection, paced_replies: bool) -> None:
+    """Child process: an emulated hand control on a free TCP port until the parent says stop.
 
-        async def factory() -> Link:
-            nonlocal handed_out
-            if handed_out:
-                raise RuntimeError("the memory link cannot be reopened")
-            handed_out = True
-            return paced(device_side, SERIAL_9600_8N1.baudrate, SERIAL_9600_8N1.bits_per_byte)
+    A separate process, as the real hand control is a separate machine: its CPU time then overlaps
+    the driver's instead of adding to it in one event loop."""
 
-        mount = SynScanMount(factory, site=SITE, clock=sim.now, name="memory, 9600 paced")
-        await mount.connect()
-        started = time.perf_counter()
-        for _ in range(sizes.polls):
-            await mount.refresh()
-        refresh_rate = sizes.polls / (time.perf_counter() - started)
-        started = time.perf_counter()
-        for _ in range(sizes.polls):
-            await mount.wire.ask(GetRaDec(), Priority.POLL)
-        poll_rate = sizes.polls / (time.perf_counter() - started)
-        await mount.disconnect()
+    async def serve() -> None:
+        sim = new_sim()
+        wire = SERIAL_9600_8N1 if paced_replies else None
+        async with SynScanEmulator(sim, wire=wire) as emulator:
+            host, port = await emulator.on_tcp("127.0.0.1", 0)
+            pipe.send(f"tcp://{host}:{port}")
+            await asyncio.get_running_loop().run_in_executor(None, pipe.recv)
+
+    asyncio.run(serve())
+
+
+@contextmanager
+def emulator_process(*, paced_replies: bool) -> Iterator[str]:
+    """Start :func:`serve_emulator_process`; yields its ``tcp://`` address."""
+    context = multiprocessing.get_context("spawn")
+    parent, child = context.Pipe()
+    process = context.Process(target=serve_emulator_process, args=(child, paced_replies))
+    process.start()
+    try:
+        if not parent.poll(60.0):
+            raise RuntimeError("the emulator process did not start")
+        yield str(parent.recv())
+    finally:
+        parent.send("stop")
+        process.join(10.0)
+        if process.is_alive():
+            process.kill()
+
+
+async def wire_utilisation(url: str, sizes: Sizes) -> list[tuple[str, float, float]]:
+    """Refresh cycles and bare ``e`` polls per second, the driver's commands paced at 9600 8N1 by
+    ``open_link(pace=True)`` and the emulator's replies by its host."""
+    mount = SynScanMount(lambda: open_link(url, pace=True), site=SITE, name="tcp, 9600 paced")
+    await mount.connect()
+    await mount.refresh()  # warm up
+    started = time.perf_counter()
+    for _ in range(sizes.polls):
+        await mount.refresh()
+    refresh_rate = sizes.polls / (time.perf_counter() - started)
+    started = time.perf_counter()
+    for _ in range(sizes.polls):
+        await mount.wire.ask(GetRaDec(), Priority.POLL)
+    poll_rate = sizes.polls / (time.perf_counter() - started)
+    await mount.disconnect()
+    # The peer: the same polls by the least an asyncio client can do (no codec, no timeout).
+    link = await open_link(url, pace=True)
+    started = time.perf_counter()
+    for _ in range(sizes.polls):
+        await link.write(b"e")
+        await link.read_exactly(E_ROUND_TRIP_BYTES - 1)
+    bare_rate = sizes.polls / (time.perf_counter() - started)
+    await link.close()
+    limit = 1.0 / (E_ROUND_TRIP_BYTES * BYTE_S)
     return [
         ("refresh (L e t p)", refresh_rate, 1.0 / (REFRESH_BYTES * BYTE_S)),
-        ("e polls", poll_rate, 1.0 / (E_ROUND_TRIP_BYTES * BYTE_S)),
+        ("e polls", poll_rate, limit),
+        ("e polls, bare link", bare_rate, limit),
     ]
 
 
@@ -168,38 +206,17 @@ def pyserial_client(url: str) -> Batch:
     return batch
 
 
-def cpu_per_command(sizes: Sizes) -> list[ClientFigures]:
-    """Serve one unpaced emulator on TCP in a thread; time each client against it in turn."""
-    sim = new_sim()
-    loop = asyncio.new_event_loop()
-    ready = threading.Event()
-    stop = asyncio.Event()
-    address: list[str] = []
-
-    async def serve() -> None:
-        async with SynScanEmulator(sim, wire=None) as emulator:
-            host, port = await emulator.on_tcp("127.0.0.1", 0)
-            address.append(f"tcp://{host}:{port}")
-            ready.set()
-            await stop.wait()
-
-    server = threading.Thread(target=loop.run_until_complete, args=(serve(),), daemon=True)
-    server.start()
-    ready.wait(10.0)
-    url = address[0]
-    try:
-        clients: list[tuple[str, Callable[[str], Batch]]] = [
-            ("scopelink SynScanMount.wire", scopelink_client),
-            ("nexstar 0.0.5 getPosition", nexstar_client),
-            ("pyserial write/read", pyserial_client),
-        ]
-        return [
-            timed_in_thread(name, functools.partial(make, url), sizes.commands)
-            for name, make in clients
-        ]
-    finally:
-        loop.call_soon_threadsafe(stop.set)
-        server.join(10.0)
+def cpu_per_command(url: str, sizes: Sizes) -> list[ClientFigures]:
+    """Time each client in turn against one unpaced emulator (in its own process)."""
+    clients: list[tuple[str, Callable[[str], Batch]]] = [
+        ("scopelink SynScanMount.wire", scopelink_client),
+        ("nexstar 0.0.5 getPosition", nexstar_client),
+        ("pyserial write/read", pyserial_client),
+    ]
+    return [
+        timed_in_thread(name, functools.partial(make, url), sizes.commands)
+        for name, make in clients
+    ]
 
 
 # --- report --------------------------------------------------------------------------------------
@@ -208,19 +225,22 @@ def cpu_per_command(sizes: Sizes) -> list[ClientFigures]:
 def main(sizes: Sizes) -> None:
     print(f"scopelink SynScan driver benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
     print()
-    print("1. polls over a memory link paced at 9600 8N1 both ways")
+    print("1. polls over TCP paced at 9600 8N1 both ways, emulator in another process")
     print(f"{'poll':<20} {'per s':>8} {'wire limit':>11} {'of limit':>9}")
-    for name, rate, limit in asyncio.run(wire_utilisation(sizes)):
+    with emulator_process(paced_replies=True) as url:
+        rows = asyncio.run(wire_utilisation(url, sizes))
+    for name, rate, limit in rows:
         print(f"{name:<20} {rate:>8.2f} {limit:>11.2f} {rate / limit:>8.1%}")
     print()
-    print("2. CPU per 'e' command, each client in its own thread, emulator on TCP in another")
-    figures = cpu_per_command(sizes)
+    print("2. CPU per 'e' command: each client in its own thread (thread CPU clock), unpaced")
+    print("   emulator on TCP in another process")
+    with emulator_process(paced_replies=False) as url:
+        figures = cpu_per_command(url, sizes)
     baseline = figures[-1].cpu_us
     print(f"{'client':<30} {'cpu us':>8} {'wall us':>8} {'cpu vs pyserial':>16}")
     for row in figures:
-        print(
-            f"{row.name:<30} {row.cpu_us:>8.0f} {row.wall_us:>8.0f} {row.cpu_us / baseline:>15.2f}x"
-        )
+        ratio = row.cpu_us / baseline
+        print(f"{row.name:<30} {row.cpu_us:>8.0f} {row.wall_us:>8.0f} {ratio:>15.2f}x")
 
 
 if __name__ == "__main__":
