@@ -5,13 +5,15 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import math
 import os
 import re
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
-from contextlib import contextmanager, redirect_stdout
+from contextlib import contextmanager, redirect_stderr, redirect_stdout
 from pathlib import Path
 from typing import Any
 
@@ -39,22 +41,30 @@ def scopelink(config: Path, *args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def state_of(config: Path, device: str | None = None) -> dict[str, Any]:
-    """The mount's state as ``scopelink status --json`` prints it (run in this process: a
-    subprocess per reading would make the tests slow; the commands under test run apart)."""
-    output = io.StringIO()
+def scopelink_here(config: Path, *args: str) -> tuple[int, str, str]:
+    """``scopelink ARGS`` through :func:`main` in this process (status, stdout, stderr): cheaper
+    than a subprocess where the process boundary is not what a test is about."""
+    out, err = io.StringIO(), io.StringIO()
     saved = os.environ.get("SCOPELINK_CONFIG")
     os.environ["SCOPELINK_CONFIG"] = str(config)
     try:
-        with redirect_stdout(output):
-            status = main(["status", "--json", *(["--device", device] if device else [])])
+        with redirect_stdout(out), redirect_stderr(err):
+            status = main(list(args))
     finally:
         if saved is None:
             del os.environ["SCOPELINK_CONFIG"]
         else:
             os.environ["SCOPELINK_CONFIG"] = saved
-    assert status == 0, output.getvalue()
-    state: dict[str, Any] = json.loads(output.getvalue())
+    return status, out.getvalue(), err.getvalue()
+
+
+def state_of(config: Path, device: str | None = None) -> dict[str, Any]:
+    """The mount's state as ``scopelink status --json`` prints it (in this process)."""
+    status, out, err = scopelink_here(
+        config, "status", "--json", *(["--device", device] if device else [])
+    )
+    assert status == 0, err
+    state: dict[str, Any] = json.loads(out)
     return state
 
 
@@ -127,3 +137,29 @@ def degrees_in(text: str, label: str) -> float:
     sign, whole, minutes, seconds = match.groups()
     value = int(whole) + int(minutes) / 60 + int(seconds) / 3600
     return -value if sign == "-" else value
+
+
+def separation_deg(alt1: float, az1: float, alt2: float, az2: float) -> float:
+    a1, z1, a2, z2 = (math.radians(value) for value in (alt1, az1, alt2, az2))
+    cosine = math.sin(a1) * math.sin(a2) + math.cos(a1) * math.cos(a2) * math.cos(z1 - z2)
+    return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
+
+
+def settled_state(config: Path, device: str | None = None) -> dict[str, Any]:
+    """A state once the axes have stopped: ``L`` says a cancelled goto is over while the motors
+    still ramp down, so the position is read until two readings 0.2 s apart agree."""
+    previous = state_of(config, device)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        time.sleep(0.2)
+        current = state_of(config, device)
+        alt1, az1, alt2, az2 = (
+            previous["alt_deg"],
+            previous["az_deg"],
+            current["alt_deg"],
+            current["az_deg"],
+        )
+        if separation_deg(alt1, az1, alt2, az2) < 0.01:
+            return current
+        previous = current
+    raise AssertionError("the mount never came to rest")

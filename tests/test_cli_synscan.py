@@ -8,18 +8,17 @@ from __future__ import annotations
 
 import asyncio
 import json
-import math
 import signal
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from tests.test_cli_support import (
     read_line_matching,
     scopelink,
+    separation_deg,
     start_scopelink,
     state_of,
     synscan_emulator,
@@ -36,32 +35,6 @@ def device() -> Iterator[str]:
 @pytest.fixture
 def config(tmp_path: Path) -> Path:
     return tmp_path / "absent.toml"
-
-
-def separation_deg(alt1: float, az1: float, alt2: float, az2: float) -> float:
-    a1, z1, a2, z2 = (math.radians(value) for value in (alt1, az1, alt2, az2))
-    cosine = math.sin(a1) * math.sin(a2) + math.cos(a1) * math.cos(a2) * math.cos(z1 - z2)
-    return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
-
-
-def settled_state(config: Path, device: str | None = None) -> dict[str, Any]:
-    """A state once the axes have stopped: ``L`` says a cancelled goto is over while the motors
-    still ramp down, so the position is read until two readings 0.2 s apart agree."""
-    previous = state_of(config, device)
-    deadline = time.monotonic() + 10.0
-    while time.monotonic() < deadline:
-        time.sleep(0.2)
-        current = state_of(config, device)
-        alt1, az1, alt2, az2 = (
-            previous["alt_deg"],
-            previous["az_deg"],
-            current["alt_deg"],
-            current["az_deg"],
-        )
-        if separation_deg(alt1, az1, alt2, az2) < 0.01:
-            return current
-        previous = current
-    raise AssertionError("the mount never came to rest")
 
 
 def test_info_names_the_firmware_and_model(config: Path, device: str) -> None:
@@ -111,35 +84,6 @@ def test_ctrl_c_during_goto_stops_the_mount(config: Path, device: str) -> None:
     assert separation_deg(first["alt_deg"], first["az_deg"], 20.0, 200.0) > 5.0
     moved = separation_deg(first["alt_deg"], first["az_deg"], second["alt_deg"], second["az_deg"])
     assert moved < 0.05
-
-
-def test_goto_no_wait_then_stop_from_another_command(config: Path, device: str) -> None:
-    started = scopelink(config, "goto", "--altaz", "60", "90", "--no-wait", "--device", device)
-    assert started.returncode == 0, started.stderr
-    assert state_of(config, device)["slewing"] is True
-    stopped = scopelink(config, "stop", "--device", device)
-    assert stopped.returncode == 0, stopped.stderr
-    assert stopped.stdout.startswith("stopped at")
-    assert state_of(config, device)["slewing"] is False
-    settled = settled_state(config, device)
-    assert separation_deg(settled["alt_deg"], settled["az_deg"], 60.0, 90.0) > 5.0
-
-
-def test_config_file_names_the_device_and_its_horizon_guards_it(
-    tmp_path: Path, device: str
-) -> None:
-    config = tmp_path / "config.toml"
-    config.write_text(f'device = "{device}"\n[horizon]\naltitude = 25\n', encoding="utf-8")
-    before = settled_state(config)  # no --device: the file's
-    refused = scopelink(config, "goto", "--altaz", "20", "100")
-    assert refused.returncode == 1
-    assert "below the configured horizon of 25.00°" in refused.stderr
-    assert "[horizon]" in refused.stderr  # the hint says where the horizon is set
-    after = state_of(config, device)
-    assert after["slewing"] is False
-    assert separation_deg(
-        before["alt_deg"], before["az_deg"], after["alt_deg"], after["az_deg"]
-    ) < (0.05)
 
 
 def test_status_watch_streams_until_ctrl_c(config: Path, device: str) -> None:
