@@ -27,6 +27,7 @@ from scopelink.cli.mount_session import (
     read_config,
 )
 from scopelink.cli.options import parse_site, positive_rate, until_stopped
+from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
@@ -36,7 +37,7 @@ from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimulatedMount
-from scopelink.web import Dashboard
+from scopelink.web import Dashboard, protocol_by_port
 
 __all__ = ["DEFAULT_DASHBOARD_PORT", "DEFAULT_SYNSCAN_PORT", "register", "run"]
 
@@ -297,16 +298,26 @@ async def _start_servers(
         stellarium = StellariumServer(mount, host, plan.stellarium, frame=frame)
         await stack.enter_async_context(stellarium)
         lines.append(f"Stellarium  tcp {host}:{stellarium.port}  ({frame.value})")
+    decoded: dict[int, Protocol] = {}
     if plan.synscan is not None or plan.synscan_pty is not None:
         config = SynScanConfig(model=synscan_model_code(mount))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
         synscan = await stack.enter_async_context(SynScanEmulator(mount, config, wire=None))
         if plan.synscan is not None:
             bound_host, port = await synscan.on_tcp(host, plan.synscan)
+            decoded[port] = Protocol.SYNSCAN
             lines.append(f"SynScan     tcp {bound_host}:{port}")
         if plan.synscan_pty is not None:
             lines.append(f"SynScan     pty {await synscan.on_pty(plan.synscan_pty or None)}")
     if plan.dashboard is not None:
-        dashboard = await stack.enter_async_context(Dashboard(mount, host, plan.dashboard))
+        # The traffic panel decodes the SynScan server's clients and the driver's own link;
+        # LX200, Stellarium and Alpaca traffic is not a mount protocol and stays undecoded.
+        try:
+            driver_protocol: Protocol | None = Protocol(mount.identity.protocol)
+        except ValueError:
+            driver_protocol = None  # the simulator has no link of its own
+        trace = protocol_by_port(decoded, driver_protocol)
+        dashboard = Dashboard(mount, host, plan.dashboard, trace=trace)
+        await stack.enter_async_context(dashboard)
         lines.append(f"Dashboard   {dashboard.url}")
     return lines
