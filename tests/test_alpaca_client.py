@@ -30,7 +30,15 @@ from scopelink.astro import angular_separation_deg, j2000_to_apparent
 from scopelink.mount import Limits, TrackingMode
 from scopelink.servers.alpaca import EquatorialSystem, TelescopeConfig
 from scopelink.sim import AZ_GTI, SimulatedMount
-from tests.test_alpaca_support import blocking, client, radec_at, serve, sim_mount, wait_until
+from tests.test_alpaca_support import (
+    WATCHABLE_SPEED_UP,
+    blocking,
+    client,
+    radec_at,
+    serve,
+    sim_mount,
+    wait_until,
+)
 
 SLEW_TIMEOUT_S = 20.0
 
@@ -129,7 +137,7 @@ async def test_connect_disconnect_and_connecting(tmp_path: Path) -> None:
 
 
 async def test_async_slew_is_slewing_within_a_second_and_lands_on_target(tmp_path: Path) -> None:
-    mount = sim_mount()
+    mount = sim_mount(speed_up=WATCHABLE_SPEED_UP)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
@@ -215,7 +223,7 @@ async def test_sync_moves_the_reported_position(tmp_path: Path) -> None:
 
 
 async def test_abort_stops_a_slew_short_of_its_target(tmp_path: Path) -> None:
-    mount = sim_mount()
+    mount = sim_mount(speed_up=WATCHABLE_SPEED_UP)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
@@ -264,7 +272,7 @@ async def test_set_park_stores_the_current_position(tmp_path: Path) -> None:
 
 
 async def test_move_axis_turns_and_stops(tmp_path: Path) -> None:
-    mount = sim_mount()
+    mount = sim_mount(speed_up=WATCHABLE_SPEED_UP)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
@@ -283,7 +291,7 @@ async def test_move_axis_turns_and_stops(tmp_path: Path) -> None:
 
 
 async def test_pulse_guide_nudges_declination(tmp_path: Path) -> None:
-    mount = sim_mount()
+    mount = sim_mount(speed_up=WATCHABLE_SPEED_UP)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
@@ -292,7 +300,7 @@ async def test_pulse_guide_nudges_declination(tmp_path: Path) -> None:
         await blocking(lambda: telescope.SlewToCoordinatesAsync(ra, dec))
         await wait_until(lambda: not telescope.Slewing, SLEW_TIMEOUT_S, "the slew's end")
         dec_before = await blocking(lambda: telescope.Declination)
-        duration_ms = 20_000  # simulated: one real second at x20
+        duration_ms = 20_000  # simulated: one real second at x20 (WATCHABLE_SPEED_UP)
         await blocking(lambda: telescope.PulseGuide(GuideDirections.guideNorth, duration_ms))
         assert await blocking(lambda: telescope.IsPulseGuiding) is True
         await wait_until(lambda: not telescope.IsPulseGuiding, 5.0, "the pulse's end")

@@ -16,8 +16,10 @@ from scopelink.servers.alpaca import AlpacaServer, TelescopeConfig
 from scopelink.sim import EQ6, MountModel, SimClock, SimulatedMount
 
 SITE = Site(latitude_deg=50.0, longitude_deg=10.0, elevation_m=300.0)
-SPEED_UP = 20.0
-"""Simulated seconds per real second: a 90° slew at 3.3°/s lands in about 1.5 s."""
+SPEED_UP = 50.0
+"""Simulated seconds per real second: a 90° slew at 3.3°/s lands in about 0.6 s."""
+WATCHABLE_SPEED_UP = 20.0
+"""For tests that must see a slew or pulse in progress: a 90° slew then lasts about 1.5 s."""
 
 T = TypeVar("T")
 

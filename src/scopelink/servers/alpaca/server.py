@@ -147,7 +147,8 @@ class AlpacaServer:
         if self._listener is not None:
             self._listener.close()
             if self._http is not None:
-                await self._http.shutdown(1.0)
+                self._http.pre_shutdown()  # idle keep-alive connections close now
+                await self._http.shutdown(1.0)  # a synchronous slew in progress gets 1 s
             await self._listener.wait_closed()
             self._listener = None
         await self.telescope.close()
