@@ -279,13 +279,19 @@ async def test_disconnect_stops_manual_motion_and_refuses_commands() -> None:
         assert r.mount.state.connected
 
 
-async def test_open_connects_and_an_unreachable_link_is_a_clear_error() -> None:
+async def test_open_and_an_unreachable_link_is_a_clear_error() -> None:
     async with rig("tcp", connect=False) as r:
-        mount = await type(r.mount).open(r.spec, site=MADRID, clock=r.sim.now)
+        mount = SynScanMount.open(r.spec, site=MADRID, clock=r.sim.now)
+        before = mount.state
+        await mount.connect()
+        assert not before.connected
         assert mount.state.connected
+        assert mount.identity.link == r.spec
         await mount.disconnect()
-    with pytest.raises(DeviceError, match="cannot open"):
-        await type(r.mount).open("tcp://127.0.0.1:1", site=MADRID, timeout_s=0.5)
+    unreachable = SynScanMount.open("tcp://127.0.0.1:1", site=MADRID, timeout_s=0.5)
+    with pytest.raises(DeviceError, match=r"cannot open tcp://127\.0\.0\.1:1"):
+        await unreachable.connect()
+    assert not unreachable.state.connected
 
 
 def test_time_zone_is_whole_hours() -> None:

@@ -2,7 +2,8 @@
 
 Usage::
 
-    mount = await SynScanMount.open("/dev/ttyUSB0", site=Site(51.48, 0.0))
+    mount = SynScanMount.open("/dev/ttyUSB0", site=Site(51.48, 0.0))
+    await mount.connect()
     await mount.goto_object("M31")
     await mount.wait_for_slew(timeout_s=120)
 
@@ -20,7 +21,7 @@ import logging
 import math
 from collections.abc import Callable
 from datetime import datetime, timedelta, timezone
-from typing import Self, TypeVar
+from typing import Any, Self, TypeVar
 
 from scopelink.astro import (
     PierSide,
@@ -176,11 +177,10 @@ class SynScanMount(Mount):
         self._pulses: dict[MountAxis, asyncio.Task[None]] = {}
 
     @classmethod
-    async def open(cls, link: str | LinkFactory, **options: object) -> Self:
-        """Create the driver and connect; ``options`` are the constructor's keywords."""
-        mount = cls(link, **options)  # type: ignore[arg-type]
-        await mount.connect()
-        return mount
+    def open(cls, link: str | LinkFactory, **options: Any) -> Self:
+        """The driver for ``link`` (not connected yet: ``await mount.connect()``, or hand it to
+        ``BlockingMount``, which connects); ``options`` are the constructor's keywords."""
+        return cls(link, **options)
 
     # --- who, what --------------------------------------------------------------------------------
 
