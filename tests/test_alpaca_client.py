@@ -222,6 +222,31 @@ async def test_sync_moves_the_reported_position(tmp_path: Path) -> None:
         assert got_dec == pytest.approx(new_dec, abs=0.01)
 
 
+async def test_sync_to_alt_az_and_to_target(tmp_path: Path) -> None:
+    mount = sim_mount()
+    async with serve(mount, state_dir=tmp_path) as server:
+        telescope = client(server)
+        await _connect(telescope)
+        await blocking(lambda: setattr(telescope, "Tracking", True))
+        with pytest.raises(InvalidOperationException):  # ASCOM: needs tracking off
+            await blocking(lambda: telescope.SyncToAltAz(10.0, 48.0))
+        await blocking(lambda: setattr(telescope, "Tracking", False))
+        await blocking(lambda: telescope.SyncToAltAz(10.0, 48.0))
+        assert mount.state.alt_deg == pytest.approx(48.0, abs=0.01)
+        assert mount.state.az_deg == pytest.approx(10.0, abs=0.01)
+
+        def sync_to_target() -> tuple[float, float]:
+            telescope.Tracking = True
+            ra, dec = telescope.RightAscension, telescope.Declination
+            telescope.TargetRightAscension = ra
+            telescope.TargetDeclination = dec - 0.5
+            telescope.SyncToTarget()
+            return dec - 0.5, telescope.Declination
+
+        wanted, got = await blocking(sync_to_target)
+        assert got == pytest.approx(wanted, abs=0.01)
+
+
 async def test_abort_stops_a_slew_short_of_its_target(tmp_path: Path) -> None:
     mount = sim_mount(speed_up=WATCHABLE_SPEED_UP)
     async with serve(mount, state_dir=tmp_path) as server:

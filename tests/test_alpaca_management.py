@@ -5,12 +5,14 @@ from __future__ import annotations
 import asyncio
 import json
 import socket
+import time
 import uuid
 from pathlib import Path
 
 import aiohttp
 import pytest
 from alpaca import management
+from alpaca.telescope import Telescope
 
 from scopelink.servers.alpaca import DISCOVERY_MESSAGE, AlpacaServer, TelescopeConfig
 from scopelink.servers.alpaca.identity import UNIQUE_ID_FILE, load_or_create_unique_id
@@ -80,6 +82,16 @@ async def test_setup_pages_show_the_site_and_escape_everything(tmp_path: Path) -
             assert "50.000000°" in page  # the site's latitude
             assert "Horizon" in page
             assert server.unique_id in page
+
+
+async def test_closing_does_not_wait_for_idle_keep_alive_clients(tmp_path: Path) -> None:
+    server = AlpacaServer(sim_mount(), port=0, discovery_port=None, state_dir=tmp_path)
+    await server.start()
+    telescope = Telescope(f"127.0.0.1:{server.port}", 0)  # keeps its connection open
+    assert await blocking(lambda: telescope.Name) == "scopelink telescope"
+    started = time.monotonic()
+    await server.close()
+    assert time.monotonic() - started < 0.5
 
 
 class _Receiver(asyncio.DatagramProtocol):
