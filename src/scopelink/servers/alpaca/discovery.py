@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import socket
 from typing import cast
 
 __all__ = ["DISCOVERY_MESSAGE", "DISCOVERY_PORT", "DiscoveryResponder", "start_discovery"]
@@ -46,7 +47,11 @@ async def start_discovery(
 ) -> tuple[asyncio.DatagramTransport, DiscoveryResponder]:
     """Listen for discovery datagrams on ``host:port`` (0 picks a free port)."""
     loop = asyncio.get_running_loop()
+    # Several Alpaca servers on one machine (ASCOM Remote, other drivers) share port 32227: each
+    # answers the broadcasts it receives. Windows has no SO_REUSEPORT.
     transport, responder = await loop.create_datagram_endpoint(
-        lambda: DiscoveryResponder(alpaca_port), local_addr=(host, port)
+        lambda: DiscoveryResponder(alpaca_port),
+        local_addr=(host, port),
+        reuse_port=hasattr(socket, "SO_REUSEPORT"),
     )
     return transport, responder
