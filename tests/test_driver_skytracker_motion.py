@@ -9,7 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from scopelink.drivers.skytracker import axis_motion
 from scopelink.mount import (
     GuideDirection,
     InvalidValueError,
@@ -92,31 +91,6 @@ async def test_move_axis_at_a_guide_rate_adds_to_tracking(tmp_path: Path, transp
         await r.driver.move_axis(MountAxis.SECONDARY, 0.0)
         assert box_mode(r) is TrackerMode.TRACK  # back to the mode before
         await eventually(lambda: altitude.rate == pytest.approx(track_rate, abs=2e-4))
-
-
-def test_rates_map_to_the_nearest_supported(transport: str) -> None:
-    del transport  # a pure function: the same on every link
-    guide = axis_motion(MountAxis.PRIMARY, 100.4 / 3600.0)
-    assert guide is not None
-    assert guide.mode is TrackerMode.GUIDE
-    assert guide.guide_speed_arcsec_s == 100
-    assert guide.direction is Direction.RIGHT
-    tiny = axis_motion(MountAxis.SECONDARY, -0.1 / 3600.0)
-    assert tiny is not None
-    assert tiny.guide_speed_arcsec_s == 1
-    assert tiny.direction is Direction.DOWN
-    track = axis_motion(MountAxis.PRIMARY, -400.0 / 3600.0)
-    assert track is not None
-    assert track.mode is TrackerMode.TRACK
-    assert track.rate_deg_s == pytest.approx(-8.0 / 60.0)
-    assert track.direction is Direction.LEFT
-    near_guide = axis_motion(MountAxis.PRIMARY, 300.0 / 3600.0)
-    assert near_guide is not None
-    assert near_guide.guide_speed_arcsec_s == 255
-    utility = axis_motion(MountAxis.SECONDARY, 2.1)
-    assert utility is not None
-    assert utility.mode is TrackerMode.UTILITY
-    assert axis_motion(MountAxis.PRIMARY, 0.0) is None
 
 
 async def test_pulse_guide_in_guide_mode_timed_on_the_pc(tmp_path: Path, transport: str) -> None:

@@ -1,0 +1,76 @@
+"""The Sky Tracker driver's rate mapping (move_axis) and guide buttons: pure functions."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from scopelink.drivers.skytracker import axis_motion, guide_button
+from scopelink.drivers.skytracker.motion import (
+    GUIDE_SPEED_MAX_ARCSEC_S,
+    TRACK_ARROW_ARCSEC_S,
+    UTILITY_ARROW_ARCSEC_S,
+)
+from scopelink.mount import GuideDirection, MountAxis
+from scopelink.protocol.skytracker import Direction, TrackerMode
+
+SUPPORTED_ABOVE_GUIDE = (GUIDE_SPEED_MAX_ARCSEC_S, TRACK_ARROW_ARCSEC_S, UTILITY_ARROW_ARCSEC_S)
+
+
+def test_rates_map_to_the_nearest_supported() -> None:
+    guide = axis_motion(MountAxis.PRIMARY, 100.4 / 3600.0)
+    assert guide is not None
+    assert guide.mode is TrackerMode.GUIDE
+    assert guide.guide_speed_arcsec_s == 100
+    assert guide.direction is Direction.RIGHT
+    tiny = axis_motion(MountAxis.SECONDARY, -0.1 / 3600.0)
+    assert tiny is not None
+    assert tiny.guide_speed_arcsec_s == 1
+    assert tiny.direction is Direction.DOWN
+    track = axis_motion(MountAxis.PRIMARY, -400.0 / 3600.0)
+    assert track is not None
+    assert track.mode is TrackerMode.TRACK
+    assert track.rate_deg_s == pytest.approx(-8.0 / 60.0)
+    assert track.direction is Direction.LEFT
+    near_guide = axis_motion(MountAxis.PRIMARY, 300.0 / 3600.0)
+    assert near_guide is not None
+    assert near_guide.guide_speed_arcsec_s == 255
+    utility = axis_motion(MountAxis.SECONDARY, 2.1)
+    assert utility is not None
+    assert utility.mode is TrackerMode.UTILITY
+    assert axis_motion(MountAxis.PRIMARY, 0.0) is None
+
+
+@given(
+    axis=st.sampled_from(MountAxis),
+    rate_deg_s=st.floats(min_value=-4.0, max_value=4.0, allow_nan=False).filter(bool),
+)
+def test_every_rate_maps_to_the_nearest_supported_one(axis: MountAxis, rate_deg_s: float) -> None:
+    motion = axis_motion(axis, rate_deg_s)
+    assert motion is not None
+    assert (motion.rate_deg_s > 0) == (rate_deg_s > 0)  # never the wrong way
+    positive = Direction.RIGHT if axis is MountAxis.PRIMARY else Direction.UP
+    assert (motion.direction is positive) == (rate_deg_s > 0)
+    speed = abs(rate_deg_s) * 3600.0
+    given_speed = abs(motion.rate_deg_s) * 3600.0
+    if speed <= GUIDE_SPEED_MAX_ARCSEC_S:
+        assert motion.mode is TrackerMode.GUIDE
+        assert motion.guide_speed_arcsec_s is not None
+        assert abs(given_speed - speed) <= max(0.5, 1.0 - speed) + 1e-9
+    else:
+        nearest = min(abs(supported - speed) for supported in SUPPORTED_ABOVE_GUIDE)
+        assert abs(given_speed - speed) == pytest.approx(nearest)
+    if motion.mode is TrackerMode.GUIDE:
+        assert motion.guide_speed_arcsec_s is not None
+        assert 1 <= motion.guide_speed_arcsec_s <= GUIDE_SPEED_MAX_ARCSEC_S
+        assert given_speed == pytest.approx(motion.guide_speed_arcsec_s)
+    else:
+        assert motion.guide_speed_arcsec_s is None
+
+
+def test_guide_directions_press_one_arrow_each() -> None:
+    assert guide_button(GuideDirection.NORTH) == (MountAxis.SECONDARY, Direction.UP)
+    assert guide_button(GuideDirection.SOUTH) == (MountAxis.SECONDARY, Direction.DOWN)
+    assert guide_button(GuideDirection.EAST) == (MountAxis.PRIMARY, Direction.LEFT)
+    assert guide_button(GuideDirection.WEST) == (MountAxis.PRIMARY, Direction.RIGHT)
