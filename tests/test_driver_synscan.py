@@ -22,6 +22,7 @@ from scopelink.mount import (
     ParkPosition,
     TrackingMode,
 )
+from scopelink.protocol.synscan import AnyCommand, AnyReply, CancelGoto
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, SimClock
 from tests.test_driver_synscan_support import (
@@ -297,3 +298,33 @@ async def test_open_and_an_unreachable_link_is_a_clear_error() -> None:
 def test_time_zone_is_whole_hours() -> None:
     with pytest.raises(ValueError, match="UTC offset"):
         SynScanMount("tcp://127.0.0.1:1", site=MADRID, utc_offset_hours=20)
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+async def test_abort_holds_the_wire_while_the_poller_runs(transport: str) -> None:
+    async with rig(transport) as r:
+        seen: list[AnyCommand] = []
+        answer = r.emulator.hand_control.answer
+
+        async def note(command: AnyCommand) -> AnyReply:
+            seen.append(command)
+            return await answer(command)
+
+        r.emulator.hand_control.answer = note  # type: ignore[method-assign]
+        async with r.mount.watching():
+            await r.mount.set_tracking(TrackingMode.SIDEREAL)
+            await r.mount.move_axis(MountAxis.PRIMARY, 1.0)
+            await r.mount.wait_for(lambda _: r.mount.poller.polls >= 2, timeout_s=5.0)
+            polls_before = r.mount.poller.polls
+            await r.mount.abort()
+            await r.mount.wait_for(lambda state: not state.slewing, timeout_s=5.0)
+        assert polls_before > 0
+        start = next(i for i, c in enumerate(seen) if isinstance(c, CancelGoto))
+        names = [type(c).__name__ for c in seen[start : start + 5]]
+        assert names == [
+            "CancelGoto",
+            "FixedRateSlew",
+            "FixedRateSlew",
+            "SetTrackingMode",
+            "IsGotoInProgress",
+        ]

@@ -399,18 +399,19 @@ class SynScanMount(Mount):
         """``M``, then rate 0 on both axes (firmware up to 3.36 resumes rate motion after ``M``),
         tracking re-enabled as it was, and ``L`` checked (``M`` sent again if a goto still runs)."""
         await self._cancel_pulses()
-        await self._ask(CancelGoto(), Ack)
-        for axis in MountAxis:
-            await self._send_rate_zero(axis)
-        self._axis_rates.clear()
-        await self._resume_tracking()
-        for attempt in range(2):
-            running = await self._ask(IsGotoInProgress(), GotoInProgress)
-            if not running.in_progress:
-                break
-            if attempt == 1:
-                raise DeviceError("abort: the hand control still reports a goto in progress")
+        async with self.wire.exclusive():
             await self._ask(CancelGoto(), Ack)
+            for axis in MountAxis:
+                await self._send_rate_zero(axis)
+            self._axis_rates.clear()
+            await self._resume_tracking()
+            for attempt in range(2):
+                running = await self._ask(IsGotoInProgress(), GotoInProgress)
+                if not running.in_progress:
+                    break
+                if attempt == 1:
+                    raise DeviceError("abort: the hand control still reports a goto in progress")
+                await self._ask(CancelGoto(), Ack)
         self._motion_epoch += 1
         self._goto_running = False
         self._settle = None
@@ -427,9 +428,10 @@ class SynScanMount(Mount):
             await self._ask(SetTrackingMode(synscan_tracking(self._tracking)), Ack)
 
     async def _stop_axis(self, axis: MountAxis) -> None:
-        await self._send_rate_zero(axis)
-        self._axis_rates.pop(axis, None)
-        await self._resume_tracking()
+        async with self.wire.exclusive():
+            await self._send_rate_zero(axis)
+            self._axis_rates.pop(axis, None)
+            await self._resume_tracking()
 
     # --- manual motion ----------------------------------------------------------------------------
 
@@ -505,8 +507,9 @@ class SynScanMount(Mount):
     async def _end_pulse(self, axis: MountAxis, ends_at: float) -> None:
         await asyncio.sleep(ends_at - asyncio.get_running_loop().time())
         try:
-            await self._send_rate_zero(axis)
-            await self._resume_tracking()
+            async with self.wire.exclusive():
+                await self._send_rate_zero(axis)
+                await self._resume_tracking()
         except MountError as error:
             logger.warning("%s: ending a guide pulse failed: %s", self.wire.name, error)
             self._report_problem(f"ending a guide pulse failed: {error}")
@@ -543,9 +546,10 @@ class SynScanMount(Mount):
         self._limits.check_altaz(park.alt_deg, park.az_deg, what="park position")
         await self._require_aligned("park goto")
         await self._cancel_pulses()
-        await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
-        self._tracking = TrackingMode.OFF
-        await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
+        async with self.wire.exclusive():
+            await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
+            self._tracking = TrackingMode.OFF
+            await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
         self._parked = True
         self._goto_started((park.alt_deg, park.az_deg))
         self._publish(dataclasses.replace(self.state, parked=True, tracking=TrackingMode.OFF))

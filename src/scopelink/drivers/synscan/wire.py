@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
 from scopelink.links import Link, LinkClosedError, LinkError
@@ -95,6 +96,7 @@ class SynScanWire:
         self._codec = SynScanClientConnection()
         self._needs_resync = False
         self._next_echo = 0
+        self._holder: asyncio.Task[object] | None = None
         self.last_write_at = 0.0
         """Event-loop time at which the last command started to leave (times guide pulses)."""
 
@@ -136,8 +138,24 @@ class SynScanWire:
         ``meanwhile`` runs right after the command has been written (again if it is re-sent): CPU
         work that then overlaps the device's answer instead of leaving the wire idle.
         """
+        if self._holder is not None and self._holder is asyncio.current_task():
+            return await self._ask_holding_the_wire(command, meanwhile)
         async with self.scheduler.turn(priority):
             return await self._ask_holding_the_wire(command, meanwhile)
+
+    @asynccontextmanager
+    async def exclusive(self, priority: Priority = Priority.COMMAND) -> AsyncIterator[None]:
+        """Hold the wire for several exchanges of this task (an abort's ``M`` and its stops): no
+        poll slips in between them."""
+        if self._holder is not None and self._holder is asyncio.current_task():
+            yield
+            return
+        async with self.scheduler.turn(priority):
+            self._holder = asyncio.current_task()
+            try:
+                yield
+            finally:
+                self._holder = None
 
     async def _ask_holding_the_wire(
         self, command: AnyCommand, meanwhile: Callable[[], object] | None
