@@ -81,3 +81,16 @@ def test_guide_directions_follow_hemisphere_and_pier_side() -> None:
     south = SynScanMount("tcp://127.0.0.1:1", site=dataclasses.replace(MADRID, latitude_deg=-33))
     assert south._guide_axis(GuideDirection.WEST) == (MountAxis.PRIMARY, -1.0)
     assert south._guide_axis(GuideDirection.NORTH) == (MountAxis.SECONDARY, -1.0)
+
+
+async def test_disconnect_during_a_pulse_stops_its_axis() -> None:
+    async with rig("tcp") as r:
+        await r.mount.pulse_guide(GuideDirection.NORTH, 10_000)
+        assert r.sim.snapshot().slewing
+        await r.mount.disconnect()
+        r.sim.step(5.0)  # the motor ramps down
+        resting = r.sim.snapshot()
+        assert not resting.slewing
+        r.sim.step(60.0)
+        still = r.sim.snapshot()  # tracking is off: the tube holds its alt/az
+        assert (still.alt_deg, still.az_deg) == (resting.alt_deg, resting.az_deg)

@@ -245,11 +245,11 @@ class SynScanMount(Mount):
             await self.wire.close()
             return
         try:
-            await self._cancel_pulses()
-            for axis, rate in list(self._axis_rates.items()):
-                if rate:
-                    with contextlib.suppress(MountError):
-                        await self._stop_axis(axis)
+            moving = await self._cancel_pulses()  # a cut-short pulse leaves its axis moving
+            moving |= {axis for axis, rate in self._axis_rates.items() if rate}
+            for axis in sorted(moving, key=lambda axis: axis.value):
+                with contextlib.suppress(MountError):
+                    await self._stop_axis(axis)
         finally:
             self._connected = False
             self._axis_rates.clear()
@@ -524,14 +524,17 @@ class SynScanMount(Mount):
         if task is not None:
             task.cancel()
 
-    async def _cancel_pulses(self) -> None:
-        tasks = list(self._pulses.values())
+    async def _cancel_pulses(self) -> set[MountAxis]:
+        """Forget running pulses (the caller's next command takes the axes over); returns their
+        axes, still moving at the guide rate."""
+        pulses = dict(self._pulses)
         self._pulses.clear()
-        for task in tasks:
+        for task in pulses.values():
             task.cancel()
-        for task in tasks:
+        for task in pulses.values():
             with contextlib.suppress(asyncio.CancelledError):
                 await task
+        return set(pulses)
 
     # --- tracking, park, site, time ------------------------------------------------------------
 
