@@ -197,3 +197,19 @@ def test_ports_runs(tmp_path: Path) -> None:
     ports = json.loads(listed.stdout)
     assert isinstance(ports, list)
     assert all({"device", "usb_id", "likely_hand_control"} <= set(port) for port in ports)
+
+
+@pytest.mark.parametrize("command", ["goto", "sync"])
+@pytest.mark.parametrize("dec", ["-05:23:28", "-5°23'28\"", "-05 23 28", "-5.3911"])
+def test_a_negative_declination_is_an_argument_not_an_option(command: str, dec: str) -> None:
+    args = build_parser().parse_args([command, "05:35:17", dec, "-d", "sim"])
+    assert args.target == ["05:35:17", dec]
+    assert args.device == "sim"
+    target = parse_target(args.target)
+    assert isinstance(target, Coordinates)
+    assert target.second == pytest.approx(-5.3911, abs=1e-3)
+
+
+def test_unknown_options_are_still_refused() -> None:
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["goto", "M31", "-x"])
