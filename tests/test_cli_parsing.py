@@ -210,6 +210,11 @@ def test_a_negative_declination_is_an_argument_not_an_option(command: str, dec: 
     assert target.second == pytest.approx(-5.3911, abs=1e-3)
 
 
+def test_a_negative_rate_in_sidereal_multiples_is_an_argument() -> None:
+    args = build_parser().parse_args(["move", "dec", "-16x", "--for", "2"])
+    assert (args.rate, args.seconds) == ("-16x", 2.0)
+
+
 def test_unknown_options_are_still_refused() -> None:
     with pytest.raises(SystemExit):
         build_parser().parse_args(["goto", "M31", "-x"])

@@ -18,7 +18,7 @@ from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import add_device_arguments, run_on_mount
 from scopelink.cli.options import until_stopped
-from scopelink.cli.targets import Coordinates, Named, accept_negative_angles, parse_target
+from scopelink.cli.targets import Coordinates, Named, accept_negative_values, parse_target
 from scopelink.mount import Mount, SlewProgress
 
 __all__ = ["EXIT_INTERRUPTED", "register", "run_goto", "run_sync"]
@@ -73,7 +73,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help=f"abort a slew still running after S seconds (default {DEFAULT_SLEW_TIMEOUT_S:g})",
     )
     add_device_arguments(goto)
-    accept_negative_angles(goto)
+    accept_negative_values(goto)
     goto.set_defaults(run=run_goto)
 
     sync = subparsers.add_parser(
@@ -85,7 +85,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     sync.add_argument("target", nargs="+", metavar="TARGET", help="name, or RA DEC")
     add_device_arguments(sync)
-    accept_negative_angles(sync)
+    accept_negative_values(sync)
     sync.set_defaults(run=run_sync)
 
 

@@ -11,6 +11,7 @@ from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import add_device_arguments, run_on_mount
 from scopelink.cli.options import until_stopped
+from scopelink.cli.targets import accept_negative_values
 from scopelink.mount import (
     AlignmentMode,
     GuideDirection,
@@ -72,6 +73,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     move.add_argument("rate", type=str, metavar="RATE", help="°/s (signed), or Nx sidereal")
     move.add_argument("--for", dest="seconds", type=float, metavar="S", help="stop after S s")
     add_device_arguments(move)
+    accept_negative_values(move)
     move.set_defaults(run=_run_move)
 
     stop = _add(

@@ -16,14 +16,14 @@ from typing import Final
 from scopelink.astro import parse_degrees, parse_hours
 from scopelink.cli.errors import CommandError
 
-__all__ = ["Coordinates", "Named", "Target", "accept_negative_angles", "parse_target"]
+__all__ = ["Coordinates", "Named", "Target", "accept_negative_values", "parse_target"]
 
 _ANGLE_WORD: Final = re.compile(r"^[+-]?[0-9][0-9.:hmsd°'\"′″]*$")
-_NEGATIVE_ANGLE: Final = re.compile(r"^-[0-9][0-9.:hmsd°'\"′″ ]*$")
+_NEGATIVE_VALUE: Final = re.compile(r"^-[0-9][0-9.:hmsdx°'\"′″ ]*$")
 
 
-def accept_negative_angles(parser: argparse.ArgumentParser) -> None:
-    """Let ``parser`` take ``-05:23:28`` or ``-5°23'`` as a positional argument.
+def accept_negative_values(parser: argparse.ArgumentParser) -> None:
+    """Let ``parser`` take ``-05:23:28``, ``-5°23'`` or a rate ``-16x`` as a positional argument.
 
     argparse reads any word starting with ``-`` as an option unless it looks like a negative
     *number*; a sexagesimal declination does not, so ``goto 05:35:17 -05:23:28`` would fail with
@@ -31,7 +31,7 @@ def accept_negative_angles(parser: argparse.ArgumentParser) -> None:
     stable since Python 3.2) negative-number pattern is the smallest fix. None of our options
     starts with a digit, so nothing else changes.
     """
-    parser._negative_number_matcher = _NEGATIVE_ANGLE
+    parser._negative_number_matcher = _NEGATIVE_VALUE
 
 
 @dataclass(frozen=True, slots=True)
