@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from scopelink.astro import j2000_to_observed
+from scopelink.astro import Site, j2000_to_observed
 from scopelink.drivers.skytracker import (
     SkyTrackerMount,
     SlewInProgressError,
@@ -251,3 +251,19 @@ async def test_abort_goes_before_waiting_polls(tmp_path: Path, transport: str) -
             state = await r.driver.wait_for(lambda s: not s.slewing, 5.0)
             assert r.driver.poller.polls > polls
         assert state.tracking is TrackingMode.OFF
+
+
+async def test_set_site_moves_only_the_pc_side_altaz(tmp_path: Path, transport: str) -> None:
+    async with rig(tmp_path, transport) as r:
+        r.point(45.0, 90.0)
+        before = await r.driver.refresh()
+        sent = r.driver.line.commands_sent
+        elsewhere = Site(latitude_deg=-30.0, longitude_deg=11.0, pressure_hpa=0.0)
+        await r.driver.set_site(elsewhere)
+        assert r.driver.line.commands_sent == sent  # the box keeps no site
+        assert r.driver.site == elsewhere
+        after = r.driver.state
+        assert after.ra_j2000_hours == before.ra_j2000_hours
+        assert after.alt_deg is not None
+        assert before.alt_deg is not None
+        assert abs(after.alt_deg - before.alt_deg) > 10.0

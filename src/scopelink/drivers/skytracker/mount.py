@@ -100,9 +100,27 @@ class SlewInProgressError(MountError):
 
 @dataclass(frozen=True, slots=True)
 class _Position:
+    """One Sky Commander reading and what the PC derives from it (computed once, at the time
+    the reply arrived)."""
+
     ra_j2000_hours: float
     dec_j2000_deg: float
     read_at: datetime
+    ra_of_date_hours: float
+    dec_of_date_deg: float
+    alt_deg: float
+    az_deg: float
+
+    @classmethod
+    def from_reply(cls, reply: object, read_at: datetime, site: Site) -> _Position:
+        assert isinstance(reply, PositionReply)
+        return cls.of(reply.ra_hours, reply.dec_degrees, read_at, site)
+
+    @classmethod
+    def of(cls, ra: float, dec: float, read_at: datetime, site: Site) -> _Position:
+        alt, az = j2000_to_observed(ra, dec, read_at, site)
+        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
+        return cls(ra, dec, read_at, ra_of_date, dec_of_date, alt, az)
 
 
 class SkyTrackerMount(Mount):
@@ -394,8 +412,7 @@ class SkyTrackerMount(Mount):
                 raise
             self._mode = TrackerMode.GOTO
             return
-        assert isinstance(reply, PositionReply)
-        self._position = _Position(reply.ra_hours, reply.dec_degrees, self.now())
+        self._position = _Position.from_reply(reply, self.now(), self.site)
 
     async def read_position(self) -> tuple[float, float]:
         """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
@@ -409,8 +426,7 @@ class SkyTrackerMount(Mount):
         (reply,) = await line.commander(
             [ReadPosition()], priority, retry_delays_s=None if retry else ()
         )
-        assert isinstance(reply, PositionReply)
-        self._position = _Position(reply.ra_hours, reply.dec_degrees, self.now())
+        self._position = _Position.from_reply(reply, self.now(), self.site)
         return self._position
 
     async def read_status(self) -> TrackerStatus:
@@ -433,30 +449,21 @@ class SkyTrackerMount(Mount):
         self._mode = reply.status.mode
 
     def _publish_now(self) -> MountState:
-        now = self.now()
         position = self._position
         status = self._status
-        coordinates: dict[str, float | None] = {}
-        if position is not None:
-            ra, dec = position.ra_j2000_hours, position.dec_j2000_deg
-            alt, az = j2000_to_observed(ra, dec, position.read_at, self.site)
-            ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, position.read_at)
-            coordinates = {
-                "ra_j2000_hours": ra,
-                "dec_j2000_deg": dec,
-                "ra_of_date_hours": ra_of_date,
-                "dec_of_date_deg": dec_of_date,
-                "alt_deg": alt,
-                "az_deg": az,
-            }
         pulsing = Direction(0)
         for direction, _ in self._pulses.values():
             pulsing |= direction
         pressed = status.directions if status is not None else Direction(0)
         state = MountState(
-            read_at=now,
+            read_at=self.now(),
             connected=self._line is not None,
-            **coordinates,  # type: ignore[arg-type]
+            ra_j2000_hours=position.ra_j2000_hours if position else None,
+            dec_j2000_deg=position.dec_j2000_deg if position else None,
+            ra_of_date_hours=position.ra_of_date_hours if position else None,
+            dec_of_date_deg=position.dec_of_date_deg if position else None,
+            alt_deg=position.alt_deg if position else None,
+            az_deg=position.az_deg if position else None,
             slewing=self._mode is TrackerMode.GOTO or bool(pressed & ~pulsing),
             tracking=self._tracking_choice if self._mode in _TRACKING else TrackingMode.OFF,
             parked=False,
@@ -534,16 +541,21 @@ class SkyTrackerMount(Mount):
         """``U`` if a GOTO runs (re-target), ``Q`` ``L99 ...`` ``q``, then ``G``."""
         line = self._require_commander()
         await self._release_all_buttons()
-        if self._mode is TrackerMode.GOTO:
-            await line.tracker(SelectMode(TrackerMode.UTILITY))
-            self._mode = TrackerMode.UTILITY
+        # UTILITY first: it ends a GOTO under way (the box ignores 'G' during one), and makes
+        # the status after 'G' tell a lost 'G' (still UTILITY) from a GOTO that ended at once
+        # (TRACK).
+        await line.tracker(SelectMode(TrackerMode.UTILITY))
+        self._mode = TrackerMode.UTILITY
         (reply,) = await line.commander([LoadObject.current(ra_j2000_hours, dec_j2000_deg)])
         if not isinstance(reply, Acknowledge):
             raise DeviceError(f"the Sky Commander did not acknowledge the object: {reply}")
-        await line.tracker(SelectMode(TrackerMode.GOTO))
         # 'G' has no reply: the status tells that the box took it (GOTO, or TRACK at once when
-        # already on target).
-        self._note_status(await line.tracker(ReadStatus()))
+        # already on target). A lost 'G' (unbuffered port) is sent once more.
+        for _ in range(2):
+            replies = await line.tracker_sequence([SelectMode(TrackerMode.GOTO), ReadStatus()])
+            self._note_status(replies[-1])
+            if self._mode in (TrackerMode.GOTO, *_TRACKING):
+                break
         if self._mode not in (TrackerMode.GOTO, *_TRACKING):
             raise DeviceError(
                 f"the Sky Tracker did not start the GOTO (status {self._status}): was 'G' lost "
@@ -559,22 +571,39 @@ class SkyTrackerMount(Mount):
                 "cannot sync during a GOTO: the Sky Tracker lends no bus while it slews; "
                 "wait for the GOTO to end or abort it"
             )
-        load, _ = await line.commander(
-            [LoadObject.current(ra_j2000_hours, dec_j2000_deg), Realign()]
-        )
-        if not isinstance(load, Acknowledge):
-            raise DeviceError(f"the Sky Commander did not acknowledge the object: {load}")
-        # 'N' has no reply: the position read back tells whether the realign took.
-        after = await self._read_position(line, Priority.COMMAND, retry=True)
-        self._publish_now()
-        off_by = angular_separation_deg(
-            after.ra_j2000_hours * 15.0, after.dec_j2000_deg, ra_j2000_hours * 15.0, dec_j2000_deg
-        )
-        if off_by > SYNC_TOLERANCE_DEG:
-            raise DeviceError(
-                f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced "
-                "position after 'N' (was 'N' lost on the line?)"
+        # 'N' has no reply: the position read back tells whether the realign took. Realigning
+        # can be repeated, so a lost 'N' (the port is unbuffered) gets a second try.
+        off_by = 0.0
+        for _ in range(2):
+            load, _ = await line.commander(
+                [LoadObject.current(ra_j2000_hours, dec_j2000_deg), Realign()]
             )
+            if not isinstance(load, Acknowledge):
+                raise DeviceError(f"the Sky Commander did not acknowledge the object: {load}")
+            after = await self._read_position(line, Priority.COMMAND, retry=True)
+            self._publish_now()
+            off_by = angular_separation_deg(
+                after.ra_j2000_hours * 15.0,
+                after.dec_j2000_deg,
+                ra_j2000_hours * 15.0,
+                dec_j2000_deg,
+            )
+            if off_by <= SYNC_TOLERANCE_DEG:
+                return
+            logger.info("realign did not take (%.3f° off): once more", off_by)
+        raise DeviceError(
+            f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced "
+            "position after 'N', twice (is 'N' lost on the line?)"
+        )
+
+    async def _set_site(self, site: Site) -> None:
+        """The box keeps no site: only the PC-side alt/az of the last reading changes."""
+        position = self._position
+        if position is not None:
+            self._position = _Position.of(
+                position.ra_j2000_hours, position.dec_j2000_deg, position.read_at, site
+            )
+            self._publish_now()
 
     def _require_line(self) -> SkyTrackerLine:
         if self._line is None:
