@@ -225,13 +225,15 @@ class TelescopeDevice:
             )
         return value
 
+    def _radec_if_known(self, state: MountState) -> tuple[float | None, float | None]:
+        """RA/Dec of ``state`` in the configured frame (None before the first reading)."""
+        if self.config.equatorial_system is EquatorialSystem.J2000:
+            return state.ra_j2000_hours, state.dec_j2000_deg
+        return state.ra_of_date_hours, state.dec_of_date_deg
+
     def _radec(self) -> tuple[float, float]:
         """The current RA/Dec in the configured frame."""
-        state = self.mount.state
-        if self.config.equatorial_system is EquatorialSystem.J2000:
-            ra, dec = state.ra_j2000_hours, state.dec_j2000_deg
-        else:
-            ra, dec = state.ra_of_date_hours, state.dec_of_date_deg
+        ra, dec = self._radec_if_known(self.mount.state)
         return self._position(ra, "position"), self._position(dec, "position")
 
     def to_j2000(self, ra_hours: float, dec_deg: float) -> tuple[float, float]:
@@ -317,17 +319,13 @@ class TelescopeDevice:
             "IsPulseGuiding": state.pulse_guiding,
             "Slewing": self.slewing,
             "Tracking": state.tracking is not TrackingMode.OFF,
-            "SiderealTime": self._sidereal_time(Params.from_pairs((), exact=False)),
+            "SiderealTime": self.sidereal_time(),
             "UTCDate": format_utc(self.mount.now()),
         }
         if state.alt_deg is not None and state.az_deg is not None:
             values["Altitude"] = state.alt_deg
             values["Azimuth"] = state.az_deg
-        ra, dec = (
-            (state.ra_j2000_hours, state.dec_j2000_deg)
-            if self.config.equatorial_system is EquatorialSystem.J2000
-            else (state.ra_of_date_hours, state.dec_of_date_deg)
-        )
+        ra, dec = self._radec_if_known(state)
         if ra is not None and dec is not None:
             values["RightAscension"] = ra
             values["Declination"] = dec
@@ -338,7 +336,8 @@ class TelescopeDevice:
 
     # --- telescope reads -------------------------------------------------------------------------
 
-    def _sidereal_time(self, _: Params) -> float:
+    def sidereal_time(self) -> float:
+        """Local apparent sidereal time (hours) at the mount's clock and site."""
         return lst_hours(self.mount.now(), self.mount.site.longitude_deg)
 
     def _side_of_pier(self, _: Params) -> int:
@@ -647,7 +646,7 @@ class TelescopeDevice:
             "ispulseguiding": Member(get=lambda _: mount.state.pulse_guiding),
             "sideofpier": Member(get=self._side_of_pier, put=ni("Setting SideOfPier")),
             "destinationsideofpier": Member(get=self._destination_side_of_pier),
-            "siderealtime": Member(get=self._sidereal_time),
+            "siderealtime": Member(get=lambda _: self.sidereal_time()),
             "tracking": Member(
                 get=lambda _: mount.state.tracking is not TrackingMode.OFF,
                 put=self._put_tracking,
