@@ -158,3 +158,16 @@ async def test_unspaced_sends_fail_on_the_strict_line(tmp_path: Path, transport:
             assert emulator.tracker.mode.value == "U"  # no GOTO started
         finally:
             await driver.disconnect()
+
+
+async def test_connect_after_a_synscan_probe_left_a_frame_open(tmp_path: Path) -> None:
+    """A SynScan driver's echo probe ``K`` + one byte leaves the box waiting for the second
+    payload byte of its own ``K``: the driver's first ``V`` is swallowed, the second answered."""
+    async with rig(tmp_path, "pty", connect=False) as r:
+        probe = await open_serial(r.spec, 9600, stopbits=2)
+        await probe.write(b"Kx")
+        await probe.close()
+        await r.driver.connect()
+        assert r.driver.identity.firmware == "v4.0"
+        assert r.driver.line.resyncs == 1
+        assert r.emulator.tracker.guide_speeds_arcsec_s == (ord("x"), ord("V"))

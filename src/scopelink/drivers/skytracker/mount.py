@@ -274,9 +274,7 @@ class SkyTrackerMount(Mount):
         try:
             if calibration is not None:
                 await self._write_calibration_first(line, calibration)
-            version = await line.tracker(ReadVersion())
-            assert isinstance(version, VersionReply)
-            self._version = version.text
+            self._version = await self._read_version(line)
             speeds = await line.tracker(ReadGuideSpeed())
             assert isinstance(speeds, GuideSpeedReply)
             self._guide_speeds = (speeds.azimuth_arcsec_per_s, speeds.elevation_arcsec_per_s)
@@ -292,6 +290,19 @@ class SkyTrackerMount(Mount):
             raise
         self._problems = ()
         self._publish_now()
+
+    @staticmethod
+    async def _read_version(line: SkyTrackerLine) -> str:
+        """``V``, asked twice if need be: a probe by another program (e.g. a SynScan driver's
+        ``K`` echo) can leave the box inside a ``K`` or ``S`` frame that swallows the first
+        ``V`` as payload; once that frame is complete (or dropped), ``V`` is answered."""
+        try:
+            reply = await line.tracker(ReadVersion())
+        except ReplyTimeoutError as error:
+            logger.info("no version on the first try, asking again: %s", error)
+            reply = await line.tracker(ReadVersion())
+        assert isinstance(reply, VersionReply)
+        return reply.text
 
     async def _open_link(self) -> Link:
         try:
