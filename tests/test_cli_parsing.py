@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
@@ -13,10 +15,12 @@ from hypothesis import strategies as st
 from scopelink.astro import format_degrees, format_hours
 from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
+from scopelink.cli.goto_command import SlewDisplay
 from scopelink.cli.main import build_parser
 from scopelink.cli.motion_commands import parse_rate
 from scopelink.cli.ports_command import SerialPort
 from scopelink.cli.targets import Coordinates, Named, parse_target
+from scopelink.mount import MountState, SlewProgress
 from scopelink.sim import SIDEREAL_RATE_DEG_S
 from tests.test_cli_support import scopelink
 
@@ -218,3 +222,26 @@ def test_a_negative_rate_in_sidereal_multiples_is_an_argument() -> None:
 def test_unknown_options_are_still_refused() -> None:
     with pytest.raises(SystemExit):
         build_parser().parse_args(["goto", "M31", "-x"])
+
+
+# --- slew progress lines ---------------------------------------------------------------------
+
+
+def test_progress_lines_and_a_position_that_stops_updating(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Without a terminal: a line a second on stderr; a slewing mount whose position stays put
+    (a Sky Tracker during GOTO) is flagged."""
+    at = datetime(2026, 1, 1, tzinfo=UTC)
+    slewing = MountState(read_at=at, connected=True, slewing=True)
+    with SlewDisplay("M 31", stale_after_s=0.05) as display:
+        display.update(SlewProgress(slewing, 12.345, 4.2))
+        first = capsys.readouterr().err
+        time.sleep(0.1)
+        display.update(SlewProgress(slewing, 12.345, None))  # within the second: not printed
+        assert capsys.readouterr().err == ""
+        time.sleep(1.0)
+        display.update(SlewProgress(slewing, 12.345, None))
+        later = capsys.readouterr().err
+    assert first == "M 31: 12.35° to go, ETA 4 s\n"
+    assert later == "M 31: 12.35° to go (position not updating)\n"

@@ -21,7 +21,10 @@ from scopelink.cli.options import until_stopped
 from scopelink.cli.targets import Coordinates, Named, accept_negative_values, parse_target
 from scopelink.mount import Mount, SlewProgress
 
-__all__ = ["EXIT_INTERRUPTED", "register", "run_goto", "run_sync"]
+__all__ = ["EXIT_INTERRUPTED", "SlewDisplay", "register", "run_goto", "run_sync"]
+
+_STALE_POSITION_S = 3.0
+"""A slew whose reported position has not changed for this long is flagged as not updating."""
 
 EXIT_INTERRUPTED = 130
 """Ctrl-C: the shell's convention (128 + SIGINT)."""
@@ -124,7 +127,7 @@ def run_goto(args: argparse.Namespace) -> int:
 
 async def _follow_slew(mount: Mount, label: str, timeout_s: float, stop: asyncio.Event) -> int:
     """Show progress until the slew ends; ``stop`` (Ctrl-C) or a timeout aborts it."""
-    with _SlewDisplay(label) as display:
+    with SlewDisplay(label) as display:
         slew = asyncio.create_task(mount.wait_for_slew(timeout_s, progress=display.update))
         stopper = asyncio.create_task(stop.wait())
         done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
@@ -150,18 +153,21 @@ async def _follow_slew(mount: Mount, label: str, timeout_s: float, stop: asyncio
     return 0
 
 
-class _SlewDisplay:
+class SlewDisplay:
     """A progress bar on a terminal; elsewhere a line a second on stderr (logs, scripts)."""
 
-    def __init__(self, label: str) -> None:
+    def __init__(self, label: str, stale_after_s: float = _STALE_POSITION_S) -> None:
         self._label = label
+        self._stale_after_s = stale_after_s
         self._console = Console(stderr=True, highlight=False)
         self._progress: Progress | None = None
         self._task: TaskID | None = None
         self._start_distance: float | None = None
         self._printed_at = 0.0
+        self._last_distance: float | None = None
+        self._changed_at = time.monotonic()
 
-    def __enter__(self) -> _SlewDisplay:
+    def __enter__(self) -> SlewDisplay:
         if self._console.is_terminal:
             self._progress = Progress(
                 TextColumn("{task.description}"),
@@ -187,6 +193,12 @@ class _SlewDisplay:
     def update(self, progress: SlewProgress) -> None:
         distance, eta = progress.distance_deg, progress.eta_s
         distance_text = "" if distance is None else f"{distance:.2f}° to go"
+        now = time.monotonic()
+        if distance != self._last_distance:
+            self._last_distance, self._changed_at = distance, now
+        elif progress.state.slewing and now - self._changed_at > self._stale_after_s:
+            # A Sky Tracker refuses its bus during a GOTO, so no position is read until it ends.
+            distance_text += " (position not updating)"
         eta_text = "" if eta is None else f"ETA {_duration(eta)}"
         if self._progress is not None and self._task is not None:
             if distance is not None and self._start_distance is None:
@@ -197,7 +209,6 @@ class _SlewDisplay:
                 self._task, total=total, completed=done, distance=distance_text, eta=eta_text
             )
             return
-        now = time.monotonic()
         if now - self._printed_at >= 1.0:
             self._printed_at = now
             parts = ", ".join(part for part in (distance_text, eta_text) if part) or "slewing"
