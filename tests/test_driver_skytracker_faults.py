@@ -144,9 +144,18 @@ async def test_no_identification_no_connection(
     tmp_path: Path, transport: str, bad: FaultKind, error: type[Exception]
 ) -> None:
     async with rig(tmp_path, transport, connect=False) as r:
-        r.emulator.faults.add(fault(bad, "V"))
+        r.emulator.faults.add(Fault(bad, "V", times=None))  # every V (one is asked again)
         with pytest.raises(error, match="V: read version"):
             await r.driver.connect()
         assert not r.driver.state.connected
         with pytest.raises(NotConnectedError):
             await r.driver.refresh()
+
+
+@transports
+async def test_one_lost_version_reply_is_asked_again(tmp_path: Path, transport: str) -> None:
+    async with rig(tmp_path, transport, connect=False) as r:
+        r.emulator.faults.add(fault(FaultKind.DROP, "V"))
+        await r.driver.connect()
+        assert r.driver.identity.firmware == "v4.0"
+        assert r.driver.line.resyncs == 1

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from scopelink.drivers.skytracker import axis_motion, guide_button
+from scopelink.drivers.skytracker import axis_motion, guide_button, plan_buttons
 from scopelink.drivers.skytracker.motion import (
     GUIDE_SPEED_MAX_ARCSEC_S,
     TRACK_ARROW_ARCSEC_S,
@@ -74,3 +74,48 @@ def test_guide_directions_press_one_arrow_each() -> None:
     assert guide_button(GuideDirection.SOUTH) == (MountAxis.SECONDARY, Direction.DOWN)
     assert guide_button(GuideDirection.EAST) == (MountAxis.PRIMARY, Direction.LEFT)
     assert guide_button(GuideDirection.WEST) == (MountAxis.PRIMARY, Direction.RIGHT)
+
+
+def test_button_plan_returns_to_the_mode_from_before() -> None:
+    up_fast = axis_motion(MountAxis.SECONDARY, 4.0)
+    assert up_fast is not None
+    moving = plan_buttons(
+        {MountAxis.SECONDARY: up_fast},
+        {},
+        pulse_speeds_arcsec_s=(120, 120),
+        mode=TrackerMode.TRACK,
+        rest_mode=None,
+    )
+    assert moving.mode is TrackerMode.UTILITY
+    assert moving.pressed == (Direction.UP,)
+    assert moving.rest_mode is TrackerMode.TRACK
+    stopped = plan_buttons(
+        {}, {}, pulse_speeds_arcsec_s=(120, 120), mode=moving.mode, rest_mode=moving.rest_mode
+    )
+    assert stopped.mode is TrackerMode.TRACK
+    assert stopped.pressed == ()
+    assert stopped.rest_mode is None
+
+
+def test_button_plan_guides_at_the_pulse_speed_beside_a_guide_rate_motion() -> None:
+    slow_right = axis_motion(MountAxis.PRIMARY, 30.0 / 3600.0)
+    assert slow_right is not None
+    plan = plan_buttons(
+        {MountAxis.PRIMARY: slow_right},
+        {MountAxis.SECONDARY: Direction.DOWN},
+        pulse_speeds_arcsec_s=(60, 45),
+        mode=TrackerMode.TRACK,
+        rest_mode=None,
+    )
+    assert plan.mode is TrackerMode.GUIDE
+    assert plan.guide_speeds_arcsec_s == (30, 45)  # azimuth held at 30, elevation pulses at 45
+    assert plan.all_pressed == Direction.RIGHT | Direction.DOWN
+    pulses_only = plan_buttons(
+        {},
+        {MountAxis.PRIMARY: Direction.LEFT},
+        pulse_speeds_arcsec_s=(60, 45),
+        mode=TrackerMode.TRACK,
+        rest_mode=None,
+    )
+    assert pulses_only.mode is TrackerMode.GUIDE
+    assert pulses_only.guide_speeds_arcsec_s == (60, 45)

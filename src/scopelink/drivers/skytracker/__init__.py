@@ -11,13 +11,14 @@ from .line import (
     ReplyTimeoutError,
     SkyTrackerLine,
 )
-from .motion import AxisMotion, axis_motion, guide_button
+from .motion import AxisMotion, ButtonPlan, axis_motion, guide_button, plan_buttons
 from .mount import LinkFactory, SkyTrackerMount, SlewInProgressError
 
 __all__ = [
     "AxisMotion",
     "BadReplyError",
     "BusRefusedError",
+    "ButtonPlan",
     "CalibrationFactors",
     "CalibrationRuleError",
     "LineOptions",
@@ -28,4 +29,5 @@ __all__ = [
     "SlewInProgressError",
     "axis_motion",
     "guide_button",
+    "plan_buttons",
 ]

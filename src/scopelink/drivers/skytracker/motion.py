@@ -17,8 +17,10 @@ __all__ = [
     "TRACK_ARROW_ARCSEC_S",
     "UTILITY_ARROW_ARCSEC_S",
     "AxisMotion",
+    "ButtonPlan",
     "axis_motion",
     "guide_button",
+    "plan_buttons",
 ]
 
 UTILITY_ARROW_ARCSEC_S = 4.0 * 3600.0
@@ -82,3 +84,55 @@ _GUIDE_BUTTONS: dict[GuideDirection, tuple[MountAxis, Direction]] = {
 def guide_button(direction: GuideDirection) -> tuple[MountAxis, Direction]:
     """The axis and arrow of a guide pulse: north/south up/down, east/west left/right."""
     return _GUIDE_BUTTONS[direction]
+
+
+@dataclass(frozen=True, slots=True)
+class ButtonPlan:
+    """What the box must be told so that exactly the wanted arrows move at the wanted speeds."""
+
+    mode: TrackerMode
+    guide_speeds_arcsec_s: tuple[int, int]
+    """``K`` speeds (azimuth, elevation)."""
+    pressed: tuple[Direction, ...]
+    rest_mode: TrackerMode | None
+    """The mode to come back to once nothing is pressed (None: nothing pressed now)."""
+
+    @property
+    def all_pressed(self) -> Direction:
+        combined = Direction(0)
+        for direction in self.pressed:
+            combined |= direction
+        return combined
+
+
+def plan_buttons(
+    held: dict[MountAxis, AxisMotion],
+    pulses: dict[MountAxis, Direction],
+    *,
+    pulse_speeds_arcsec_s: tuple[int, int],
+    mode: TrackerMode | None,
+    rest_mode: TrackerMode | None,
+) -> ButtonPlan:
+    """The mode, ``K`` speeds and arrows for the axes held by ``move_axis`` and the guide pulses
+    under way; ``mode`` is the box's now, ``rest_mode`` the one from before the first arrow.
+
+    Held motions set the mode (both share one); pulses alone need GUIDE; with nothing pressed
+    the mode from before comes back. ``K`` is the pulse speed on an axis unless a GUIDE-mode
+    motion holds that axis at its own speed.
+    """
+    pressed = tuple(motion.direction for motion in held.values()) + tuple(pulses.values())
+    if pressed and rest_mode is None:
+        rest_mode = mode
+    if held:
+        wanted = next(iter(held.values())).mode
+    elif pulses:
+        wanted = TrackerMode.GUIDE
+    else:
+        wanted = rest_mode or mode or TrackerMode.UTILITY
+        rest_mode = None
+    speeds = list(pulse_speeds_arcsec_s)
+    for index, axis in enumerate((MountAxis.PRIMARY, MountAxis.SECONDARY)):
+        motion = held.get(axis)
+        if motion is not None and motion.guide_speed_arcsec_s is not None:
+            speeds[index] = motion.guide_speed_arcsec_s
+    return ButtonPlan(wanted, (speeds[0], speeds[1]), pressed, rest_mode)

@@ -67,7 +67,13 @@ from .line import (
     ReplyTimeoutError,
     SkyTrackerLine,
 )
-from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion, axis_motion, guide_button
+from .motion import (
+    UTILITY_ARROW_ARCSEC_S,
+    AxisMotion,
+    axis_motion,
+    guide_button,
+    plan_buttons,
+)
 
 __all__ = ["LinkFactory", "SkyTrackerMount", "SlewInProgressError"]
 
@@ -788,39 +794,27 @@ class SkyTrackerMount(Mount):
         """
         async with self._buttons:
             self._require_line()
-            pressed = [motion.direction for motion in self._held.values()]
-            pressed += [button for button, _ in self._pulses.values()]
-            if pressed and self._rest_mode is None:
-                self._rest_mode = self._mode
-            if self._held:
-                mode = next(iter(self._held.values())).mode
-            elif self._pulses:
-                mode = TrackerMode.GUIDE
-            else:
-                mode = self._rest_mode or self._mode or TrackerMode.UTILITY
-                self._rest_mode = None
-            speeds = list(self._pulse_speeds)
-            for axis, index in ((MountAxis.PRIMARY, 0), (MountAxis.SECONDARY, 1)):
-                held = self._held.get(axis)
-                if held is not None and held.guide_speed_arcsec_s is not None:
-                    speeds[index] = held.guide_speed_arcsec_s
+            plan = plan_buttons(
+                self._held,
+                {axis: button for axis, (button, _) in self._pulses.items()},
+                pulse_speeds_arcsec_s=self._pulse_speeds,
+                mode=self._mode,
+                rest_mode=self._rest_mode,
+            )
+            self._rest_mode = plan.rest_mode
             commands: list[TrackerCommand] = []
-            wanted_speeds = (speeds[0], speeds[1])
-            change_speeds = wanted_speeds != self._guide_speeds
+            change_speeds = plan.guide_speeds_arcsec_s != self._guide_speeds
             if change_speeds:
-                commands.append(SetGuideSpeed(*wanted_speeds))
-            if mode is not self._mode:
-                commands.append(SelectMode(mode))
+                commands.append(SetGuideSpeed(*plan.guide_speeds_arcsec_s))
+            if plan.mode is not self._mode:
+                commands.append(SelectMode(plan.mode))
             commands.append(ReleaseDirections())
-            commands += [PressDirection(direction) for direction in pressed]
-            all_pressed = Direction(0)
-            for direction in pressed:
-                all_pressed |= direction
+            commands += [PressDirection(direction) for direction in plan.pressed]
             await self._send_confirmed(
                 commands,
-                mode=mode,
-                pressed=all_pressed,
-                speeds=wanted_speeds if change_speeds else None,
+                mode=plan.mode,
+                pressed=plan.all_pressed,
+                speeds=plan.guide_speeds_arcsec_s if change_speeds else None,
             )
             self._publish_now()
 
