@@ -14,8 +14,9 @@ import pytest
 from scopelink.drivers.skytracker import (
     BadReplyError,
     ReplyTimeoutError,
+    SkyTrackerMount,
 )
-from scopelink.mount import DeviceError, MountError, NotConnectedError
+from scopelink.mount import DeviceError, MountError, NotConnectedError, TrackingMode
 from scopelink.servers.faults import Fault, FaultKind
 
 from .test_driver_skytracker import assert_position_matches_sim, driver_position
@@ -26,6 +27,11 @@ from .test_driver_skytracker_support import (
 )
 
 transports = pytest.mark.parametrize("transport", TRANSPORTS)
+
+
+def tracking_of(driver: SkyTrackerMount) -> TrackingMode:
+    """A function, so type checkers do not narrow the state between reads."""
+    return driver.state.tracking
 
 
 def fault(kind: FaultKind, command: str, seconds: float | None = None) -> Fault:
@@ -159,3 +165,17 @@ async def test_one_lost_version_reply_is_asked_again(tmp_path: Path, transport: 
         await r.driver.connect()
         assert r.driver.identity.firmware == "v4.0"
         assert r.driver.line.resyncs == 1
+
+
+@transports
+async def test_a_garbled_status_byte_misleads_one_poll_only(tmp_path: Path, transport: str) -> None:
+    """A status byte has no redundancy: with its top bit flipped TRACK (0x00) reads as UTIL
+    (0x80). The position is still read and right, and the next poll puts the mode right."""
+    async with rig(tmp_path, transport) as r:
+        r.point(45.0, 90.0)
+        await r.driver.set_tracking(TrackingMode.ALT_AZ)
+        r.emulator.faults.add(fault(FaultKind.MALFORMED, "R"))
+        await assert_position_matches_sim(r)
+        assert r.driver.state.tracking is TrackingMode.OFF  # misled, for this poll
+        await assert_position_matches_sim(r)
+        assert tracking_of(r.driver) is TrackingMode.ALT_AZ

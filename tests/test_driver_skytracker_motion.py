@@ -133,3 +133,17 @@ async def test_slew_down_is_released_above_the_horizon(tmp_path: Path, transport
         await eventually(lambda: altitude.rate == 0.0)
         assert r.sim.observed_at(r.sim.elapsed())[0] > 0.0
         assert any("horizon" in p for p in r.driver.state.problems)
+
+
+async def test_move_axis_at_the_track_arrow_rate(tmp_path: Path, transport: str) -> None:
+    async with rig(tmp_path, transport) as r:
+        await track_at(r, 40.0, 100.0)
+        azimuth = r.sim.axes[0]
+        track_rate = azimuth.rate
+        await r.driver.move_axis(MountAxis.PRIMARY, -400.0 / 3600.0)  # nearest: 8'/s, TRACK
+        assert box_mode(r) is TrackerMode.TRACK
+        assert r.emulator.tracker.remote_pressed == Direction.LEFT
+        await eventually(lambda: azimuth.rate == pytest.approx(track_rate - 8.0 / 60.0, abs=2e-3))
+        await r.driver.move_axis(MountAxis.PRIMARY, 0.0)
+        assert r.emulator.tracker.remote_pressed == Direction(0)
+        assert box_mode(r) is TrackerMode.TRACK
