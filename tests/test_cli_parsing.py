@@ -63,7 +63,7 @@ def test_altaz_decimal_degrees_read_back(alt: float, az: float) -> None:
     ).filter(lambda text: text.strip() and text.strip()[0].isalpha())
 )
 def test_words_starting_with_a_letter_are_names(name: str) -> None:
-    assert parse_target([name]) == Named(" ".join(name.split()) if " " in name else name.strip())
+    assert parse_target([name]) == Named(" ".join(name.split()))
 
 
 @pytest.mark.parametrize(

@@ -64,7 +64,7 @@ def parse_target(words: list[str], *, altaz: bool = False) -> Target:
         if not looks_like_angles or len(tokens) < 2:
             raise _not_two_angles(text, altaz)
         return _split_angles(text, tokens, altaz)
-    return Named(text)
+    return Named(" ".join(tokens))
 
 
 def _not_two_angles(text: str, altaz: bool, why: str = "") -> CommandError:
