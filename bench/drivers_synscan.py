@@ -38,8 +38,6 @@ BYTE_S = SERIAL_9600_8N1.bits_per_byte / SERIAL_9600_8N1.baudrate
 """One byte on a 9600 8N1 line: 1.04 ms."""
 E_ROUND_TRIP_BYTES = 1 + 18
 """``e`` and ``XXXXXXXX,YYYYYYYY#``."""
-REFRESH_BYTES = (1 + 2) + E_ROUND_TRIP_BYTES + (1 + 2) + (1 + 2)
-"""One refresh of an aligned equatorial mount: ``L``, ``e``, ``t``, ``p`` with their replies."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,16 +92,32 @@ def emulator_process(*, paced_replies: bool) -> Iterator[str]:
             process.kill()
 
 
-async def wire_utilisation(url: str, sizes: Sizes) -> list[tuple[str, float, float]]:
+@dataclass(frozen=True, slots=True)
+class PollFigures:
+    name: str
+    per_s: float
+    bytes_each: float
+
+    @property
+    def limit_per_s(self) -> float:
+        """How many of these the line carries per second at most (both directions' bytes)."""
+        return 1.0 / (self.bytes_each * BYTE_S)
+
+
+async def wire_utilisation(url: str, sizes: Sizes) -> list[PollFigures]:
     """Refresh cycles and bare ``e`` polls per second, the driver's commands paced at 9600 8N1 by
-    ``open_link(pace=True)`` and the emulator's replies by its host."""
+    ``open_link(pace=True)`` and the emulator's replies by its host. Bytes per refresh cycle are
+    counted on the wire (a mount at rest reads ``t`` and ``p`` in one cycle of ten)."""
     mount = SynScanMount(lambda: open_link(url, pace=True), site=SITE, name="tcp, 9600 paced")
     await mount.connect()
     await mount.refresh()  # warm up
+    statistics = mount.wire.statistics
+    moved = statistics.bytes_sent + statistics.bytes_received
     started = time.perf_counter()
     for _ in range(sizes.polls):
         await mount.refresh()
     refresh_rate = sizes.polls / (time.perf_counter() - started)
+    refresh_bytes = (statistics.bytes_sent + statistics.bytes_received - moved) / sizes.polls
     started = time.perf_counter()
     for _ in range(sizes.polls):
         await mount.wire.ask(GetRaDec(), Priority.POLL)
@@ -117,11 +131,10 @@ async def wire_utilisation(url: str, sizes: Sizes) -> list[tuple[str, float, flo
         await link.read_exactly(E_ROUND_TRIP_BYTES - 1)
     bare_rate = sizes.polls / (time.perf_counter() - started)
     await link.close()
-    limit = 1.0 / (E_ROUND_TRIP_BYTES * BYTE_S)
     return [
-        ("refresh (L e t p)", refresh_rate, 1.0 / (REFRESH_BYTES * BYTE_S)),
-        ("e polls", poll_rate, limit),
-        ("e polls, bare link", bare_rate, limit),
+        PollFigures("refresh cycles", refresh_rate, refresh_bytes),
+        PollFigures("e polls", poll_rate, E_ROUND_TRIP_BYTES),
+        PollFigures("e polls, bare link", bare_rate, E_ROUND_TRIP_BYTES),
     ]
 
 
@@ -226,11 +239,15 @@ def main(sizes: Sizes) -> None:
     print(f"scopelink SynScan driver benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
     print()
     print("1. polls over TCP paced at 9600 8N1 both ways, emulator in another process")
-    print(f"{'poll':<20} {'per s':>8} {'wire limit':>11} {'of limit':>9}")
+    print(f"{'poll':<20} {'per s':>8} {'bytes each':>11} {'wire limit':>11} {'of limit':>9}")
     with emulator_process(paced_replies=True) as url:
         rows = asyncio.run(wire_utilisation(url, sizes))
-    for name, rate, limit in rows:
-        print(f"{name:<20} {rate:>8.2f} {limit:>11.2f} {rate / limit:>8.1%}")
+    for poll in rows:
+        share = poll.per_s / poll.limit_per_s
+        print(
+            f"{poll.name:<20} {poll.per_s:>8.2f} {poll.bytes_each:>11.1f} "
+            f"{poll.limit_per_s:>11.2f} {share:>8.1%}"
+        )
     print()
     print("2. CPU per 'e' command: each client in its own thread (thread CPU clock), unpaced")
     print("   emulator on TCP in another process")

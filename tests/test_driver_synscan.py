@@ -9,6 +9,7 @@ import pytest
 
 from scopelink.astro import PierSide, angular_separation_deg, j2000_to_apparent
 from scopelink.drivers.synscan import NotAlignedError, SynScanMount
+from scopelink.drivers.synscan.mount import FULL_READ_EVERY
 from scopelink.mount import (
     AlignmentMode,
     DeviceError,
@@ -328,3 +329,16 @@ async def test_abort_holds_the_wire_while_the_poller_runs(transport: str) -> Non
             "SetTrackingMode",
             "IsGotoInProgress",
         ]
+
+
+async def test_a_mount_at_rest_reads_tracking_and_pier_side_every_tenth_cycle() -> None:
+    async with rig("tcp") as r:
+        exchanges = r.mount.wire.statistics.exchanges
+        for _ in range(FULL_READ_EVERY):
+            await r.mount.refresh()
+        # L and e in every cycle, t and p in one of them.
+        assert r.mount.wire.statistics.exchanges - exchanges == 2 * FULL_READ_EVERY + 2
+        await r.sim.set_tracking(TrackingMode.SIDEREAL)  # as if on the keypad
+        states = [await r.mount.refresh() for _ in range(FULL_READ_EVERY)]
+        assert states[-1].tracking is TrackingMode.SIDEREAL
+        assert all(state.pier_side is PierSide.EAST for state in states)

@@ -23,7 +23,7 @@ def test_quick_driver_benchmark_prints_its_tables() -> None:
     )
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
-    refresh = next(line for line in lines if line.startswith("refresh (L e t p)"))
+    refresh = next(line for line in lines if line.startswith("refresh cycles"))
     assert refresh.endswith("%"), refresh
     assert any(line.startswith("e polls ") for line in lines), result.stdout
     assert any(line.startswith("e polls, bare link") for line in lines), result.stdout

@@ -102,6 +102,10 @@ logger = logging.getLogger(__name__)
 DEFAULT_GUIDE_RATE_DEG_S = 0.5 * SIDEREAL_RATE_DEG_S
 """Guide pulses move at half the sidereal rate, the usual autoguider setting."""
 
+FULL_READ_EVERY = 10
+"""Poll cycles of a mount at rest read ``L`` and ``e`` only; every tenth also reads ``t`` and
+``p`` (a tracking change on the keypad shows within about a third of a second)."""
+
 SYNC_TOLERANCE_DEG = 0.05
 """A sync read back further than this from its target was not obeyed (the hand control ignores
 syncs beyond ~7° silently). Generous against drift between the ``s`` and the ``e`` read back."""
@@ -172,6 +176,8 @@ class SynScanMount(Mount):
         self._goto_running = False
         self._settle: SettleDetector | None = None
         self._axis_rates: dict[MountAxis, float] = {}
+        self._cycles_since_full_read = 0
+        self._epoch_at_full_read = -1
         self._motion_epoch = 0
         """Counts gotos and aborts: a poll that overlapped one must not judge it by its L."""
         self._pulses: dict[MountAxis, asyncio.Task[None]] = {}
@@ -273,31 +279,47 @@ class SynScanMount(Mount):
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
         epoch = self._motion_epoch
+        # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
+        # keypad: read them around motion and every few cycles, not in every one (see the docs).
+        full = (
+            priority is Priority.COMMAND
+            or self._slewing
+            or epoch != self._epoch_at_full_read
+            or self._cycles_since_full_read + 1 >= FULL_READ_EVERY
+        )
+        tracking: TrackingModeReply | None = None
         try:
             # L before e: when L says the goto has ended, the position read next is its landing.
             goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
             place = _Place(position, read_at, self.site)
-            # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
-            tracking = await self._ask(
-                GetTrackingMode(), TrackingModeReply, priority, meanwhile=place.compute
-            )
-            if self._capabilities.can_report_pier_side:
-                side = await self._ask(GetPointingState(), PointingState, priority)
-                self._pier_side = self._pier_side_of(side)
+            if full:
+                # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
+                tracking = await self._ask(
+                    GetTrackingMode(), TrackingModeReply, priority, meanwhile=place.compute
+                )
+                if self._capabilities.can_report_pier_side:
+                    side = await self._ask(GetPointingState(), PointingState, priority)
+                    self._pier_side = self._pier_side_of(side)
             if not self._aligned:
                 self._aligned = (await self._ask(IsAligned(), Aligned, priority)).aligned
         except DeviceError as error:
             self._report_problem(str(error))
             raise
         ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
-        mode = mount_tracking(tracking.mode)
         problems: tuple[str, ...] = ()
-        if mode is None:
-            problems = (f"unknown tracking mode {tracking.mode} reported",)
-            mode = self._tracking
-        self._tracking = mode
+        if tracking is not None:
+            self._cycles_since_full_read = 0
+            self._epoch_at_full_read = epoch
+            mode = mount_tracking(tracking.mode)
+            if mode is None:
+                problems = (f"unknown tracking mode {tracking.mode} reported",)
+            else:
+                self._tracking = mode
+        else:
+            self._cycles_since_full_read += 1
+        mode = self._tracking
         if self._motion_epoch == epoch:
             # A goto sent while this poll waited for the wire is not over whatever L said.
             self._goto_running = self._goto_still_running(goto.in_progress, alt, az)

@@ -62,6 +62,8 @@ class WireStatistics:
     """Counters for health displays and benchmarks."""
 
     exchanges: int = 0
+    bytes_sent: int = 0
+    bytes_received: int = 0
     failures: int = 0
     resyncs: int = 0
     reconnects: int = 0
@@ -235,6 +237,7 @@ class SynScanWire:
             raise _ExchangeError(f"{self.name} is closed")
         data = self._codec.send(command)
         self.statistics.exchanges += 1
+        self.statistics.bytes_sent += len(data)
         completed = False
         try:
             self.last_write_at = asyncio.get_running_loop().time()
@@ -262,7 +265,9 @@ class SynScanWire:
         while True:
             event = self._codec.next_event()
             if event is NEED_DATA:
-                self._codec.receive_data(await link.read())
+                data = await link.read()
+                self.statistics.bytes_received += len(data)
+                self._codec.receive_data(data)
             elif isinstance(event, UnexpectedData):
                 self._discard(event.data)
             elif isinstance(event, MalformedReply):
