@@ -271,14 +271,19 @@ class SkyTrackerLine:
     async def resync(self) -> None:
         """Release the bus (in case), drain late bytes until quiet, start a fresh codec."""
         self.resyncs += 1
-        # Inside a grant, CR first ends any partial 'L' line the Sky Commander holds (lost bytes
-        # on the unbuffered port); without one it asks for a position, drained below.
         held = self._client.bus is BusState.HELD
         self._client = TrackerClient()
+        discarded = b""
         try:
-            await self.link.write(b"\rq" if held else ReleaseBus().encode())
-            self.commands_sent += 1
-            discarded = await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
+            if held:
+                # Still inside the grant: CR ends any partial 'L' line the Sky Commander holds
+                # (bytes lost on the unbuffered port); without one it asks for a position, whose
+                # reply is drained here, before 'q', so it cannot reach the box's own next poll.
+                await self.link.write(b"\r")
+                discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
+            await self.link.write(ReleaseBus().encode())
+            self.commands_sent += 1 + held
+            discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
         except LinkError as error:
             raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
         if discarded:
