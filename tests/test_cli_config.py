@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from scopelink.cli.config import (
     DEFAULT_SERVER_PORTS,
@@ -146,3 +149,77 @@ def test_flags_override_the_file(tmp_path: Path) -> None:
     assert overridden.returncode == 0, overridden.stderr
     # An EQ6 at power-on points at the pole: its altitude is the (flag's) latitude.
     assert '"alt_deg": 10.0' in overridden.stdout
+
+
+# --- properties --------------------------------------------------------------------------------
+
+toml_scalars = st.one_of(
+    st.booleans(),
+    st.integers(-(2**40), 2**40),
+    st.floats(allow_nan=False, allow_infinity=False, width=32),
+    st.text(st.characters(blacklist_categories=("Cs", "Cc")), max_size=12),
+)
+
+
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    latitude=st.floats(-90, 90),
+    longitude=st.floats(-180, 180),
+    horizon=st.floats(-10, 60),
+    port=st.integers(0, 65535),
+)
+def test_valid_values_read_back(
+    tmp_path: Path, latitude: float, longitude: float, horizon: float, port: int
+) -> None:
+    text = (
+        f"[site]\nlatitude = {latitude!r}\nlongitude = {longitude!r}\n"
+        f"[horizon]\naltitude = {horizon!r}\n[servers]\nsynscan = {port}\n"
+    )
+    config = load_config(write(tmp_path, text))
+    assert (config.site.latitude_deg, config.site.longitude_deg) == (latitude, longitude)
+    assert config.limits.horizon_deg == horizon
+    assert config.servers.synscan == port
+
+
+@settings(max_examples=80, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    key=st.sampled_from(
+        [
+            ("", "device"),
+            ("site", "latitude"),
+            ("horizon", "altitude"),
+            ("horizon", "profile"),
+            ("limits", "max_altitude"),
+            ("servers", "alpaca"),
+            ("servers", "host"),
+        ]
+    ),
+    value=st.one_of(toml_scalars, st.lists(toml_scalars, max_size=3)),
+)
+def test_any_value_either_loads_or_is_a_config_error(
+    tmp_path: Path, key: tuple[str, str], value: object
+) -> None:
+    """Whatever a key holds, reading the file never fails with anything but a ConfigError."""
+    table, name = key
+    data: dict[str, object] = {name: value}
+    if table == "site":
+        data["longitude"] = 0.0
+    lines = [f"[{table}]"] if table else []
+    lines += [f"{k} = {_toml(v)}" for k, v in data.items()]
+    path = write(tmp_path, "\n".join(lines) + "\n")
+    message = ""
+    try:
+        load_config(path)
+    except ConfigError as error:
+        message = str(error)
+    assert not message or message.startswith(f"{path}: ")
+
+
+def _toml(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a valid TOML basic string
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml(item) for item in value) + "]"
+    return repr(value)
