@@ -653,7 +653,9 @@ class SkyTrackerMount(Mount):
             commands.append(SelectMode(mode))
         self._rest_mode = None
         await self._send_confirmed(commands, mode=mode or TrackerMode.UTILITY)
-        await self.refresh()
+        # The abort is done; a failed read afterwards is only a stale state (named in problems).
+        with contextlib.suppress(DeviceError):
+            await self.refresh()
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
         """TRACK (``T``) for sidereal/alt-az tracking; OFF is UTILITY (``U``), motors held."""
