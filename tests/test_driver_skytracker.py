@@ -267,3 +267,13 @@ async def test_set_site_moves_only_the_pc_side_altaz(tmp_path: Path, transport: 
         assert after.alt_deg is not None
         assert before.alt_deg is not None
         assert abs(after.alt_deg - before.alt_deg) > 10.0
+
+
+async def test_polls_during_a_goto_do_not_flood_the_line(tmp_path: Path, transport: str) -> None:
+    async with rig(tmp_path, transport) as r:
+        await r.driver.goto_equatorial(*sky_at(r.sim, 60.0, 200.0))
+        async with r.driver.watching():
+            await asyncio.sleep(0.5)
+            polls = r.driver.poller.polls
+        assert 3 <= polls <= 0.5 / 0.05 + 2  # one status byte every 50 ms, not hundreds
+        assert r.driver.state.slewing

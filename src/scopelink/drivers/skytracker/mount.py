@@ -11,6 +11,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import math
+import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, replace
 from datetime import datetime
@@ -94,6 +96,7 @@ STOP_MARGIN_POLLS = 3.0
 """A slew down is released this many polls' worth of travel (plus the ramp) above the horizon."""
 STOP_MARGIN_DEG = 0.05
 GOTO_STATUS_POLL_S = 0.05
+"""Status polls during a GOTO (by wait_for_goto, and the poller's refreshes) are this far apart."""
 NOTHING_PRESSED = Direction(0)
 SYNC_TOLERANCE_DEG = 0.05
 """After a sync the position read back must lie this close to the synced one (3-decimal
@@ -189,6 +192,7 @@ class SkyTrackerMount(Mount):
         self._below_horizon_alarm = False
         self._poll_s = 0.05
         """How long the last poll took (seconds on the mount's clock)."""
+        self._goto_status_at = -math.inf
 
     @classmethod
     async def open(
@@ -401,9 +405,16 @@ class SkyTrackerMount(Mount):
     async def refresh(self) -> MountState:
         """``R`` status; then, unless a GOTO keeps the bus, the position through the bus."""
         line = self._require_line()
+        if self._mode is TrackerMode.GOTO:
+            # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls
+            # would read it hundreds of times a second; GOTO_STATUS_POLL_S apart is plenty.
+            since = time.monotonic() - self._goto_status_at
+            if since < GOTO_STATUS_POLL_S:
+                await asyncio.sleep(GOTO_STATUS_POLL_S - since)
         started = self.now()
         try:
             self._note_status(await line.tracker(ReadStatus(), Priority.POLL))
+            self._goto_status_at = time.monotonic()
             if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
                 await self._poll_position(line)
         except (DeviceError, NotConnectedError) as error:
