@@ -27,6 +27,7 @@ def test_quick_driver_benchmark_prints_its_tables() -> None:
     assert refresh.endswith("%"), refresh
     assert any(line.startswith("e polls ") for line in lines), result.stdout
     assert any(line.startswith("e polls, bare link") for line in lines), result.stdout
+    assert any(line.startswith("driver e polls / bare-link") for line in lines), result.stdout
     assert any(line.startswith("scopelink SynScanMount.wire") for line in lines), result.stdout
     assert any(line.startswith("nexstar 0.0.5 getPosition") for line in lines), result.stdout
     assert any(line.startswith("pyserial write/read") for line in lines), result.stdout
