@@ -342,3 +342,19 @@ async def test_a_mount_at_rest_reads_tracking_and_pier_side_every_tenth_cycle() 
         states = [await r.mount.refresh() for _ in range(FULL_READ_EVERY)]
         assert states[-1].tracking is TrackingMode.SIDEREAL
         assert all(state.pier_side is PierSide.EAST for state in states)
+
+
+async def test_a_hand_control_with_another_site_is_named_until_set_site() -> None:
+    async with rig("tcp", connect=False) as r:
+        elsewhere = dataclasses.replace(MADRID, latitude_deg=52.0)
+        mount = SynScanMount(r.spec, site=elsewhere, clock=r.sim.now)
+        await mount.connect()
+        try:
+            assert mount.state.problems
+            assert "hand control's site (40.4000°, -3.7000°)" in mount.state.problems[0]
+            assert "set_site" in mount.state.problems[0]
+            await mount.set_site(elsewhere)
+            assert not (await mount.refresh()).problems
+            assert r.sim.site.latitude_deg == pytest.approx(52.0)
+        finally:
+            await mount.disconnect()

@@ -69,6 +69,7 @@ from scopelink.protocol.synscan import (
     DeviceVersion,
     FixedRateSlew,
     GetDeviceVersion,
+    GetLocation,
     GetModel,
     GetPointingState,
     GetRaDec,
@@ -176,6 +177,9 @@ class SynScanMount(Mount):
         self._goto_running = False
         self._settle: SettleDetector | None = None
         self._axis_rates: dict[MountAxis, float] = {}
+        self._site_mismatch = ""
+        """Set when the hand control's site (``w``) is not ours: alt/az computed here would then
+        disagree with where it points. Cleared by ``set_site``."""
         self._cycles_since_full_read = 0
         self._epoch_at_full_read = -1
         self._motion_epoch = 0
@@ -229,6 +233,11 @@ class SynScanMount(Mount):
                     self.info.identity(self.wire.name).firmware,
                 )
             self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
+            self._site_mismatch = _site_mismatch(
+                await self._ask(GetLocation(), Location), self.site
+            )
+            if self._site_mismatch:
+                logger.warning("%s: %s", self.wire.name, self._site_mismatch)
         except BaseException:
             await self.wire.close()
             raise
@@ -308,13 +317,13 @@ class SynScanMount(Mount):
             self._report_problem(str(error))
             raise
         ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
-        problems: tuple[str, ...] = ()
+        problems: tuple[str, ...] = (self._site_mismatch,) if self._site_mismatch else ()
         if tracking is not None:
             self._cycles_since_full_read = 0
             self._epoch_at_full_read = epoch
             mode = mount_tracking(tracking.mode)
             if mode is None:
-                problems = (f"unknown tracking mode {tracking.mode} reported",)
+                problems += (f"unknown tracking mode {tracking.mode} reported",)
             else:
                 self._tracking = mode
         else:
@@ -588,6 +597,7 @@ class SynScanMount(Mount):
             await self._ask(
                 SetLocation(Location.from_degrees(site.latitude_deg, site.longitude_deg)), Ack
             )
+        self._site_mismatch = ""
 
     async def _set_time(self, utc: datetime) -> None:
         zone = timezone(timedelta(hours=self.utc_offset_hours))
@@ -618,6 +628,25 @@ class SynScanMount(Mount):
                 f"{command.describe()!r}: the motor controller did not answer the hand control "
                 "(failed passthrough)"
             )
+
+
+SITE_TOLERANCE_DEG = 1.0 / 60.0
+"""The hand control stores its site to the arcsecond; a difference above an arcminute is real."""
+
+
+def _site_mismatch(theirs: Location, ours: Site) -> str:
+    """Why the hand control's site disagrees with ours, or "" when they agree."""
+    longitude_gap = abs((theirs.longitude - ours.longitude_deg + 180.0) % 360.0 - 180.0)
+    if (
+        abs(theirs.latitude - ours.latitude_deg) <= SITE_TOLERANCE_DEG
+        and longitude_gap <= SITE_TOLERANCE_DEG
+    ):
+        return ""
+    return (
+        f"the hand control's site ({theirs.latitude:.4f}°, {theirs.longitude:.4f}°) is not the "
+        f"configured one ({ours.latitude_deg:.4f}°, {ours.longitude_deg:.4f}°): call set_site "
+        "to send ours, or configure the hand control's"
+    )
 
 
 class _Place:
