@@ -5,7 +5,14 @@ from __future__ import annotations
 import pytest
 
 from scopelink.mount import MountAxis
-from scopelink.protocol.synscan import CancelGoto, GotoInProgress, IsGotoInProgress, Version
+from scopelink.protocol.synscan import (
+    CancelGoto,
+    GotoInProgress,
+    IsGotoInProgress,
+    Passthrough,
+    PassthroughFailed,
+    Version,
+)
 from scopelink.protocol.synscan import VersionDialect as Dialect
 from scopelink.servers.faults import Fault, FaultKind
 from scopelink.servers.synscan import Quirks, SynScanConfig
@@ -88,3 +95,14 @@ async def test_abort_stops_axes_that_old_firmware_restarts_after_cancel(transpor
             (stopped.alt_deg, stopped.az_deg), abs=1e-4
         )
         assert_position_matches(still, r.sim.snapshot())
+
+
+async def test_a_failed_passthrough_with_its_extra_byte_keeps_the_stream_in_step() -> None:
+    async with rig("tcp") as r:
+        resyncs = r.mount.wire.statistics.resyncs
+        # A motor controller address nobody answers: 3 requested bytes, one extra byte, '#'.
+        reply = await r.mount.wire.ask(Passthrough(bytes((1, 0x20, 5, 0, 0, 0, 3))))
+        assert isinstance(reply, PassthroughFailed)
+        assert reply.data == bytes(3)
+        assert_position_matches(await r.mount.refresh(), r.sim.snapshot())
+        assert r.mount.wire.statistics.resyncs == resyncs
