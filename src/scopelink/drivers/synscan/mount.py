@@ -209,7 +209,8 @@ class SynScanMount(Mount):
     # --- connection -------------------------------------------------------------------------------
 
     async def connect(self) -> None:
-        """Open the link, echo, and identify: ``V``, ``m``, ``J``, motor versions, ``t``, ``p``."""
+        """Open the link, echo, identify (``V``, ``m``, motor versions, ``J``, ``w``) and read the
+        state once; on any failure the link is closed again and the error raised."""
         await self.wire.open()
         try:
             version = await self._ask(GetVersion(), Version)
@@ -248,7 +249,12 @@ class SynScanMount(Mount):
         self._goto_running = False
         self._settle = None
         self._axis_rates.clear()
-        await self._read_state(Priority.COMMAND)
+        try:
+            await self._read_state(Priority.COMMAND)
+        except BaseException:
+            self._connected = False
+            await self.wire.close()
+            raise
 
     async def disconnect(self) -> None:
         """Stop manual motion this driver started (nothing could stop it later), then close.
@@ -280,8 +286,9 @@ class SynScanMount(Mount):
     # --- reading ----------------------------------------------------------------------------------
 
     async def refresh(self) -> MountState:
-        """Poll ``e`` (J2000 RA/Dec), ``L``, ``t``, ``p`` on equatorial mounts, ``J`` while
-        unaligned; alt/az and of-date RA/Dec are computed on the PC (see the docs)."""
+        """Poll ``L`` and ``e`` (J2000 RA/Dec); ``t`` and ``p`` (equatorial mounts) around motion
+        and every tenth cycle; ``J`` while unaligned. Alt/az and of-date RA/Dec are computed on
+        the PC (see ``docs/drivers-synscan.md``)."""
         return await self._read_state(Priority.POLL)
 
     async def _read_state(self, priority: Priority) -> MountState:
