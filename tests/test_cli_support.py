@@ -82,14 +82,23 @@ async def start_scopelink(config: Path, *args: str) -> asyncio.subprocess.Proces
     )
 
 
-async def read_line_matching(stream: asyncio.StreamReader | None, pattern: str) -> str:
-    """The first line of ``stream`` that matches ``pattern`` (fails at end of stream)."""
+async def read_line_matching(
+    stream: asyncio.StreamReader | None,
+    pattern: str,
+    errors: asyncio.StreamReader | None = None,
+) -> str:
+    """The first line of ``stream`` that matches ``pattern`` (fails at end of stream, quoting
+    ``errors``, the process's stderr, when given)."""
     assert stream is not None
     seen: list[str] = []
     async with asyncio.timeout(START_TIMEOUT_S):
         while True:
             line = (await stream.readline()).decode()
-            assert line, f"the stream ended before a line matching {pattern!r}: {seen}"
+            if not line:
+                stderr = (await errors.read()).decode() if errors is not None else ""
+                raise AssertionError(
+                    f"the stream ended before a line matching {pattern!r}: {seen} {stderr}"
+                )
             if re.search(pattern, line):
                 return line
             seen.append(line)

@@ -67,7 +67,7 @@ def test_config_file_names_the_device_and_its_horizon_guards_it(
 def test_move_until_ctrl_c_then_the_axis_stays_stopped(config: Path, device: str) -> None:
     async def interrupt() -> tuple[int, str]:
         process = await start_scopelink(config, "move", "dec", "1", "--device", device)
-        await read_line_matching(process.stdout, "until Ctrl-C")
+        await read_line_matching(process.stdout, "until Ctrl-C", process.stderr)
         await asyncio.sleep(0.5)
         process.send_signal(signal.SIGINT)
         async with asyncio.timeout(20):
