@@ -409,3 +409,20 @@ async def test_gem_flip_swings_the_tube_through_the_visible_pole(site: Site) -> 
             assert mount.geometry.to_observed(*mount.counters_at(t))[0] > -5.0
         state = await land(mount)
         assert error_arcsec(state, *target) < 0.1
+
+
+async def test_tracking_off_stops_the_axes_on_a_running_clock() -> None:
+    """On an accelerated clock time passes while a command plans; the stop it schedules at its
+    own start must still apply (it was once dropped as 'past', and tracking went on)."""
+    import asyncio
+
+    mount = SimulatedMount(EQ6, site=NORTH, clock=SimClock(start=START, rate=50.0))
+    await mount.connect()
+    await mount.goto_equatorial(*target_at_hour_angle(NORTH, 1.0, 30.0))
+    await mount.wait_for_slew(timeout_s=20)
+    assert mount.tracking is TrackingMode.SIDEREAL
+    await mount.set_tracking(TrackingMode.OFF)
+    before = mount.counters_at(mount.elapsed())
+    await asyncio.sleep(0.4)  # 20 simulated seconds: sidereal tracking would turn 0.08°
+    after = mount.counters_at(mount.elapsed())
+    assert after == pytest.approx(before, abs=1e-6)

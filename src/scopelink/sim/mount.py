@@ -114,6 +114,8 @@ class SimulatedMount(Mount):
         self._moving_until = [-_FOREVER, -_FOREVER]
         self._pulse_until = [-_FOREVER, -_FOREVER]
         self._retarget_at: set[float] = set()
+        self._command_at = 0.0
+        """Elapsed time at which the command being carried out began."""
         self._limit_stop: LimitStop | None = None
         self._capabilities = self._make_capabilities()
 
@@ -426,7 +428,9 @@ class SimulatedMount(Mount):
         progress at that time (a ramp, another pulse) carries on; an axis still slewing to a
         goto target is left to its own landing.
         """
-        now = self.elapsed()
+        # The command's own time, not a fresh clock reading: on a running clock time passes while
+        # the command plans, and a retarget it scheduled at its start must not be dropped as past.
+        now = self._command_at
         self._retarget_at = {t for t in self._retarget_at if t >= now}
         for t in sorted(self._retarget_at):
             path = None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
@@ -495,6 +499,7 @@ class SimulatedMount(Mount):
         the command replaces all motion (goto, park, abort), so what was scheduled is dropped.
         """
         now = self.elapsed()
+        self._command_at = now
         self._settle(now)
         stop = self._limit_stop
         if stop is not None and stop.at_s > now:
