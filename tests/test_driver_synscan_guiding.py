@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import math
 import time
 
 import pytest
@@ -61,6 +62,20 @@ async def test_pulse_guides_are_timed_on_the_pc(transport: str) -> None:
             assert end.dec_j2000_deg - start.dec_j2000_deg == pytest.approx(
                 sign * expected, rel=0.5
             )
+        # East/west: the slew replaces tracking for the pulse, so the sky offset is the guide
+        # rate alone (west: the pointing moves west, RA decreasing).
+        for direction, sign in ((GuideDirection.WEST, -1.0), (GuideDirection.EAST, 1.0)):
+            start = await r.mount.refresh()
+            await r.mount.pulse_guide(direction, 1000)
+            await asyncio.sleep(1.3)
+            end = await r.mount.refresh()
+            assert end.tracking is TrackingMode.SIDEREAL
+            assert start.ra_j2000_hours is not None
+            assert end.ra_j2000_hours is not None
+            assert end.dec_j2000_deg is not None
+            moved = (end.ra_j2000_hours - start.ra_j2000_hours) * 15.0
+            moved *= math.cos(math.radians(end.dec_j2000_deg))
+            assert moved == pytest.approx(sign * expected, rel=0.5)
 
 
 def test_guide_directions_follow_hemisphere_and_pier_side() -> None:

@@ -10,7 +10,7 @@ from datetime import UTC, datetime
 
 import pytest
 
-from scopelink.astro import Site, angular_separation_deg
+from scopelink.astro import Site, angular_separation_deg, lst_hours
 from scopelink.links import Link, open_serial, open_tcp
 from scopelink.protocol.synscan import (
     NEED_DATA,
@@ -233,3 +233,39 @@ async def test_old_firmware_dialects() -> None:
     async with session("tcp", config) as s:
         assert await s.ask(GetVersion()) == old
         assert await s.ask(GetModel()) == Model(3, swapped=True)
+
+
+async def test_slews_override_equatorial_tracking_except_fixed_rates_1_and_2() -> None:
+    """The spec: slews override tracking, except fixed rates 1-2 while tracking equatorially."""
+    from scopelink.mount import MountAxis
+    from scopelink.sim import SIDEREAL_RATE_DEG_S
+    from scopelink.sim.models import synscan_fixed_rate_deg_s
+
+    def polar_axis(s: Session) -> float:
+        return s.mount.counters_at(s.mount.elapsed())[MountAxis.PRIMARY.value]
+
+    async def turned_in_100_s(s: Session, command: AnyCommand) -> float:
+        await s.ask(command)
+        s.mount.step(10.0)  # past the ramp
+        start = polar_axis(s)
+        s.mount.step(100.0)
+        turned = polar_axis(s) - start
+        await s.ask(FixedRateSlew(Axis.AZM_RA, positive=True, rate=0))
+        s.mount.step(10.0)
+        return turned
+
+    async with session("tcp") as s:
+        # away from the pole, where tracking turns the polar axis at exactly the sidereal rate
+        ra_now = (lst_hours(START, MADRID.longitude_deg) - 1.0) % 24.0
+        await s.mount.goto_equatorial(ra_now, 30.0)
+        s.mount.step(300.0)
+        await s.ask(SetTrackingMode(2))
+        s.mount.step(1.0)
+        guide = await turned_in_100_s(s, FixedRateSlew(Axis.AZM_RA, positive=True, rate=2))
+        assert guide == pytest.approx(100 * (synscan_fixed_rate_deg_s(2) + SIDEREAL_RATE_DEG_S))
+        fast = await turned_in_100_s(s, FixedRateSlew(Axis.AZM_RA, positive=True, rate=4))
+        assert fast == pytest.approx(100 * synscan_fixed_rate_deg_s(4))
+        variable = await turned_in_100_s(
+            s, VariableRateSlew.from_arcsec_per_second(Axis.AZM_RA, 360.0)
+        )
+        assert variable == pytest.approx(10.0, rel=1e-3)

@@ -426,3 +426,29 @@ async def test_tracking_off_stops_the_axes_on_a_running_clock() -> None:
     await asyncio.sleep(0.4)  # 20 simulated seconds: sidereal tracking would turn 0.08°
     after = mount.counters_at(mount.elapsed())
     assert after == pytest.approx(before, abs=1e-6)
+
+
+async def test_an_axis_rate_adds_to_tracking_on_a_running_clock() -> None:
+    """On an accelerated clock a command acts at its start, already past when it is planned:
+    the history it builds on must still be there (the move was once lost when it stopped)."""
+    import asyncio
+
+    mount = SimulatedMount(EQ6, site=NORTH, clock=SimClock(start=START, rate=20.0))
+    await mount.connect()
+    await mount.goto_equatorial(*target_at_hour_angle(NORTH, 1.0, 30.0))
+    await mount.wait_for_slew(timeout_s=20)
+    extra = 0.5 * SIDEREAL_RATE_DEG_S
+    start_counter, start = mount.counters_at(mount.elapsed())[0], mount.elapsed()
+    before_move = mount.elapsed()
+    await mount.move_axis(MountAxis.PRIMARY, extra)
+    after_move = mount.elapsed()
+    await asyncio.sleep(0.5)
+    before_stop = mount.elapsed()
+    await mount.move_axis(MountAxis.PRIMARY, 0.0)
+    after_stop = mount.elapsed()
+    await asyncio.sleep(0.2)
+    end_counter, end = mount.counters_at(mount.elapsed())[0], mount.elapsed()
+    beyond_tracking = (end_counter - start_counter) - SIDEREAL_RATE_DEG_S * (end - start)
+    # The extra rate ran from some time in the move command to some time in the stop command.
+    assert extra * (before_stop - after_move) - 1e-3 <= beyond_tracking
+    assert beyond_tracking <= extra * (after_stop - before_move) + 1e-3

@@ -175,6 +175,9 @@ class Axis:
         self._segments: list[Segment] = [Segment(start, position_deg, 0.0, 0.0)]
         self._follows: list[FollowPiece] = [FollowPiece(start, 0.0)]
         self.counter_offset_deg = 0.0
+        self.history_needed_from: float | None = None
+        """Set while a command plans from a time that may already be past on a running clock:
+        history from then on is kept (pruning against the live clock would lose it)."""
 
     # --- reading --------------------------------------------------------------------------------
 
@@ -439,6 +442,8 @@ class Axis:
 
     def _prune(self, items: list[_Planned]) -> None:
         present = self.now()
+        if self.history_needed_from is not None:
+            present = min(present, self.history_needed_from)
         while len(items) > 1 and items[1].start_s < present:
             items.pop(0)
 

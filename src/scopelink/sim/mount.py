@@ -443,6 +443,8 @@ class SimulatedMount(Mount):
         """End a command: settle tracking, stop at the first limit, publish the state."""
         self._resolve_retargets()
         self._enforce_limits(limits_from)
+        for axis in self.axes:
+            axis.history_needed_from = None
         self.snapshot()
 
     def _take_over_from_goto(self, index: int, t: float) -> None:
@@ -500,6 +502,8 @@ class SimulatedMount(Mount):
         """
         now = self.elapsed()
         self._command_at = now
+        for axis in self.axes:
+            axis.history_needed_from = now
         self._settle(now)
         stop = self._limit_stop
         if stop is not None and stop.at_s > now:

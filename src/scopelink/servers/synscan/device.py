@@ -180,7 +180,8 @@ class SynScanHandControl:
             case FixedRateSlew(axis, positive, rate):
                 await self._fixed_rate(_AXES[axis], positive, rate)
             case VariableRateSlew():
-                await self._move(_AXES[command.axis], command.arcsec_per_second / 3600.0)
+                rate_deg_s = command.arcsec_per_second / 3600.0
+                await self._slew(_AXES[command.axis], rate_deg_s, on_top_of_tracking=False)
             case GetDeviceVersion():
                 return DeviceVersion(*self.config.motor_version)
             case SlowGoto(axis, _) | SetAxisPosition(axis, _):
@@ -317,9 +318,16 @@ class SynScanHandControl:
 
     async def _fixed_rate(self, axis: MountAxis, positive: bool, rate: int) -> None:
         speed = synscan_fixed_rate_deg_s(rate)
-        rate_deg_s = speed if positive else -speed
-        if rate in GUIDING_RATES and self._tracking_equatorially():
-            rate_deg_s += self._tracking_rate_deg_s(axis)
+        await self._slew(
+            axis, speed if positive else -speed, on_top_of_tracking=rate in GUIDING_RATES
+        )
+
+    async def _slew(self, axis: MountAxis, rate_deg_s: float, *, on_top_of_tracking: bool) -> None:
+        """A keypad or variable-rate slew. The Mount adds ``move_axis`` to tracking; the spec
+        has slews override equatorial tracking except fixed rates 1-2, so the others are sent
+        net of the tracking rate (the axis then turns at exactly the commanded rate)."""
+        if rate_deg_s and not on_top_of_tracking and self._tracking_equatorially():
+            rate_deg_s -= self._tracking_rate_deg_s(axis)
         await self._move(axis, rate_deg_s)
 
     def _tracking_equatorially(self) -> bool:
