@@ -116,3 +116,45 @@ async def test_paced_link_keeps_the_name_reads_through_and_closes_the_inner_link
     assert sender.closed
     with pytest.raises(ValueError, match="positive"):
         paced(receiver, 0, 10)
+
+
+async def exchange_loop(client: Link, server: Link, rounds: int, *, think_s: float = 0.0) -> float:
+    """Seconds for ``rounds`` one-byte requests each answered with 18 bytes (a SynScan ``e``)."""
+
+    async def answer() -> None:
+        for _ in range(rounds):
+            await server.read_exactly(1)
+            if think_s:
+                await asyncio.sleep(think_s)
+            await server.write(b"0" * 17 + b"#")
+
+    responder = asyncio.create_task(answer())
+    started = time.monotonic()
+    for _ in range(rounds):
+        await client.write(b"e")
+        await client.read_exactly(18)
+    elapsed = time.monotonic() - started
+    await responder
+    return elapsed
+
+
+async def test_a_request_response_loop_never_beats_the_line() -> None:
+    """Both ends paced: each round trip takes at least 19 byte-times, and not much more."""
+    byte_seconds = 10 / BAUD
+    rounds = 40
+    async with memory_link_pair() as (pc, device):
+        elapsed = await exchange_loop(paced(pc, BAUD, 10), paced(device, BAUD, 10), rounds)
+    line_time = rounds * 19 * byte_seconds
+    assert elapsed >= line_time - 1e-3
+    assert elapsed < line_time * 1.25
+
+
+async def test_a_slow_answer_banks_no_credit() -> None:
+    """A device that thinks for 30 ms still sends its 18 bytes at the line rate after that."""
+    byte_seconds = 10 / BAUD
+    rounds = 5
+    async with memory_link_pair() as (pc, device):
+        elapsed = await exchange_loop(
+            paced(pc, BAUD, 10), paced(device, BAUD, 10), rounds, think_s=0.03
+        )
+    assert elapsed >= rounds * (19 * byte_seconds + 0.03) - 1e-3

@@ -17,13 +17,21 @@ from scopelink.links.base import Link
 # An idle line earns no more credit than this.
 CONTINUATION_SLACK_SECONDS = 0.005
 
+# A write answering input this link has just read may start when that input arrived, up to this
+# long ago: the program's own processing time and wake-up delay are not line time (a device with
+# no latency). A reply that took longer to compute starts when it is written.
+RESPONSE_BACKDATE_SECONDS = 0.005
+
 
 class PacedLink(Link):
     """A link whose writes leave one byte every ``bits_per_byte / baudrate`` seconds.
 
     Byte ``k`` of a burst is handed to the inner link when its last bit would have left a real
     UART, on an absolute schedule of the monotonic clock, so timer jitter never accumulates.
-    Reads pass straight through. Closing it closes the inner link.
+    A write that answers input read since the previous write starts no earlier than that input
+    arrived and no earlier than the previous write left the line, so a request/response loop
+    between two paced ends never runs faster than the real line (an unpaced peer's request takes
+    no line time). Reads pass straight through. Closing it closes the inner link.
     """
 
     def __init__(self, inner: Link, baudrate: int, bits_per_byte: int) -> None:
@@ -37,17 +45,32 @@ class PacedLink(Link):
         self.bits_per_byte = bits_per_byte
         self.byte_seconds = bits_per_byte / baudrate
         self._line_free_at = -math.inf
+        self._input_at = -math.inf
+        self._written_at = -math.inf
         self._write_lock = asyncio.Lock()
 
     async def _read_some(self, max_bytes: int) -> bytes:
         # The inner link's hooks, not its public methods: the trace is logged once, by this link.
-        return await self.inner._read_some(max_bytes)
+        data = await self.inner._read_some(max_bytes)
+        self._input_at = time.monotonic()
+        return data
+
+    def _start_of(self, now: float) -> float:
+        """When the first bit of a write requested ``now`` goes on the line."""
+        if self._input_at > self._written_at:
+            # A response: it cannot start before its request arrived, nor while the previous
+            # write is still on the line; credit for an idle line before the request is none.
+            answered_at = (
+                self._input_at if now - self._input_at <= RESPONSE_BACKDATE_SECONDS else now
+            )
+            return max(self._line_free_at, answered_at)
+        if now - self._line_free_at <= CONTINUATION_SLACK_SECONDS:
+            return self._line_free_at
+        return now
 
     async def _write_all(self, data: bytes) -> None:
         async with self._write_lock:
-            now = time.monotonic()
-            continues = now - self._line_free_at <= CONTINUATION_SLACK_SECONDS
-            start = self._line_free_at if continues else now
+            start = self._start_of(time.monotonic())
             sent = 0
             while sent < len(data):
                 due = min(len(data), math.floor((time.monotonic() - start) / self.byte_seconds))
@@ -58,6 +81,7 @@ class PacedLink(Link):
                     next_due_at = start + (sent + 1) * self.byte_seconds
                     await asyncio.sleep(next_due_at - time.monotonic())
             self._line_free_at = start + len(data) * self.byte_seconds
+            self._written_at = time.monotonic()
 
     async def _close_transport(self) -> None:
         await self.inner.close()
