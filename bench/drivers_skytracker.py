@@ -193,10 +193,6 @@ def print_wire(rows: list[Row]) -> None:
     )
     for row in rows:
         assert row.limit is not None
-        if row.what.startswith("status"):
-            # One byte each way: the emulated line's pacing credit (up to 5 ms of idle time
-            # counted as line time) makes it exceed the wire, so it says nothing here.
-            continue
         print(
             f"{row.what:<38} {row.driver:8.1f} {row.peer:9.1f} {row.limit:10.1f}"
             f" {100 * row.driver / row.peer:12.1f}% {100 * row.driver / row.limit:14.1f}%"
