@@ -28,3 +28,21 @@ def test_quick_benchmark_prints_its_tables() -> None:
     assert any("mounts, 9600 paced" in line for line in lines), result.stdout
     assert any(line.strip().startswith("1e+04") for line in lines), result.stdout
     assert any(line.startswith("largest factor") for line in lines), result.stdout
+
+
+@pytest.mark.timeout(60)
+def test_quick_astro_benchmark_prints_its_table() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "bench.astro", "--quick"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith("J2000 -> observed Alt/Az, 1000 positions")
+    assert any(line.startswith("scopelink j2000_to_observed (vector)") for line in lines)
+    assert any(line.startswith("astropy SkyCoord.transform_to(AltAz)") for line in lines)
+    assert lines[-1].startswith("astropy / scopelink:")

@@ -11,6 +11,7 @@ refraction to the altitude (``refract``) or removes it (``unrefract``). Polar mo
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, overload
 
 import erfa
@@ -36,11 +37,56 @@ __all__ = [
 _HOURS_PER_RADIAN = 12.0 / np.pi
 
 
+_REUSE_WITHIN_DAYS = 10.0 / 86400.0
+"""An observer context computed for one instant serves instants up to 10 s away with only the
+Earth rotation angle updated (``erfa.aper13``): precession-nutation, annual aberration and the
+site's velocity change by well under a milliarcsecond in that time."""
+
+
+@dataclass(slots=True)
+class _CachedObserver:
+    site: Site
+    ut1_minus_utc_s: float
+    utc_jd: float
+    astrom: Any
+    equation_of_origins: FloatArray
+
+
+_last_observer: _CachedObserver | None = None
+
+
 def _observer(t: TimeLike, site: Site, ut1_minus_utc_s: float) -> tuple[Any, FloatArray]:
-    """ERFA's star-independent context for ``site`` at ``t`` (refraction off) and EO."""
+    """ERFA's star-independent context for ``site`` at ``t`` (refraction off) and EO.
+
+    One instant at a time (a mount's poll) reuses the previous context when it is for the same
+    site and within 10 s, updating only the Earth rotation: a fifth of the cost of ``apco13``."""
+    global _last_observer  # noqa: PLW0603 - a one-entry cache of the most recent instant
     check_ut1_minus_utc(ut1_minus_utc_s)
+    utc1, utc2 = utc_pair(t)
+    if np.ndim(utc1) == 0:
+        cached = _last_observer
+        jd = float(utc1) + float(utc2)
+        if (
+            cached is not None
+            and cached.site == site
+            and cached.ut1_minus_utc_s == ut1_minus_utc_s
+            and abs(jd - cached.utc_jd) <= _REUSE_WITHIN_DAYS
+        ):
+            ut11, ut12 = erfa.utcut1(utc1, utc2, ut1_minus_utc_s)
+            astrom = erfa.aper13(ut11, ut12, cached.astrom.copy())
+            return astrom, cached.equation_of_origins
+        astrom, equation_of_origins = _observer_now(utc1, utc2, site, ut1_minus_utc_s)
+        _last_observer = _CachedObserver(site, ut1_minus_utc_s, jd, astrom, equation_of_origins)
+        return astrom, equation_of_origins
+    return _observer_now(utc1, utc2, site, ut1_minus_utc_s)
+
+
+def _observer_now(
+    utc1: FloatArray, utc2: FloatArray, site: Site, ut1_minus_utc_s: float
+) -> tuple[Any, FloatArray]:
     astrom, equation_of_origins = erfa.apco13(
-        *utc_pair(t),
+        utc1,
+        utc2,
         ut1_minus_utc_s,
         np.radians(site.longitude_deg),
         np.radians(site.latitude_deg),
