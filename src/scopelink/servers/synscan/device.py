@@ -13,7 +13,7 @@ from dataclasses import replace
 from datetime import UTC, datetime, timedelta, timezone
 from typing import Protocol, runtime_checkable
 
-from scopelink.astro import angular_separation_deg
+from scopelink.astro import angular_separation_deg, observed_to_j2000
 from scopelink.mount import (
     AlignmentMode,
     Mount,
@@ -254,7 +254,15 @@ class SynScanHandControl:
             az0, alt0 = self._power_on_az_alt
             az_deg, alt_deg = az_deg + az0, alt_deg + alt0
         az_deg, alt_deg = _fold_over_pole(az_deg, alt_deg, 180.0)
-        await self.mount.goto_horizontal(alt_deg, az_deg)
+        capabilities = self.mount.capabilities
+        if capabilities.can_goto and not capabilities.can_goto_altaz:
+            # A mount that only goes to RA/Dec (a Sky Tracker): the same place on the sky now.
+            ra_hours, dec_deg = observed_to_j2000(
+                alt_deg, az_deg % 360.0, self.mount.now(), self.mount.site
+            )
+            await self.mount.goto_equatorial(ra_hours, dec_deg)
+        else:
+            await self.mount.goto_horizontal(alt_deg, az_deg)
         self._goto_running = True
         self._goto_sent_at = self.mount.now()
         self._goto_sticky = self.config.quirks.sticky_altaz_goto
