@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 from bench.alpaca_wrk import parse_wrk
 
+from tests.bench_support import run_quick_bench
 from tests.conftest import require_executable
-
-ROOT = Path(__file__).resolve().parent.parent
 
 WRK_REPORT = """Running 3s test @ http://127.0.0.1:1/api/v1/telescope/0/rightascension
   2 threads and 8 connections
@@ -41,15 +36,7 @@ def test_wrk_reports_are_read_with_their_units() -> None:
 @pytest.mark.timeout(60)
 def test_quick_benchmark_prints_its_table() -> None:
     require_executable("wrk")
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.alpaca_wrk", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.alpaca_wrk", timeout_s=60)
     ours = next(
         line for line in result.stdout.splitlines() if line.startswith("scopelink Alpaca + sim")
     )

@@ -2,26 +2,14 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.bench_support import run_quick_bench
 
 
 @pytest.mark.timeout(60)
 def test_quick_benchmark_prints_its_tables() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.emulators", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.emulators", timeout_s=60)
     lines = result.stdout.splitlines()
     assert any(line.startswith("1 mount, unpaced") for line in lines), result.stdout
     assert any(line.startswith("1 mount, 9600 paced") for line in lines), result.stdout
@@ -32,15 +20,7 @@ def test_quick_benchmark_prints_its_tables() -> None:
 
 @pytest.mark.timeout(60)
 def test_quick_astro_benchmark_prints_its_table() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.astro", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.astro", timeout_s=60)
     lines = result.stdout.splitlines()
     assert lines[0].startswith("J2000 -> observed Alt/Az, 1000 positions")
     assert any(line.startswith("scopelink j2000_to_observed (vector)") for line in lines)

@@ -2,26 +2,14 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.bench_support import run_quick_bench
 
 
 @pytest.mark.timeout(120)
 def test_quick_cli_benchmark_prints_its_table() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.cli_latency", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.cli_latency", timeout_s=120)
     lines = result.stdout.splitlines()
     assert any(line.startswith("python -c pass (peer)") for line in lines), result.stdout
     emulator = [line for line in lines if line.startswith("scopelink status, SynScan emulator")]

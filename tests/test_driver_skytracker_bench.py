@@ -2,26 +2,14 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.bench_support import run_quick_bench
 
 
 @pytest.mark.timeout(90)
 def test_quick_benchmark_prints_its_tables() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.drivers_skytracker", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=90,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.drivers_skytracker", timeout_s=90)
     lines = result.stdout.splitlines()
     wire = [line for line in lines if line.startswith("position poll") and line.endswith("%")]
     assert len(wire) == 1, result.stdout

@@ -2,26 +2,14 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.bench_support import run_quick_bench
 
 
 @pytest.mark.timeout(60)
 def test_quick_planetarium_benchmark_prints_its_tables() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.planetarium_servers", "--quick"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr
+    result = run_quick_bench("bench.planetarium_servers", timeout_s=60)
     lines = result.stdout.splitlines()
     assert any(line.startswith("LX200 over TCP, unpaced") for line in lines), result.stdout
     paced = next(line for line in lines if line.startswith("LX200 9600 paced"))
