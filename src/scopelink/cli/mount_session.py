@@ -27,6 +27,7 @@ __all__ = [
     "DeviceCommand",
     "add_device_arguments",
     "mount_error",
+    "open_device",
     "read_config",
     "run_on_mount",
 ]
@@ -139,9 +140,10 @@ def run_on_mount(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int
     return asyncio.run(_run(command, body))
 
 
-async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
+async def open_device(command: DeviceCommand) -> Mount:
+    """The connected mount ``command`` names, or a :class:`CommandError` with a hint."""
     try:
-        mount = await open_mount(
+        return await open_mount(
             command.device,
             command.site,
             command.config.limits,
@@ -150,6 +152,10 @@ async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) 
         )
     except DeviceError as error:
         raise CommandError(str(error), error.hint) from None
+
+
+async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
+    mount = await open_device(command)
     try:
         return await body(mount)
     except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:

@@ -18,12 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scopelink.cli.config import DEFAULT_SERVER_PORTS
-from scopelink.cli.devices import DeviceError, DeviceSpec, open_mount, parse_device
+from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
     add_device_arguments,
     mount_error,
+    open_device,
     read_config,
 )
 from scopelink.cli.options import parse_site, positive_rate, until_stopped
@@ -222,16 +223,7 @@ def _describe(mount: Mount) -> str:
 
 
 async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
-    try:
-        mount = await open_mount(
-            command.device,
-            command.site,
-            command.config.limits,
-            clock_rate=command.clock_rate,
-            timeout_s=command.timeout_s,
-        )
-    except DeviceError as error:
-        raise CommandError(str(error), error.hint) from None
+    mount = await open_device(command)
     if _exposes_beyond_this_machine(plan.host):
         _log.warning("servers listen on %s: the mount can be driven from other machines", plan.host)
     try:
