@@ -452,3 +452,21 @@ async def test_an_axis_rate_adds_to_tracking_on_a_running_clock() -> None:
     # The extra rate ran from some time in the move command to some time in the stop command.
     assert extra * (before_stop - after_move) - 1e-3 <= beyond_tracking
     assert beyond_tracking <= extra * (after_stop - before_move) + 1e-3
+
+
+async def test_a_chosen_park_position_is_where_park_goes() -> None:
+    """Alpaca's SetPark (and a configured park) choose an alt/az; the simulator parks there
+    instead of at its power-on counters."""
+    from scopelink.mount import ParkPosition
+
+    mount = await make_mount()
+    assert not mount.park_position_chosen
+    mount.park_position = ParkPosition(30.0, 100.0)
+    assert mount.park_position_chosen
+    await mount.park()
+    state = await land(mount)
+    assert state.parked
+    assert state.tracking is TrackingMode.OFF
+    alt, az = mount.observed_at(mount.elapsed())
+    assert alt == pytest.approx(30.0, abs=1e-6)
+    assert az == pytest.approx(100.0, abs=1e-6)

@@ -100,8 +100,8 @@ class Mount(ABC):
             retry_s=self.poll_retry_s,
         )
         self._target: SlewTarget | None = None
-        self.park_position = park_position or ParkPosition.pole(site.latitude_deg)
-        """Where :meth:`park` points the mount (drivers use it; a device may keep its own)."""
+        self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
+        self._park_position_chosen = park_position is not None
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -135,6 +135,22 @@ class Mount(ABC):
     def state(self) -> MountState:
         """The last known state, without waiting on the wire."""
         return self._broadcast.state
+
+    @property
+    def park_position(self) -> ParkPosition:
+        """Where :meth:`park` points the mount: the pole of the site's hemisphere unless chosen
+        (a device that keeps its own park position uses it only once one was chosen)."""
+        return self._park_position
+
+    @park_position.setter
+    def park_position(self, position: ParkPosition) -> None:
+        self._park_position = position
+        self._park_position_chosen = True
+
+    @property
+    def park_position_chosen(self) -> bool:
+        """Whether a park position was given (constructor, Alpaca SetPark, configuration)."""
+        return self._park_position_chosen
 
     @property
     def target(self) -> SlewTarget | None:

@@ -311,7 +311,12 @@ class SimulatedMount(Mount):
     async def _park(self) -> None:
         t = self._begin(replan=True)
         self._tracking = TrackingMode.OFF
-        self._slew_both_to(self.park_counters, t)
+        counters = self.park_counters
+        if self.park_position_chosen:  # e.g. Alpaca's SetPark: the chosen alt/az wins
+            where = self.park_position
+            side = self.geometry.choose_side(where.alt_deg, where.az_deg, self._side_at(t))
+            counters = self.geometry.to_axes(where.alt_deg, where.az_deg, side)
+        self._slew_both_to(counters, t)
         self._parked = True
         self._finish(limits_from=self._goto_until)
 
