@@ -132,3 +132,30 @@ async def test_random_faults_on_every_command_never_give_a_wrong_position() -> N
             assert_position_matches(state, r.sim.snapshot())
         assert len(faults.fired) >= 3
         assert errors <= 3  # two faults in a row are rare; one is always recovered
+
+
+async def test_a_silent_device_fails_connect_and_the_link_is_closed() -> None:
+    """Nothing answers the opening echo: connect raises DeviceError and hangs up (no leaked
+    link keeping the port busy for the next attempt, e.g. autodetection's Sky Tracker try)."""
+    import asyncio as _asyncio
+
+    from scopelink.astro import Site
+    from scopelink.drivers.synscan import SynScanMount
+    from scopelink.mount import DeviceError
+
+    hung_up = _asyncio.Event()
+
+    async def silent(reader: _asyncio.StreamReader, writer: _asyncio.StreamWriter) -> None:
+        while await reader.read(100):
+            pass  # swallow the echoes, answer nothing
+        hung_up.set()
+        writer.close()
+
+    server = await _asyncio.start_server(silent, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    async with server:
+        mount = SynScanMount(f"tcp://127.0.0.1:{port}", site=Site(45.0, 7.0), timeout_s=0.3)
+        with pytest.raises(DeviceError):
+            await mount.connect()
+        await _asyncio.wait_for(hung_up.wait(), 5)
+        assert not mount.state.connected

@@ -211,8 +211,8 @@ class SynScanMount(Mount):
     async def connect(self) -> None:
         """Open the link, echo, identify (``V``, ``m``, motor versions, ``J``, ``w``) and read the
         state once; on any failure the link is closed again and the error raised."""
-        await self.wire.open()
         try:
+            await self.wire.open()
             version = await self._ask(GetVersion(), Version)
             if version.dialect is VersionDialect.NEXSTAR_BINARY:
                 raise DeviceError(
