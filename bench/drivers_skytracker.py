@@ -20,7 +20,7 @@ from tempfile import TemporaryDirectory
 
 from scopelink.astro import Site
 from scopelink.drivers.skytracker import SkyTrackerMount
-from scopelink.links import Link, paced
+from scopelink.links import Link, paced, precise_event_loop
 from scopelink.mount import Priority
 from scopelink.protocol.skytracker import (
     NEED_DATA,
@@ -217,7 +217,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small counts (smoke test)")
     arguments = parser.parse_args()
-    asyncio.run(main_async(QUICK if arguments.quick else FULL))
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        runner.run(main_async(QUICK if arguments.quick else FULL))
 
 
 if __name__ == "__main__":

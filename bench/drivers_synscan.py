@@ -24,7 +24,7 @@ import serial
 
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import open_link
+from scopelink.links import open_link, precise_event_loop
 from scopelink.mount import Priority
 from scopelink.protocol.synscan import GetRaDec, Position
 from scopelink.servers.hosting import SERIAL_9600_8N1
@@ -72,7 +72,8 @@ def serve_emulator_process(pipe: Connection, paced_replies: bool) -> None:
             pipe.send(f"tcp://{host}:{port}")
             await asyncio.get_running_loop().run_in_executor(None, pipe.recv)
 
-    asyncio.run(serve())
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        runner.run(serve())
 
 
 @contextmanager
@@ -247,8 +248,11 @@ def main(sizes: Sizes) -> None:
     print()
     print("1. polls over TCP paced at 9600 8N1 both ways, emulator in another process (best round)")
     print(f"{'poll':<20} {'per s':>8} {'bytes each':>11} {'wire limit':>11} {'of limit':>9}")
-    with emulator_process(paced_replies=True) as url:
-        rows = asyncio.run(wire_utilisation(url, sizes))
+    with (
+        emulator_process(paced_replies=True) as url,
+        asyncio.Runner(loop_factory=precise_event_loop) as runner,
+    ):
+        rows = runner.run(wire_utilisation(url, sizes))
     for poll in rows:
         share = poll.per_s / poll.limit_per_s
         print(

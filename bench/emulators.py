@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from scopelink.astro import Site, angular_separation_deg
-from scopelink.links import Link, paced
+from scopelink.links import Link, paced, precise_event_loop
 from scopelink.protocol.synscan import (
     NEED_DATA,
     GetRaDec,
@@ -375,7 +375,8 @@ def run() -> None:
     parser = argparse.ArgumentParser(prog="python -m bench.emulators", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="a few seconds, smaller counts")
     args = parser.parse_args()
-    asyncio.run(main(QUICK if args.quick else FULL))
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        runner.run(main(QUICK if args.quick else FULL))
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from scopelink.astro import Site
-from scopelink.links import Link, open_tcp, paced
+from scopelink.links import Link, open_tcp, paced, precise_event_loop
 from scopelink.protocol.stellarium import NEED_DATA, CurrentPosition, StellariumClientConnection
 from scopelink.servers.hosting import SERIAL_9600_8N1
 from scopelink.servers.lx200 import LX200Server
@@ -155,7 +155,8 @@ def run() -> None:
     )
     parser.add_argument("--quick", action="store_true", help="a few seconds, smaller counts")
     args = parser.parse_args()
-    asyncio.run(main(QUICK if args.quick else FULL))
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        runner.run(main(QUICK if args.quick else FULL))
 
 
 if __name__ == "__main__":

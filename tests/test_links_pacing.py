@@ -158,3 +158,26 @@ async def test_a_slow_answer_banks_no_credit() -> None:
             paced(pc, BAUD, 10), paced(device, BAUD, 10), rounds, think_s=0.03
         )
     assert elapsed >= rounds * (19 * byte_seconds + 0.03) - 1e-3
+
+
+def test_the_precise_loop_keeps_a_paced_exchange_close_to_the_line() -> None:
+    """On the select()-based loop the timers are not rounded up to whole milliseconds: the loop
+    still never beats the line, and loses less to timer overshoot."""
+    import selectors
+
+    from scopelink.links import precise_event_loop
+
+    byte_seconds = 10 / BAUD
+    rounds = 40
+
+    async def measure() -> float:
+        loop = asyncio.get_running_loop()
+        assert isinstance(loop, asyncio.SelectorEventLoop)
+        assert isinstance(loop._selector, selectors.SelectSelector)  # type: ignore[attr-defined]
+        async with memory_link_pair() as (pc, device):
+            return await exchange_loop(paced(pc, BAUD, 10), paced(device, BAUD, 10), rounds)
+
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        elapsed = runner.run(measure())
+    line_time = rounds * 19 * byte_seconds
+    assert line_time - 1e-3 <= elapsed < line_time * 1.15

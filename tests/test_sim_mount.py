@@ -460,9 +460,9 @@ async def test_a_chosen_park_position_is_where_park_goes() -> None:
     from scopelink.mount import ParkPosition
 
     mount = await make_mount()
-    assert not mount.park_position_chosen
+    chosen_before = mount.park_position_chosen
     mount.park_position = ParkPosition(30.0, 100.0)
-    assert mount.park_position_chosen
+    assert (chosen_before, mount.park_position_chosen) == (False, True)
     await mount.park()
     state = await land(mount)
     assert state.parked

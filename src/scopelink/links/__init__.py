@@ -6,7 +6,7 @@ Set the ``scopelink.links.trace`` logger to DEBUG to see every byte in hex.
 
 from scopelink.links.base import Link, LinkClosedError, LinkError, LinkOpenError, LinkSpecError
 from scopelink.links.memory import MemoryLink, memory_pair
-from scopelink.links.pacing import PacedLink, paced
+from scopelink.links.pacing import PacedLink, paced, precise_event_loop
 from scopelink.links.pty import LineSettings, PtyLink, open_pty
 from scopelink.links.serial import SerialLink, open_serial
 from scopelink.links.tcp import ConnectionHandler, TcpLink, TcpServer, open_tcp, serve_tcp
@@ -32,5 +32,6 @@ __all__ = [
     "open_serial",
     "open_tcp",
     "paced",
+    "precise_event_loop",
     "serve_tcp",
 ]

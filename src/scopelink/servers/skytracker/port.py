@@ -41,7 +41,8 @@ class DevicePort:
     async def read(self) -> bytes:
         """The next bytes the device's UART reads (possibly empty when all were lost)."""
         await self.faults.wait_until_reading()
-        chunk = await self.link.read()
+        # Through the pacer: it notes when a command arrived, so the reply cannot start earlier.
+        chunk = await self._output.read()
         arrival_s = time.monotonic()
         client = self.client_line()
         if client is not None:
