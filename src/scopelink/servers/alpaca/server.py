@@ -23,8 +23,6 @@ from types import CoroutineType, TracebackType
 from typing import Self
 from urllib.parse import parse_qsl
 
-from aiohttp import web
-
 from scopelink import __version__ as scopelink_version
 from scopelink.mount import Mount, MountError
 from scopelink.servers.alpaca.discovery import DISCOVERY_PORT, start_discovery
@@ -34,6 +32,7 @@ from scopelink.servers.alpaca.errors import (
     ErrorNumber,
     from_mount_error,
 )
+from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
 from scopelink.servers.alpaca.identity import default_state_dir, load_or_create_unique_id
 from scopelink.servers.alpaca.params import Params, parse_transaction_id
 from scopelink.servers.alpaca.setup_page import render_setup_page
@@ -48,12 +47,8 @@ MAX_REQUEST_BYTES = 64 * 1024
 """Largest request body accepted (HTTP 413 above it); real Alpaca requests are < 1 KiB."""
 _API_PREFIX = "/api/v1/"
 _DEVICE_TYPE = "telescope"
-_JSON_HEADERS = {"Content-Type": "application/json; charset=utf-8"}
+_JSON = "application/json; charset=utf-8"
 _METHODS = ("GET", "PUT")
-
-
-class RequestTooLarge(BadRequest):
-    """A request body over the size limit: HTTP 413."""
 
 
 def _json_value(value: object) -> str:
@@ -67,8 +62,8 @@ def _json_value(value: object) -> str:
     return json.dumps(value, allow_nan=False)
 
 
-def _text(status: int, message: str) -> web.Response:
-    return web.Response(status=status, text=message)
+def _text(status: int, message: str) -> HttpReply:
+    return HttpReply.text(status, message)
 
 
 class AlpacaServer:
@@ -101,9 +96,9 @@ class AlpacaServer:
         self.unique_id = ""
         self._max_request_bytes = max_request_bytes
         self._transactions = itertools.count(1)
-        self._http: web.Server | None = None
+        self._connections: set[HttpConnection] = set()
         self._listener: asyncio.Server | None = None
-        self._pages: dict[str, Callable[[web.BaseRequest], Awaitable[web.Response]]] = {
+        self._pages: dict[str, Callable[[HttpRequest], Awaitable[HttpReply]]] = {
             "/management/apiversions": self._api_versions,
             "/management/v1/description": self._description,
             "/management/v1/configureddevices": self._configured_devices,
@@ -123,12 +118,15 @@ class AlpacaServer:
         self.unique_id = load_or_create_unique_id(self.state_dir)
         # Reads are answered from mount.state: keep the mount's poller running while we serve.
         await self._stack.enter_async_context(self.mount.watching())
-        # aiohttp's low-level server with our own dispatch: no router or middleware on the path
-        # of the property reads clients poll many times a second.
-        self._http = web.Server(self._handle, access_log=None)
+        # A lean HTTP layer (http.py) with our own dispatch: no framework on the path of the
+        # property reads clients poll many times a second.
         loop = asyncio.get_running_loop()
+        limit = self._max_request_bytes
         self._listener = await loop.create_server(
-            self._http, self.host, self.port, reuse_address=True
+            lambda: HttpConnection(self._handle, limit, self._connections),
+            self.host,
+            self.port,
+            reuse_address=True,
         )
         self.port = int(self._listener.sockets[0].getsockname()[1])
         if self.discovery_port is not None:
@@ -145,9 +143,8 @@ class AlpacaServer:
             self._discovery = None
         if self._listener is not None:
             self._listener.close()
-            if self._http is not None:
-                self._http.pre_shutdown()  # idle keep-alive connections close now
-                await self._http.shutdown(1.0)  # a synchronous slew in progress gets 1 s
+            # Idle keep-alive connections close now; a synchronous slew in progress gets 1 s.
+            await asyncio.gather(*(c.finish(1.0) for c in list(self._connections)))
             await self._listener.wait_closed()
             self._listener = None
         await self.telescope.close()
@@ -181,7 +178,7 @@ class AlpacaServer:
         value: object = None,
         has_value: bool = False,
         error: AlpacaError | None = None,
-    ) -> web.Response:
+    ) -> HttpReply:
         # Assembled by hand: property reads are the hot path, and json.dumps of a whole dict
         # costs more than the rest of our handling together.
         server_id = next(self._transactions)
@@ -197,11 +194,11 @@ class AlpacaServer:
                 f'"ServerTransactionID":{server_id},"ErrorNumber":{int(error.number)},'
                 f'"ErrorMessage":{json.dumps(error.message)}}}'
             )
-        return web.Response(body=text.encode(), headers=_JSON_HEADERS)
+        return HttpReply(200, text.encode(), _JSON)
 
     @staticmethod
-    def _query_ids(request: web.BaseRequest) -> tuple[int, int]:
-        params = Params.from_pairs(request.query.items(), exact=False)
+    def _query_ids(request: HttpRequest) -> tuple[int, int]:
+        params = Params.from_pairs(request.query, exact=False)
         client_id = parse_transaction_id("ClientID", params.optional("ClientID"))
         transaction = parse_transaction_id(
             "ClientTransactionID", params.optional("ClientTransactionID")
@@ -210,7 +207,7 @@ class AlpacaServer:
 
     # --- device API ------------------------------------------------------------------------------
 
-    async def _handle(self, request: web.BaseRequest) -> web.Response:
+    async def _handle(self, request: HttpRequest) -> HttpReply:
         path = request.path
         if path.startswith(_API_PREFIX):
             parts = path[len(_API_PREFIX) :].split("/")
@@ -224,8 +221,8 @@ class AlpacaServer:
         return await page(request)
 
     async def _api(
-        self, request: web.BaseRequest, device_type: str, number: str, name: str
-    ) -> web.Response:
+        self, request: HttpRequest, device_type: str, number: str, name: str
+    ) -> HttpReply:
         if device_type != _DEVICE_TYPE:
             return _text(404, f"no device of type {device_type!r} here (only 'telescope')")
         if number != "0":
@@ -237,32 +234,23 @@ class AlpacaServer:
             return _text(405, f"{request.method} is not an Alpaca method: use GET or PUT")
         try:
             if request.method == "GET":
-                params = Params.from_pairs(request.query.items(), exact=False)
+                params = Params.from_pairs(request.query, exact=False)
             else:
-                params = await self._form(request)
+                params = self._form(request)
             client_id = params.optional("ClientID")
             parse_transaction_id("ClientID", client_id)
             transaction = parse_transaction_id(
                 "ClientTransactionID", params.optional("ClientTransactionID")
             )
             return await self._invoke(request.method, member, name, params, transaction)
-        except RequestTooLarge as error:
-            return _text(413, str(error))
         except BadRequest as error:
             return _text(400, str(error))
 
-    async def _form(self, request: web.BaseRequest) -> Params:
-        limit = self._max_request_bytes
-        too_large = RequestTooLarge(f"request bodies are limited to {limit} bytes")
-        if (request.content_length or 0) > limit:
-            raise too_large
-        body = b""
-        while chunk := await request.content.read(limit + 1 - len(body)):
-            body += chunk
-            if len(body) > limit:
-                raise too_large
+    @staticmethod
+    def _form(request: HttpRequest) -> Params:
+        # The size limit is enforced while the body arrives (http.py answers 413).
         try:
-            text = body.decode("utf-8")
+            text = request.body.decode("utf-8")
             pairs = parse_qsl(text, keep_blank_values=True, strict_parsing=False)
         except (UnicodeDecodeError, ValueError):
             raise BadRequest("the PUT body must be UTF-8 form data (name=value&...)") from None
@@ -270,7 +258,7 @@ class AlpacaServer:
 
     async def _invoke(
         self, method: str, member: Member, name: str, params: Params, transaction: int
-    ) -> web.Response:
+    ) -> HttpReply:
         handler = member.get if method == "GET" else member.put
         if handler is None:
             other = "PUT" if method == "GET" else "GET"
@@ -296,17 +284,17 @@ class AlpacaServer:
 
     # --- management API and setup pages ----------------------------------------------------------
 
-    async def _management(self, request: web.BaseRequest, value: object) -> web.Response:
+    async def _management(self, request: HttpRequest, value: object) -> HttpReply:
         try:
             _, transaction = self._query_ids(request)
         except BadRequest as error:
             return _text(400, str(error))
         return self._reply(transaction, value=value, has_value=True)
 
-    async def _api_versions(self, request: web.BaseRequest) -> web.Response:
+    async def _api_versions(self, request: HttpRequest) -> HttpReply:
         return await self._management(request, [1])
 
-    async def _description(self, request: web.BaseRequest) -> web.Response:
+    async def _description(self, request: HttpRequest) -> HttpReply:
         description = {
             "ServerName": "scopelink",
             "Manufacturer": "scopelink developers",
@@ -317,7 +305,7 @@ class AlpacaServer:
         }
         return await self._management(request, description)
 
-    async def _configured_devices(self, request: web.BaseRequest) -> web.Response:
+    async def _configured_devices(self, request: HttpRequest) -> HttpReply:
         devices = [
             {
                 "DeviceName": self.config.name,
@@ -328,7 +316,7 @@ class AlpacaServer:
         ]
         return await self._management(request, devices)
 
-    async def _setup(self, _: web.BaseRequest) -> web.Response:
+    async def _setup(self, _: HttpRequest) -> HttpReply:
         page = render_setup_page(
             self.mount,
             self.config,
@@ -336,4 +324,4 @@ class AlpacaServer:
             port=self.port,
             discovery_port=self.discovery_port,
         )
-        return web.Response(text=page, content_type="text/html")
+        return HttpReply(200, page.encode(), "text/html; charset=utf-8")

@@ -1,0 +1,172 @@
+"""The Alpaca server's own HTTP/1.1 layer over raw sockets: keep-alive, pipelining, 100-continue,
+chunked bodies, size limits and malformed requests — and garbage never takes the server down."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import re
+from pathlib import Path
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
+from tests.test_alpaca_support import serve
+
+API = "/api/v1/telescope/0"
+
+
+async def read_reply(reader: asyncio.StreamReader) -> tuple[int, dict[str, str], bytes]:
+    head = (await reader.readuntil(b"\r\n\r\n")).decode("latin-1")
+    status = int(head.split(" ", 2)[1])
+    headers = {
+        name.strip().lower(): value.strip()
+        for name, value in (line.split(":", 1) for line in head.split("\r\n")[1:] if ":" in line)
+    }
+    body = await reader.readexactly(int(headers.get("content-length", "0")))
+    return status, headers, body
+
+
+async def raw(port: int) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+    return await asyncio.open_connection("127.0.0.1", port)
+
+
+async def test_pipelined_requests_are_answered_in_order_on_one_connection(
+    tmp_path: Path,
+) -> None:
+    async with serve(state_dir=tmp_path) as server:
+        reader, writer = await raw(server.port)
+        requests = b"".join(
+            f"GET {API}/name?ClientTransactionID={n} HTTP/1.1\r\nHost: x\r\n\r\n".encode()
+            for n in range(1, 21)
+        )
+        writer.write(requests)
+        async with asyncio.timeout(5):
+            for n in range(1, 21):
+                status, headers, body = await read_reply(reader)
+                assert status == 200
+                assert headers["content-type"].startswith("application/json")
+                assert json.loads(body)["ClientTransactionID"] == n
+        writer.close()
+
+
+async def test_expect_continue_and_chunked_bodies_work_and_close_is_honoured(
+    tmp_path: Path,
+) -> None:
+    async with serve(state_dir=tmp_path) as server:
+        reader, writer = await raw(server.port)
+        body = b"Connected=True&ClientTransactionID=7"
+        writer.write(
+            f"PUT {API}/connected HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\n"
+            "Content-Type: application/x-www-form-urlencoded\r\n"
+            f"Content-Length: {len(body)}\r\n\r\n".encode()
+        )
+        async with asyncio.timeout(5):
+            assert await reader.readuntil(b"\r\n\r\n") == b"HTTP/1.1 100 Continue\r\n\r\n"
+            writer.write(body)
+            status, _, reply = await read_reply(reader)
+        assert status == 200
+        assert json.loads(reply)["ErrorNumber"] == 0
+        chunked = b"Connected=False&ClientTransactionID=8"
+        writer.write(
+            f"PUT {API}/connected HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n"
+            "Connection: close\r\n\r\n".encode()
+            + f"{len(chunked):x}\r\n".encode()
+            + chunked
+            + b"\r\n0\r\n\r\n"
+        )
+        async with asyncio.timeout(5):
+            status, headers, reply = await read_reply(reader)
+            assert status == 200
+            assert headers["connection"] == "close"
+            assert json.loads(reply)["ClientTransactionID"] == 8
+            assert await reader.read() == b""  # the server closed the connection
+        assert server.telescope.connected is False
+
+
+async def test_bad_requests_get_400_or_413_and_the_connection_closes(tmp_path: Path) -> None:
+    async with serve(state_dir=tmp_path) as server:
+        for request, expected in (
+            (b"THIS IS NOT HTTP\r\n\r\n", 400),
+            (b"GET /a\x00b HTTP/1.1\r\nHost: x\r\n\r\n", 400),
+            (
+                f"PUT {API}/connected HTTP/1.1\r\nHost: x\r\n"
+                "Content-Length: 10000000\r\n\r\n".encode(),
+                413,
+            ),
+        ):
+            reader, writer = await raw(server.port)
+            writer.write(request)
+            async with asyncio.timeout(5):
+                status, _, _ = await read_reply(reader)
+                assert status == expected, request
+                assert await reader.read() == b""
+            writer.close()
+        # and the server still answers
+        reader, writer = await raw(server.port)
+        writer.write(f"GET {API}/name HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+        async with asyncio.timeout(5):
+            status, _, _ = await read_reply(reader)
+        assert status == 200
+        writer.close()
+
+
+def test_replies_are_well_formed_http() -> None:
+    reply = HttpReply.text(404, "nothing at /x")
+    encoded = reply.encode(keep_alive=True)
+    assert encoded.startswith(b"HTTP/1.1 404 Not Found\r\n")
+    assert re.search(rb"\r\nContent-Length: 13\r\n\r\nnothing at /x$", encoded)
+    assert b"Connection: close" in reply.encode(keep_alive=False)
+    assert (
+        HttpReply(413, b"")
+        .encode(keep_alive=False)
+        .startswith(b"HTTP/1.1 413 Request Entity Too Large")
+    )
+
+
+class _Transport(asyncio.Transport):
+    """Collects what the protocol writes (the parser and queue logic without sockets)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.written = bytearray()
+        self.closed = False
+
+    def write(self, data: bytes | bytearray | memoryview) -> None:
+        self.written += data
+
+    def close(self) -> None:
+        self.closed = True
+
+    def is_closing(self) -> bool:
+        return self.closed
+
+    def pause_reading(self) -> None:
+        pass
+
+    def resume_reading(self) -> None:
+        pass
+
+
+@given(st.binary(max_size=400), st.integers(min_value=1, max_value=50))
+@settings(max_examples=300, deadline=None)
+def test_any_bytes_in_any_chunks_give_replies_or_a_400_never_an_exception(
+    data: bytes, chunk: int
+) -> None:
+    async def handle(request: HttpRequest) -> HttpReply:
+        return HttpReply.text(200, request.path)
+
+    async def feed() -> _Transport:
+        transport = _Transport()
+        connection = HttpConnection(handle, 1024, set())
+        connection.connection_made(transport)
+        for start in range(0, len(data), chunk):
+            connection.data_received(data[start : start + chunk])
+        await asyncio.sleep(0)
+        await asyncio.sleep(0)
+        connection.connection_lost(None)
+        return transport
+
+    transport = asyncio.run(feed())
+    assert transport.written == b"" or transport.written.startswith(b"HTTP/1.1 ")
