@@ -100,22 +100,26 @@ class DeviceCommand:
     timeout_s: float | None
 
     @classmethod
-    def from_args(cls, args: argparse.Namespace) -> DeviceCommand:
+    def from_args(
+        cls, args: argparse.Namespace, *, device: str | None = None, default_device: str = ""
+    ) -> DeviceCommand:
+        """Flags over the config file; ``device`` overrides both (e.g. ``serve --mount``),
+        ``default_device`` applies when neither names one (``serve`` runs the simulator)."""
         config = read_config()
-        text = args.device or config.device
+        text = device or args.device or config.device or default_device
         if not text:
             raise CommandError(
                 "no device given",
                 f'add --device DEVICE ({EXAMPLES}) or set device = "..." in {config_path()}',
             )
         try:
-            device = parse_device(text)
+            spec = parse_device(text)
         except DeviceError as error:
             raise CommandError(str(error), error.hint) from None
         site = parse_site(args.site) if args.site else config.site
         if args.timeout is not None and not args.timeout > 0:
             raise CommandError(f"--timeout must be positive, not {args.timeout}")
-        return cls(device, site, config, positive_rate(args.clock_rate), args.timeout)
+        return cls(spec, site, config, positive_rate(args.clock_rate), args.timeout)
 
 
 def mount_error(error: Exception) -> CommandError:

@@ -18,16 +18,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scopelink.cli.config import DEFAULT_SERVER_PORTS
-from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
     add_device_arguments,
     mount_error,
     open_device,
-    read_config,
 )
-from scopelink.cli.options import parse_site, positive_rate, until_stopped
+from scopelink.cli.options import until_stopped
 from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
@@ -160,18 +158,12 @@ def _merge_port(flag: int | None, configured: int | None, name: str) -> int | No
 
 
 def plan_from(args: argparse.Namespace) -> tuple[DeviceCommand, ServePlan]:
-    config = read_config()
     if args.mount and args.device:
         raise CommandError("give --device or --mount, not both")
-    text = f"sim:{args.mount}" if args.mount else (args.device or config.device or "sim")
-    try:
-        device: DeviceSpec = parse_device(text)
-    except DeviceError as error:
-        raise CommandError(str(error), error.hint) from None
-    if args.timeout is not None and not args.timeout > 0:
-        raise CommandError(f"--timeout must be positive, not {args.timeout}")
-    site = parse_site(args.site) if args.site else config.site
-    command = DeviceCommand(device, site, config, positive_rate(args.clock_rate), args.timeout)
+    command = DeviceCommand.from_args(
+        args, device=f"sim:{args.mount}" if args.mount else None, default_device="sim"
+    )
+    config = command.config
     servers = config.servers
     plan = ServePlan(
         host=args.host or servers.host,
