@@ -24,9 +24,6 @@ from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.links import open_serial
 from scopelink.mount import MountAxis
 from scopelink.protocol.synscan import (
-    NEED_DATA,
-    AnyCommand,
-    AnyReply,
     GotoAzAlt,
     GotoInProgress,
     IsGotoInProgress,
@@ -37,6 +34,7 @@ from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
 from tests.conftest import require_executable
 from tests.indi_support import IndiDriver, IndiProperty
+from tests.synscan_support import ask
 
 DRIVER = "indi_synscan_telescope"
 SITE = Site(48.0, 11.0)
@@ -124,20 +122,12 @@ async def test_an_alt_az_goto_reaches_a_sky_tracker_as_an_ra_dec_goto(tmp_path: 
                 async with link:
                     client = SynScanClientConnection()
 
-                    async def ask(command: AnyCommand) -> AnyReply:
-                        await link.write(client.send(command))
-                        async with asyncio.timeout(5):
-                            while (event := client.next_event()) is NEED_DATA:
-                                client.receive_data(await link.read())
-                        assert isinstance(event, AnyReply), event
-                        return event
-
                     # that place on the sky when asked; the box then tracks it
                     target = observed_to_j2000(44.0, 154.0, sim.clock.now(), SITE)
-                    await ask(GotoAzAlt.from_degrees(154.0, 44.0))
+                    await ask(link, client, GotoAzAlt.from_degrees(154.0, 44.0))
                     async with asyncio.timeout(30):
                         while True:
-                            busy = await ask(IsGotoInProgress())
+                            busy = await ask(link, client, IsGotoInProgress())
                             assert isinstance(busy, GotoInProgress)
                             if not busy.in_progress:
                                 break

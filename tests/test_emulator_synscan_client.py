@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -13,7 +12,6 @@ import pytest
 from scopelink.astro import Site, angular_separation_deg, lst_hours
 from scopelink.links import Link, open_serial, open_tcp
 from scopelink.protocol.synscan import (
-    NEED_DATA,
     Aligned,
     AnyCommand,
     AnyReply,
@@ -59,6 +57,7 @@ from scopelink.protocol.synscan import (
 )
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
+from tests.synscan_support import ask
 
 PRECISE_UNIT_DEG = 360.0 / 2**24
 MADRID = Site(40.4, 3.7, pressure_hpa=0.0)
@@ -75,14 +74,7 @@ class Session:
     connection: SynScanClientConnection
 
     async def ask(self, command: AnyCommand, seconds: float = 3.0) -> AnyReply:
-        await self.link.write(self.connection.send(command))
-        async with asyncio.timeout(seconds):
-            while True:
-                event = self.connection.next_event()
-                if event is not NEED_DATA:
-                    assert isinstance(event, AnyReply), event
-                    return event
-                self.connection.receive_data(await self.link.read())
+        return await ask(self.link, self.connection, command, seconds)
 
 
 @asynccontextmanager

@@ -20,10 +20,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
-from scopelink.links import Link, open_serial, open_tcp
+from scopelink.links import open_serial, open_tcp
 from scopelink.mount import MountAxis
 from scopelink.protocol.synscan import (
-    NEED_DATA,
     GetRaDec,
     GetVersion,
     GotoRaDec,
@@ -33,9 +32,10 @@ from scopelink.protocol.synscan import (
     SynScanClientConnection,
     Version,
 )
-from scopelink.protocol.synscan.messages import AnyCommand, AnyReply, GotoInProgress
+from scopelink.protocol.synscan.messages import GotoInProgress
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
+from tests.synscan_support import ask
 
 START_TIMEOUT_S = 30
 ALL_OFF = (
@@ -98,15 +98,6 @@ def listening(printed: str, label: str) -> int:
     found = re.search(label + r"\s+(?:tcp |udp |http://)?127\.0\.0\.1:(\d+)", printed)
     assert found, f"no {label} in {printed}"
     return int(found.group(1))
-
-
-async def ask(link: Link, client: SynScanClientConnection, command: AnyCommand) -> AnyReply:
-    await link.write(client.send(command))
-    async with asyncio.timeout(5):
-        while (event := client.next_event()) is NEED_DATA:
-            client.receive_data(await link.read())
-    assert isinstance(event, AnyReply), event
-    return event
 
 
 def http_get(url: str) -> tuple[int, str]:
