@@ -29,6 +29,7 @@ __all__ = [
     "ServersConfig",
     "config_path",
     "load_config",
+    "parse_config",
 ]
 
 CONFIG_ENV_VAR: Final = "SCOPELINK_CONFIG"
@@ -93,6 +94,11 @@ def load_config(path: Path | None = None) -> Config:
         return Config(path=None)
     except (OSError, UnicodeDecodeError) as error:
         raise ConfigError(f"{path}: cannot read: {error}") from None
+    return parse_config(text, path)
+
+
+def parse_config(text: str, path: Path) -> Config:
+    """Check and read the text of a settings file; errors name ``path`` and the key."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

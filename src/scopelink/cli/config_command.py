@@ -1,10 +1,13 @@
-"""``scopelink config path|show|example``: where the settings file is and what it says."""
+"""``scopelink config path|show|example|init|set|unset``: the settings file, read and changed."""
 
 from __future__ import annotations
 
 import argparse
+from typing import Final
 
-from scopelink.cli.config import CONFIG_ENV_VAR, Config, config_path
+from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path
+from scopelink.cli.config_edit import create_config, set_values, unset_keys
+from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import read_config
 
 __all__ = ["EXAMPLE_CONFIG", "register", "run"]
@@ -38,35 +41,84 @@ _EXAMPLES = f"""\
 examples:
   scopelink config path                        where the settings file is read from
   scopelink config show                        the settings in force (defaults filled in)
-  scopelink config example > "$(scopelink config path)"   start from a commented example
+  scopelink config init                        write the commented example (never overwrites)
+  scopelink config set device sim:az-gti       change one value, keeping comments and layout
+  scopelink config set site.latitude 40.4 site.longitude -3.7   several at once
+  scopelink config set horizon.profile "[[0, 15], [90, 25]]"    any TOML value
+  scopelink config set servers.lx200 false     turn a server off
+  scopelink config unset horizon.profile       back to the default
+  scopelink config example                     print the commented example
 
 {CONFIG_ENV_VAR}=/some/file.toml overrides the path.
 """
+
+_ACTIONS: Final = {
+    "path": "print the settings file's path",
+    "show": "print the settings in force (defaults filled in)",
+    "example": "print a commented example file",
+    "init": "write the commented example as the settings file (refuses to overwrite one)",
+    "set": "set dotted KEY to VALUE (TOML value, or a bare string); several KEY VALUE pairs "
+    "are written together",
+    "unset": "remove dotted KEYs from the file (back to their defaults)",
+}
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "config",
-        help="show where the settings file is and what it says",
-        description="The settings file: device, site, horizon, limits and servers (TOML).",
+        help="show or change the settings file",
+        description="The settings file: device, site, horizon, limits and servers (TOML). "
+        "set/unset keep the file's comments and layout, check the result before writing, "
+        "and write atomically.",
         epilog=_EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(
         "action",
-        choices=("path", "show", "example"),
-        help="path: the file's path; show: the settings in force; example: a commented example",
+        choices=tuple(_ACTIONS),
+        help="; ".join(f"{name}: {text}" for name, text in _ACTIONS.items()),
+    )
+    parser.add_argument(
+        "arguments",
+        nargs="*",
+        metavar="KEY [VALUE]",
+        help="set: KEY VALUE [KEY VALUE ...]; unset: KEY [KEY ...] (dotted: site.latitude)",
     )
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.action == "path":
+    action: str = args.action
+    arguments: list[str] = args.arguments
+    if action in ("path", "show", "example", "init") and arguments:
+        raise CommandError(f"config {action} takes no arguments, got {' '.join(arguments)!r}")
+    if action == "path":
         print(config_path())
-    elif args.action == "example":
+    elif action == "example":
         print(EXAMPLE_CONFIG, end="")
-    else:
+    elif action == "show":
         print(show(read_config()), end="")
+    else:
+        path = config_path()
+        hint = f"see 'scopelink config example' for every key; {path} is unchanged"
+        try:
+            if action == "init":
+                create_config(path, EXAMPLE_CONFIG)
+                print(f"wrote {path}")
+            elif action == "set":
+                if not arguments or len(arguments) % 2:
+                    raise CommandError(
+                        "config set needs KEY VALUE pairs", "e.g. scopelink config set device sim"
+                    )
+                set_values(path, list(zip(arguments[::2], arguments[1::2], strict=True)))
+            else:
+                if not arguments:
+                    raise CommandError("config unset needs a KEY", "e.g. config unset horizon")
+                unset_keys(path, arguments)
+        except ConfigError as error:
+            if action == "init":
+                hint = "change it with 'scopelink config set', or move it away first"
+            raise CommandError(str(error), hint) from None
     return 0
 
 
