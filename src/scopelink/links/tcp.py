@@ -32,6 +32,9 @@ class TcpLink(Link):
         super().__init__(name)
         self._reader = reader
         self._writer = writer
+        peer = writer.get_extra_info("peername")
+        self.peer_host: str | None = str(peer[0]) if peer else None
+        """The address at the other end (servers check it against their allow-list)."""
         sock = writer.get_extra_info("socket")
         if sock is not None:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)

@@ -24,6 +24,7 @@ from scopelink.links import (
     paced,
     serve_tcp,
 )
+from scopelink.servers.access import AccessControl, Refusal
 
 __all__ = ["SERIAL_9600_8N1", "HostedDevice", "WireSpeed"]
 
@@ -59,6 +60,8 @@ class HostedDevice:
         self._tasks: list[asyncio.Task[None]] = []
         self._links: list[Link] = []
         self._tcp_server: TcpServer | None = None
+        self.access = AccessControl(name=type(self).__name__)
+        """Who may connect over TCP, how many, how fast (replace it to apply a policy)."""
         self.address = ""
         """The pty path, ``HOST:PORT``, or ``memory``, once started."""
 
@@ -132,4 +135,7 @@ class HostedDevice:
                 await link.close()
 
     async def _serve_tcp_link(self, link: Link) -> None:
-        await self._handler(self._paced(link))
+        async with self.access.session(getattr(link, "peer_host", None)) as client:
+            if isinstance(client, Refusal):
+                return  # no protocol here has a refusal message: the connection just closes
+            await self._handler(self._paced(link))

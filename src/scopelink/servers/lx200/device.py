@@ -90,6 +90,20 @@ _GUIDE = {
     Direction.WEST: GuideDirection.WEST,
 }
 MEADE_SYNC_TEXT = "Coordinates     matched.        "
+READ_ONLY_TEXT = "Read-only server"
+_CHANGES_THE_MOUNT = (
+    GotoTarget,
+    SyncTarget,
+    Halt,
+    Move,
+    PulseGuide,
+    SetLatitude,
+    SetLongitude,
+    SetUtcOffset,
+    SetLocalTime,
+    SetLocalDate,
+)
+"""Refused on a read-only server. Targets, rate and precision belong to the connection."""
 
 
 class LX200Handset:
@@ -100,6 +114,8 @@ class LX200Handset:
         self.config = config or LX200Config()
         self.utc_offset_hours = self.config.utc_offset_hours
         """Meade's sign: hours to add to local time to get UTC."""
+        self.read_only = False
+        """Refuse every command that would change the mount, the site, the time or the offset."""
 
     def session(self) -> LX200Session:
         return LX200Session(self)
@@ -132,6 +148,8 @@ class LX200Session:
         if isinstance(command, MalformedCommand):
             logger.info("%s", command.describe())
             return boolean_reply(False) if reply_kind(command) is ReplyKind.CHAR else b""
+        if self.handset.read_only and isinstance(command, _CHANGES_THE_MOUNT):
+            return self._refuse_read_only(command)
         match command:
             case Ack():
                 mode = self.mount.capabilities.alignment_mode
@@ -178,6 +196,20 @@ class LX200Session:
                 time_of_day = self.handset.local_now().time().replace(microsecond=0)
                 ok = await self._set_clock(date(year, month, day), time_of_day)
                 return DATE_SET_REPLY if ok else boolean_reply(False)
+
+    def _refuse_read_only(self, command: AnyCommand) -> bytes:
+        """Each command's own refusal: a goto's ``1<reason>#``, a sync's reason text, a set's
+        ``0``; motions have no reply, so they are ignored (and logged)."""
+        logger.info("read-only: %s refused", type(command).__name__)
+        match command:
+            case GotoTarget():
+                return slew_reply(SlewRefusal.OTHER, READ_ONLY_TEXT)
+            case SyncTarget():
+                status = self.handset.config.sync_reply is SyncReply.STATUS
+                return text_reply(f"1{READ_ONLY_TEXT}" if status else READ_ONLY_TEXT)
+            case Halt() | Move() | PulseGuide():
+                return b""
+        return boolean_reply(False)
 
     # --- reads ----------------------------------------------------------------------------------
 

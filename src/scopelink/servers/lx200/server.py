@@ -22,6 +22,7 @@ from scopelink.protocol.lx200 import (
     StrayBytes,
     UnknownCommand,
 )
+from scopelink.servers.access import AccessControl, AccessPolicy, current_client
 from scopelink.servers.hosting import HostedDevice, WireSpeed
 from scopelink.servers.lx200.config import LX200Config
 from scopelink.servers.lx200.device import LX200Handset
@@ -45,7 +46,9 @@ class LX200Server(HostedDevice):
             path = await server.on_pty()     # and/or a serial-like device
             await server.on_skyfi()          # SkySafari's auto-detect on udp 127.0.0.1:4031
 
-    ``wire`` paces replies like a serial line (None, the default, sends at once).
+    ``wire`` paces replies like a serial line (None, the default, sends at once). ``access``
+    limits who connects over TCP and how fast (commands beyond the rate wait), and makes the
+    handset read-only; SkyFi ignores senders it does not admit.
     """
 
     def __init__(
@@ -54,10 +57,13 @@ class LX200Server(HostedDevice):
         config: LX200Config | None = None,
         *,
         wire: WireSpeed | None = None,
+        access: AccessPolicy | None = None,
     ) -> None:
         self.handset = LX200Handset(mount, config)
         self.skyfi: SkyFiResponder | None = None
         super().__init__(self.serve, wire=wire)
+        self.access = AccessControl(access, "LX200")
+        self.handset.read_only = self.access.read_only
 
     @property
     def mount(self) -> Mount:
@@ -76,7 +82,7 @@ class LX200Server(HostedDevice):
         self, host: str = "127.0.0.1", port: int = SKYFI_PORT, *, name: str | None = None
     ) -> SkyFiResponder:
         """Answer SkySafari's SkyFi discovery on UDP ``host:port`` (stopped with the server)."""
-        self.skyfi = SkyFiResponder(host, port, name=name)
+        self.skyfi = SkyFiResponder(host, port, name=name, admits=self.access.allows)
         await self.skyfi.start()
         return self.skyfi
 
@@ -89,6 +95,7 @@ class LX200Server(HostedDevice):
         """Answer commands from ``link`` until it closes."""
         session = self.handset.session()
         connection = LX200ServerConnection()
+        client = current_client()
         async with self.mount.watching():
             while True:
                 data = await self._read(link, connection)
@@ -101,6 +108,7 @@ class LX200Server(HostedDevice):
                     if isinstance(event, StrayBytes | UnknownCommand):
                         logger.info("%s: %s", link.name, event.describe())
                         continue
+                    await client.throttle()
                     reply = await session.answer(event)
                     if reply:
                         await link.write(reply)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
+from collections.abc import Callable
 from types import TracebackType
 from typing import Self, cast
 
@@ -24,12 +25,19 @@ logger = logging.getLogger(__name__)
 class SkyFiResponder:
     """Answers SkyFi discovery datagrams on ``host:port`` (port 0 picks a free one).
 
-    ``name`` is the SkyFi name to answer to; None answers every query.
+    ``name`` is the SkyFi name to answer to; None answers every query. ``admits`` says which
+    sender addresses get an answer (the server's allow-list); the others are ignored.
     """
 
     def __init__(
-        self, host: str = "127.0.0.1", port: int = SKYFI_PORT, *, name: str | None = None
+        self,
+        host: str = "127.0.0.1",
+        port: int = SKYFI_PORT,
+        *,
+        name: str | None = None,
+        admits: Callable[[str], bool] | None = None,
     ) -> None:
+        self.admits = admits
         self.host = host
         self.port = port
         self.name = name
@@ -63,6 +71,9 @@ class SkyFiResponder:
         await self.close()
 
     def reply_to(self, datagram: bytes, sender: tuple[str, int]) -> bytes | None:
+        if self.admits is not None and not self.admits(sender[0]):
+            logger.info("SkyFi: ignored a datagram from %s (not in the allow-list)", sender[0])
+            return None
         query = parse_skyfi_query(datagram)
         if query is None:
             logger.info("SkyFi: ignored %d-byte datagram from %s", len(datagram), sender[0])

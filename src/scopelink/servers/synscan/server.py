@@ -10,16 +10,31 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Awaitable, Callable
 
 from scopelink.links import Link, LinkClosedError
 from scopelink.protocol.synscan import (
     NEED_DATA,
+    Ack,
     AnyCommand,
+    AnyReply,
+    CancelGoto,
+    FixedRateSlew,
+    GotoAzAlt,
+    GotoRaDec,
     MalformedCommand,
+    SetAxisPosition,
+    SetLocation,
+    SetTime,
+    SetTrackingMode,
+    SlowGoto,
+    SyncRaDec,
     SynScanServerConnection,
     UnknownCommand,
+    VariableRateSlew,
     encode_command,
 )
+from scopelink.servers.access import AccessControl, current_client
 from scopelink.servers.faults import FaultInjector, FaultKind
 from scopelink.servers.synscan.device import SynScanHandControl
 
@@ -34,6 +49,23 @@ _NOT_EXECUTED = frozenset({FaultKind.STALL, FaultKind.HALT, FaultKind.CLOSE})
 """Faults that stand for a hung device: the command is not carried out. Under the others the
 device works and only its reply goes wrong on the way."""
 
+CHANGES_THE_MOUNT = (
+    GotoRaDec,
+    GotoAzAlt,
+    SyncRaDec,
+    SetTrackingMode,
+    FixedRateSlew,
+    VariableRateSlew,
+    SlowGoto,
+    SetAxisPosition,
+    SetLocation,
+    SetTime,
+    CancelGoto,
+)
+"""Refused by a read-only server. The hand control's answer to a command it refuses is a plain
+``#`` with nothing done (what it sends for a goto below the horizon), so that is the refusal.
+Passthrough motor commands are already answered as unanswerable over a Mount."""
+
 
 def command_key(command: AnyCommand) -> str:
     """The key faults match a command by: its first byte as text (``e``, ``P``, ``K``...)."""
@@ -41,15 +73,21 @@ def command_key(command: AnyCommand) -> str:
 
 
 class SynScanServer:
-    """Serves the SynScan protocol for ``hand_control`` on every link given to :meth:`serve`."""
+    """Serves the SynScan protocol for ``hand_control`` on every link given to :meth:`serve`.
+
+    :attr:`access` (no limits unless replaced) makes it read-only; a TCP client's commands wait
+    for their turn under its rate (admission itself is the hosting device's).
+    """
 
     def __init__(self, hand_control: SynScanHandControl, faults: FaultInjector | None = None):
         self.hand_control = hand_control
         self.faults = faults or FaultInjector()
+        self.access = AccessControl(name="SynScan")
 
     async def serve(self, link: Link) -> None:
         """Answer commands from ``link`` until it closes (or a ``close`` fault closes it)."""
         connection = SynScanServerConnection()
+        client = current_client()
         try:
             while True:
                 await self.faults.wait_until_reading()
@@ -59,7 +97,7 @@ class SynScanServer:
                     logger.info("%s: incomplete command %r dropped", link.name, dropped)
                     continue
                 connection.receive_data(data)
-                if not await self._answer_all(link, connection):
+                if not await self._answer_all(link, connection, client.throttle):
                     return
         except LinkClosedError as exc:
             logger.info("%s: %s", link.name, exc)
@@ -74,7 +112,12 @@ class SynScanServer:
         except TimeoutError:
             return None
 
-    async def _answer_all(self, link: Link, connection: SynScanServerConnection) -> bool:
+    async def _answer_all(
+        self,
+        link: Link,
+        connection: SynScanServerConnection,
+        throttle: Callable[[], Awaitable[None]],
+    ) -> bool:
         """Answer every complete command received; False once the link was closed by a fault."""
         while True:
             await self.faults.wait_until_reading()
@@ -91,7 +134,12 @@ class SynScanServer:
                     await link.close()
                     return False
                 continue
-            reply = await self.hand_control.answer(event)
+            await throttle()
+            if self.access.read_only and isinstance(event, CHANGES_THE_MOUNT):
+                logger.info("%s: read-only: %s refused", link.name, event.describe())
+                reply: AnyReply = Ack()
+            else:
+                reply = await self.hand_control.answer(event)
             if self.hand_control.config.latency_s:
                 await asyncio.sleep(self.hand_control.config.latency_s)
             if not await self.faults.deliver(link, connection.send(reply), fault):

@@ -1,0 +1,335 @@
+"""Who may talk to the servers, how many at once, how fast, and whether they may change anything.
+
+One :class:`AccessPolicy` (what ``scopelink serve --read-only --allow CIDR ...`` says) is shared
+by every server; each server builds its own :class:`AccessControl` from it, so a flood on one
+protocol's port does not lock clients out of another. What it decides, protocol-neutrally:
+
+- **allow-list**: an empty list lets every address in (the bind address is the first fence); a
+  non-empty one admits only those networks, plus loopback unless ``loopback_always_allowed`` is
+  off (tests turn it off to see a refusal without another machine).
+- **connection limits**: in total per server, and per client address.
+- **rate**: a token bucket per client address (``requests_per_s``, ``burst``). How excess is
+  handled is the server's choice, because each protocol has its own: line protocols (LX200,
+  SynScan, Stellarium) wait (:meth:`Client.throttle`), which reads to the client as a slower
+  line and loses nothing; HTTP waits up to ``max_delay_s`` and answers 429 beyond it.
+- **read-only**: :attr:`AccessPolicy.read_only`; each server refuses state-changing commands with
+  its protocol's own refusal (``docs/reliability-security.md`` lists them).
+
+Connections that do not come from a TCP peer (a pty, a memory pair) count as local: admitted,
+not counted, not throttled.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import logging
+import time
+from collections.abc import AsyncIterator, Callable, Iterable
+from contextvars import ContextVar
+from dataclasses import dataclass, field
+
+from scopelink.mount import MountError
+
+__all__ = [
+    "DEFAULT_POLICY",
+    "OPEN_POLICY",
+    "AccessControl",
+    "AccessPolicy",
+    "Client",
+    "IPNetwork",
+    "ReadOnlyError",
+    "Refusal",
+    "TokenBucket",
+    "current_client",
+    "parse_network",
+]
+
+logger = logging.getLogger(__name__)
+
+IPNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
+
+
+class ReadOnlyError(MountError):
+    """A state-changing command reached a read-only server."""
+
+    def __init__(self, what: str = "this command") -> None:
+        super().__init__(f"{what} refused: the server is read-only")
+
+
+def parse_network(text: str) -> IPNetwork:
+    """``192.168.1.0/24``, ``10.0.0.7`` (one host) or ``fd00::/8``; ValueError names the text."""
+    try:
+        return ipaddress.ip_network(text.strip(), strict=False)
+    except ValueError:
+        raise ValueError(
+            f"{text!r} is not an IP network (expected e.g. 192.168.1.0/24 or 10.0.0.7)"
+        ) from None
+
+
+@dataclass(frozen=True, slots=True)
+class AccessPolicy:
+    """What every server admits and allows; the defaults are those of ``scopelink serve``."""
+
+    read_only: bool = False
+    allow: tuple[IPNetwork, ...] = ()
+    """Networks admitted; empty admits every address."""
+    loopback_always_allowed: bool = True
+    max_connections: int = 64
+    """Connections at once per server (NINA uses 1-4, SkySafari 1, Stellarium 1)."""
+    max_connections_per_client: int = 16
+    requests_per_s: float = 200.0
+    """Sustained commands or requests per second per client address (NINA polls ~20/s)."""
+    burst: int = 400
+    max_delay_s: float = 1.0
+    """HTTP: the longest a request is held for its token before the answer is 429."""
+
+    def __post_init__(self) -> None:
+        if self.max_connections < 1 or self.max_connections_per_client < 1:
+            raise ValueError("connection limits must be at least 1")
+        if not self.requests_per_s > 0.0 or self.burst < 1:
+            raise ValueError("the request rate must be positive and the burst at least 1")
+        if self.max_delay_s < 0.0:
+            raise ValueError("the maximum delay cannot be negative")
+
+    def allows(self, host: str) -> bool:
+        """Whether a client at ``host`` (an IP address text) may connect at all."""
+        try:
+            address = ipaddress.ip_address(host.split("%", 1)[0])
+        except ValueError:
+            return False
+        if isinstance(address, ipaddress.IPv6Address) and address.ipv4_mapped is not None:
+            address = address.ipv4_mapped
+        if self.loopback_always_allowed and address.is_loopback:
+            return True
+        if not self.allow:
+            return True
+        return any(address in network for network in self.allow)
+
+    def describe(self) -> str:
+        """One line for ``scopelink serve``'s "what listens where"."""
+        who = "any address"
+        if self.allow:
+            networks = ", ".join(str(network) for network in self.allow)
+            loopback = " + loopback" if self.loopback_always_allowed else ""
+            who = f"{networks}{loopback}"
+        mode = "read-only" if self.read_only else "read-write"
+        return (
+            f"{mode}; clients: {who}; at most {self.max_connections} connections per server, "
+            f"{self.max_connections_per_client} per client; "
+            f"{self.requests_per_s:g} requests/s per client (burst {self.burst})"
+        )
+
+    @classmethod
+    def from_cidrs(cls, cidrs: Iterable[str], **options: object) -> AccessPolicy:
+        return cls(allow=tuple(parse_network(cidr) for cidr in cidrs), **options)  # type: ignore[arg-type]
+
+
+DEFAULT_POLICY = AccessPolicy()
+OPEN_POLICY = AccessPolicy(
+    max_connections=1_000_000,
+    max_connections_per_client=1_000_000,
+    requests_per_s=1e12,
+    burst=1_000_000_000,
+)
+"""No limit at all: what a server built without a policy uses (library use, benchmarks)."""
+
+
+class TokenBucket:
+    """``rate`` tokens a second up to ``burst``; one token per request."""
+
+    def __init__(self, rate: float, burst: int, now: float) -> None:
+        self.rate = rate
+        self.burst = float(burst)
+        self._tokens = float(burst)
+        self._stamp = now
+
+    def _refill(self, now: float) -> None:
+        elapsed = max(0.0, now - self._stamp)
+        self._tokens = min(self.burst, self._tokens + elapsed * self.rate)
+        self._stamp = now
+
+    def reserve(self, now: float, *, max_wait_s: float = float("inf")) -> float | None:
+        """Take a token; the wait until it is really available (0 now), or None (nothing taken)
+        when that wait would exceed ``max_wait_s``."""
+        self._refill(now)
+        wait = max(0.0, (1.0 - self._tokens) / self.rate)
+        if wait > max_wait_s:
+            return None
+        self._tokens -= 1.0
+        return wait
+
+    def wait_for_one(self, now: float) -> float:
+        """How long until one token is free (for a Retry-After)."""
+        self._refill(now)
+        return max(0.0, (1.0 - self._tokens) / self.rate)
+
+    def full(self, now: float) -> bool:
+        self._refill(now)
+        return self._tokens >= self.burst
+
+
+@dataclass(frozen=True, slots=True)
+class Refusal:
+    """Why a connection was not admitted: ``forbidden`` (allow-list) or ``busy`` (a limit)."""
+
+    reason: str
+    forbidden: bool
+
+
+@dataclass(eq=False, slots=True)
+class Client:
+    """One admitted connection; its address's bucket is shared by all that address's
+    connections to the same server."""
+
+    host: str
+    control: AccessControl | None
+    bucket: TokenBucket | None
+    released: bool = field(default=False)
+
+    @property
+    def read_only(self) -> bool:
+        return self.control is not None and self.control.policy.read_only
+
+    async def throttle(self) -> None:
+        """Wait for this client's next token (line protocols: the excess waits, nothing drops)."""
+        if self.bucket is None or self.control is None:
+            return
+        wait = self.bucket.reserve(self.control.clock())
+        if wait:
+            self.control.delayed += 1
+            await asyncio.sleep(wait)
+
+    def admit_request(self) -> float | None:
+        """HTTP: the wait before handling this request, or None to answer 429 now."""
+        if self.bucket is None or self.control is None:
+            return 0.0
+        wait = self.bucket.reserve(self.control.clock(), max_wait_s=self.control.policy.max_delay_s)
+        if wait is None:
+            self.control.refused_requests += 1
+        elif wait:
+            self.control.delayed += 1
+        return wait
+
+    def retry_after_s(self) -> float:
+        if self.bucket is None or self.control is None:
+            return 0.0
+        return self.bucket.wait_for_one(self.control.clock())
+
+    def release(self) -> None:
+        if not self.released:
+            self.released = True
+            if self.control is not None:
+                self.control._release(self)
+
+
+LOCAL_CLIENT_HOST = "local"
+
+
+class AccessControl:
+    """One server's enforcement of a policy: admission, counters, buckets."""
+
+    def __init__(
+        self,
+        policy: AccessPolicy | None = None,
+        name: str = "server",
+        *,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.policy = policy if policy is not None else OPEN_POLICY
+        self.name = name
+        self.clock = clock
+        self._per_host: dict[str, int] = {}
+        self._buckets: dict[str, TokenBucket] = {}
+        self.open_connections = 0
+        self.forbidden = 0
+        """Connections and datagrams refused by the allow-list."""
+        self.refused_connections = 0
+        """Connections refused by a connection limit."""
+        self.refused_requests = 0
+        """HTTP requests answered 429."""
+        self.delayed = 0
+        """Requests or commands that waited for their token."""
+
+    @property
+    def read_only(self) -> bool:
+        return self.policy.read_only
+
+    def allows(self, host: str | None) -> bool:
+        """Whether ``host`` may talk to us at all (datagrams: ignore when False)."""
+        if host is None:
+            return True
+        if self.policy.allows(host):
+            return True
+        self.forbidden += 1
+        return False
+
+    def admit(self, host: str | None) -> Client | Refusal:
+        """A new connection from ``host`` (None: not a network peer, always admitted)."""
+        if host is None:
+            return Client(LOCAL_CLIENT_HOST, self, None)
+        if not self.allows(host):
+            logger.warning("%s: connection from %s refused (allow-list)", self.name, host)
+            return Refusal(f"{host} is not in this server's allow-list", forbidden=True)
+        policy = self.policy
+        if self.open_connections >= policy.max_connections:
+            self.refused_connections += 1
+            limit = policy.max_connections
+            logger.info("%s: connection from %s refused: %d open", self.name, host, limit)
+            return Refusal(f"{self.name} has {policy.max_connections} connections open", False)
+        if self._per_host.get(host, 0) >= policy.max_connections_per_client:
+            self.refused_connections += 1
+            limit = policy.max_connections_per_client
+            logger.info("%s: %s refused: %d open from there", self.name, host, limit)
+            return Refusal(f"{host} already has {limit} connections to {self.name}", False)
+        self.open_connections += 1
+        self._per_host[host] = self._per_host.get(host, 0) + 1
+        bucket = self._buckets.get(host)
+        if bucket is None:
+            bucket = TokenBucket(policy.requests_per_s, policy.burst, self.clock())
+            self._buckets[host] = bucket
+        return Client(host, self, bucket)
+
+    def _release(self, client: Client) -> None:
+        if client.bucket is None:
+            return
+        self.open_connections -= 1
+        left = self._per_host.get(client.host, 1) - 1
+        if left > 0:
+            self._per_host[client.host] = left
+            return
+        self._per_host.pop(client.host, None)
+        # Forget an idle address's bucket only when full: reconnecting must not refill it.
+        bucket = self._buckets.get(client.host)
+        if bucket is not None and bucket.full(self.clock()):
+            del self._buckets[client.host]
+        if len(self._buckets) > 4 * self.policy.max_connections:
+            now = self.clock()
+            for host in [h for h, b in self._buckets.items() if h not in self._per_host]:
+                if self._buckets[host].full(now):
+                    del self._buckets[host]
+
+    @contextlib.asynccontextmanager
+    async def session(self, host: str | None) -> AsyncIterator[Client | Refusal]:
+        """Admit ``host`` for the body (the refusal is yielded instead when it is refused) and
+        make the client :func:`current_client` inside it."""
+        admitted = self.admit(host)
+        if isinstance(admitted, Refusal):
+            yield admitted
+            return
+        token = _CURRENT.set(admitted)
+        try:
+            yield admitted
+        finally:
+            _CURRENT.reset(token)
+            admitted.release()
+
+
+_UNLIMITED = Client(LOCAL_CLIENT_HOST, None, None)
+_CURRENT: ContextVar[Client] = ContextVar("scopelink_access_client", default=_UNLIMITED)
+
+
+def current_client() -> Client:
+    """The client whose connection the running task serves (an unlimited one outside any)."""
+    return _CURRENT.get()
