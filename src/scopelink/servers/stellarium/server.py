@@ -17,6 +17,7 @@ import asyncio
 import contextlib
 import enum
 import logging
+from collections.abc import Awaitable, Callable
 from types import TracebackType
 from typing import Self
 
@@ -31,6 +32,7 @@ from scopelink.protocol.stellarium import (
     SkippedMessage,
     StellariumServerConnection,
 )
+from scopelink.servers.access import AccessControl, AccessPolicy, ReadOnlyError, Refusal
 
 __all__ = ["DEFAULT_PORT", "Equinox", "StellariumServer"]
 
@@ -55,7 +57,9 @@ class StellariumServer:
     """Serves Stellarium's binary protocol for ``mount`` on ``host:port`` (0 picks a free port).
 
     Use as ``async with StellariumServer(mount, port=0) as server:`` and read ``server.port``.
-    The mount is connected on entry if it is not yet.
+    The mount is connected on entry if it is not yet. ``access`` limits who connects and how
+    many; gotos beyond its rate wait their turn, and a read-only policy refuses them (logged:
+    the protocol has no refusal).
     """
 
     def __init__(
@@ -66,6 +70,7 @@ class StellariumServer:
         *,
         frame: Equinox = Equinox.J2000,
         interval_s: float = 0.5,
+        access: AccessPolicy | None = None,
     ) -> None:
         if not 0.05 <= interval_s <= 10.0:
             raise ValueError(f"position interval {interval_s} s must lie in [0.05, 10]")
@@ -76,6 +81,7 @@ class StellariumServer:
         self.interval_s = interval_s
         self.clients = 0
         """Clients connected now."""
+        self.access = AccessControl(access, "Stellarium")
         self._server: TcpServer | None = None
 
     async def __aenter__(self) -> Self:
@@ -107,12 +113,18 @@ class StellariumServer:
     # --- one client -----------------------------------------------------------------------------
 
     async def _serve(self, link: Link) -> None:
+        async with self.access.session(getattr(link, "peer_host", None)) as client:
+            if isinstance(client, Refusal):
+                return  # the protocol has no refusal message: the connection just closes
+            await self._serve_admitted(link, client.throttle)
+
+    async def _serve_admitted(self, link: Link, throttle: Callable[[], Awaitable[None]]) -> None:
         self.clients += 1
         try:
             async with self.mount.watching():
                 sender = asyncio.create_task(self._send_positions(link), name=f"{link.name} out")
                 try:
-                    await self._read_gotos(link)
+                    await self._read_gotos(link, throttle)
                 finally:
                     sender.cancel()
                     with contextlib.suppress(asyncio.CancelledError, LinkClosedError):
@@ -120,7 +132,7 @@ class StellariumServer:
         finally:
             self.clients -= 1
 
-    async def _read_gotos(self, link: Link) -> None:
+    async def _read_gotos(self, link: Link, throttle: Callable[[], Awaitable[None]]) -> None:
         connection = StellariumServerConnection()
         while True:
             connection.receive_data(await link.read())
@@ -131,11 +143,14 @@ class StellariumServer:
                 if isinstance(event, SkippedMessage):
                     logger.info("%s: %s", link.name, event.describe())
                     continue
+                await throttle()
                 await self._goto(link, event)
 
     async def _goto(self, link: Link, goto: GotoMessage) -> None:
         ra, dec = goto.ra_hours, goto.dec_deg
         try:
+            if self.access.read_only:
+                raise ReadOnlyError("goto")
             if self.frame is Equinox.JNOW:
                 if not -90.0 <= dec <= 90.0:
                     raise MountError(f"declination {dec:.4f}° lies beyond a pole")
