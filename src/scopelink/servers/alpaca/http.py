@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import math
 from collections import deque
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
@@ -20,6 +21,8 @@ from http import HTTPStatus
 from urllib.parse import parse_qsl, unquote
 
 import httptools
+
+from scopelink.servers.access import AccessControl, Client, Refusal
 
 __all__ = ["HttpConnection", "HttpReply", "HttpRequest"]
 
@@ -41,6 +44,8 @@ class HttpReply:
     status: int
     body: bytes
     content_type: str = "text/plain; charset=utf-8"
+    headers: tuple[tuple[str, str], ...] = ()
+    """Extra header lines (``Retry-After``)."""
 
     @classmethod
     def text(cls, status: int, message: str) -> HttpReply:
@@ -52,11 +57,18 @@ class HttpReply:
         head = (
             f"HTTP/1.1 {self.status} {phrase}\r\nContent-Type: {self.content_type}\r\n"
             f"Content-Length: {len(self.body)}\r\n"
+            + "".join(f"{name}: {value}\r\n" for name, value in self.headers)
         ).encode()
         return head + connection + b"\r\n" + self.body
 
 
 _PHRASES = {200: "OK", 400: "Bad Request", 404: "Not Found", 405: "Method Not Allowed"}
+
+
+def _retry_after(status: int, message: str, wait_s: float) -> HttpReply:
+    seconds = max(1, math.ceil(wait_s))
+    return HttpReply(status, message.encode(), headers=(("Retry-After", str(seconds)),))
+
 
 Handler = Callable[[HttpRequest], Awaitable[HttpReply]]
 
@@ -64,8 +76,16 @@ Handler = Callable[[HttpRequest], Awaitable[HttpReply]]
 class HttpConnection(asyncio.Protocol):
     """One client connection; requests are handled one after the other, replies in order."""
 
-    def __init__(self, handle: Handler, max_body_bytes: int, registry: set[HttpConnection]):
+    def __init__(
+        self,
+        handle: Handler,
+        max_body_bytes: int,
+        registry: set[HttpConnection],
+        access: AccessControl | None = None,
+    ):
         self._handle = handle
+        self._access = access if access is not None else AccessControl(name="HTTP")
+        self._client: Client | None = None
         self._max_body_bytes = max_body_bytes
         self._registry = registry
         self._parser = httptools.HttpRequestParser(self)
@@ -99,10 +119,22 @@ class HttpConnection(asyncio.Protocol):
         assert isinstance(transport, asyncio.Transport)
         self._transport = transport
         self._registry.add(self)
+        peer = transport.get_extra_info("peername")
+        admitted = self._access.admit(str(peer[0]) if peer else None)
+        if isinstance(admitted, Refusal):
+            # Refused before reading anything: one answer, then the connection closes.
+            if admitted.forbidden:
+                self._refuse(HttpReply.text(403, f"forbidden: {admitted.reason}"))
+            else:
+                self._refuse(_retry_after(503, f"busy: {admitted.reason}", 1.0))
+            return
+        self._client = admitted
 
     def connection_lost(self, exc: Exception | None) -> None:
         self._registry.discard(self)
         self._transport = None
+        if self._client is not None:
+            self._client.release()
         if self._worker is not None:
             self._worker.cancel()
 
@@ -188,6 +220,15 @@ class HttpConnection(asyncio.Protocol):
         if not self.busy:
             self._worker = asyncio.get_running_loop().create_task(self._work())
 
+    def _wait_for_turn(self) -> float | None:
+        """Seconds to hold this request under the client's rate; None: answer 429."""
+        return 0.0 if self._client is None else self._client.admit_request()
+
+    def _too_many(self) -> HttpReply:
+        assert self._client is not None
+        wait = self._client.retry_after_s()
+        return _retry_after(429, "too many requests from this address: retry later", wait)
+
     def _open_transport(self) -> asyncio.Transport | None:
         return self._transport
 
@@ -196,7 +237,11 @@ class HttpConnection(asyncio.Protocol):
             item, keep_alive = self._queue.popleft()
             if isinstance(item, HttpReply):
                 reply = item
+            elif (wait := self._wait_for_turn()) is None:
+                reply = self._too_many()
             else:
+                if wait:
+                    await asyncio.sleep(wait)
                 try:
                     reply = await self._handle(item)
                 except Exception:

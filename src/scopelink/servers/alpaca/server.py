@@ -25,6 +25,7 @@ from urllib.parse import parse_qsl
 
 from scopelink import __version__ as scopelink_version
 from scopelink.mount import Mount, MountError
+from scopelink.servers.access import AccessControl, AccessPolicy
 from scopelink.servers.alpaca.discovery import DISCOVERY_PORT, start_discovery
 from scopelink.servers.alpaca.errors import (
     AlpacaError,
@@ -49,6 +50,8 @@ _API_PREFIX = "/api/v1/"
 _DEVICE_TYPE = "telescope"
 _JSON = "application/json; charset=utf-8"
 _METHODS = ("GET", "PUT")
+_READ_ONLY_PUTS = frozenset({"connected", "connect", "disconnect"})
+"""PUTs a read-only server still takes: they open or close the client's session, not the mount."""
 
 
 def _json_value(value: object) -> str:
@@ -71,6 +74,9 @@ class AlpacaServer:
 
     ``discovery_port=None`` turns discovery off; it listens on ``discovery_host`` (default
     ``host``). ``state_dir`` holds the persistent UniqueID (default: ``$XDG_STATE_HOME/scopelink``).
+    ``access`` (default: no limits) decides who connects (403 otherwise; discovery ignores them),
+    how many (503), how fast (held up to its ``max_delay_s``, then 429 with Retry-After) and
+    whether PUTs that change the mount are refused (ASCOM InvalidOperation, 0x40B).
     """
 
     def __init__(
@@ -84,6 +90,7 @@ class AlpacaServer:
         state_dir: Path | None = None,
         config: TelescopeConfig | None = None,
         max_request_bytes: int = MAX_REQUEST_BYTES,
+        access: AccessPolicy | None = None,
     ) -> None:
         self.mount = mount
         self.host = host
@@ -95,6 +102,7 @@ class AlpacaServer:
         self.telescope = TelescopeDevice(mount, self.config)
         self.unique_id = ""
         self._max_request_bytes = max_request_bytes
+        self.access = AccessControl(access, "Alpaca")
         self._transactions = itertools.count(1)
         self._connections: set[HttpConnection] = set()
         self._listener: asyncio.Server | None = None
@@ -123,7 +131,7 @@ class AlpacaServer:
         loop = asyncio.get_running_loop()
         limit = self._max_request_bytes
         self._listener = await loop.create_server(
-            lambda: HttpConnection(self._handle, limit, self._connections),
+            lambda: HttpConnection(self._handle, limit, self._connections, self.access),
             self.host,
             self.port,
             reuse_address=True,
@@ -131,7 +139,7 @@ class AlpacaServer:
         self.port = int(self._listener.sockets[0].getsockname()[1])
         if self.discovery_port is not None:
             transport, _ = await start_discovery(
-                self._discovery_host, self.discovery_port, self.port
+                self._discovery_host, self.discovery_port, self.port, admits=self.access.allows
             )
             self._discovery = transport
             self.discovery_port = int(transport.get_extra_info("sockname")[1])
@@ -263,6 +271,11 @@ class AlpacaServer:
         if handler is None:
             other = "PUT" if method == "GET" else "GET"
             return _text(405, f"{name} takes {other}, not {method}")
+        if method == "PUT" and self.access.read_only and name not in _READ_ONLY_PUTS:
+            refusal = AlpacaError(
+                ErrorNumber.INVALID_OPERATION, f"{name}: this server is read-only"
+            )
+            return self._reply(transaction, error=refusal)
         try:
             if member.needs_connection:
                 self.telescope.require_connected()
