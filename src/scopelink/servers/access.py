@@ -291,6 +291,35 @@ class AccessControl:
             self._buckets[host] = bucket
         return Client(host, self, bucket)
 
+    def request_wait(self, host: str | None) -> float | None:
+        """For servers without connection hooks (the dashboard): take a token for one request
+        from ``host``; the wait before handling it, or None to refuse it (429)."""
+        if host is None:
+            return 0.0
+        now = self.clock()
+        bucket = self._buckets.get(host)
+        if bucket is None:
+            self._forget_idle_buckets(now)
+            bucket = TokenBucket(self.policy.requests_per_s, self.policy.burst, now)
+            self._buckets[host] = bucket
+        wait = bucket.reserve(now, max_wait_s=self.policy.max_delay_s)
+        if wait is None:
+            self.refused_requests += 1
+        elif wait:
+            self.delayed += 1
+        return wait
+
+    def retry_after_s(self, host: str) -> float:
+        bucket = self._buckets.get(host)
+        return 0.0 if bucket is None else bucket.wait_for_one(self.clock())
+
+    def _forget_idle_buckets(self, now: float) -> None:
+        if len(self._buckets) <= 4 * self.policy.max_connections:
+            return
+        for host in [h for h in self._buckets if h not in self._per_host]:
+            if self._buckets[host].full(now):
+                del self._buckets[host]
+
     def _release(self, client: Client) -> None:
         if client.bucket is None:
             return
@@ -304,11 +333,7 @@ class AccessControl:
         bucket = self._buckets.get(client.host)
         if bucket is not None and bucket.full(self.clock()):
             del self._buckets[client.host]
-        if len(self._buckets) > 4 * self.policy.max_connections:
-            now = self.clock()
-            for host in [h for h, b in self._buckets.items() if h not in self._per_host]:
-                if self._buckets[host].full(now):
-                    del self._buckets[host]
+        self._forget_idle_buckets(self.clock())
 
     @contextlib.asynccontextmanager
     async def session(self, host: str | None) -> AsyncIterator[Client | Refusal]:

@@ -8,8 +8,10 @@ every response forbids framing and foreign scripts.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import logging
+import math
 from importlib import resources
 from pathlib import Path
 from types import TracebackType
@@ -17,9 +19,11 @@ from typing import Self
 from urllib.parse import urlsplit
 
 from aiohttp import web
+from aiohttp.typedefs import Middleware
 
 from scopelink.decode import Protocol
 from scopelink.mount import Mount
+from scopelink.servers.access import AccessControl, AccessPolicy
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
@@ -75,6 +79,36 @@ async def _same_origin(request: web.Request, handler: Handler) -> web.StreamResp
     return response
 
 
+def _access_middleware(control: AccessControl) -> Middleware:
+    """The allow-list (403), read-only (403 on every POST) and the per-address request rate
+    (held up to the policy's ``max_delay_s``, then 429 with Retry-After)."""
+
+    @web.middleware
+    async def access(request: web.Request, handler: Handler) -> web.StreamResponse:
+        host = request.remote
+        if not control.allows(host):
+            return web.json_response(
+                {"error": f"{host} may not use this dashboard", "kind": "Forbidden"}, status=403
+            )
+        if control.read_only and request.method not in ("GET", "HEAD"):
+            return web.json_response(
+                {"error": "this dashboard is read-only", "kind": "ReadOnly"}, status=403
+            )
+        wait = control.request_wait(host)
+        if wait is None:
+            retry = max(1, math.ceil(control.retry_after_s(host or "")))
+            return web.json_response(
+                {"error": "too many requests: retry later", "kind": "TooManyRequests"},
+                status=429,
+                headers={"Retry-After": str(retry)},
+            )
+        if wait:
+            await asyncio.sleep(wait)
+        return await handler(request)
+
+    return access
+
+
 class Dashboard:
     """Serve the dashboard for ``mount`` on ``host``:``port`` (0: a free port) while inside
     ``async with``.
@@ -84,7 +118,9 @@ class Dashboard:
     it), a :class:`~scopelink.decode.Protocol` forces one, a function of the link's trace name
     chooses per link (``None``: show that link's bytes undecoded, e.g. an LX200 server's), and
     ``False`` hides the panel. The mount is
-    used as it is: connect it before, disconnect it after.
+    used as it is: connect it before, disconnect it after. ``access`` (default: no limits)
+    applies the servers' allow-list, request rate and read-only mode (the page then disables
+    its controls, and the API refuses every command).
     """
 
     def __init__(
@@ -96,6 +132,7 @@ class Dashboard:
         trace: bool | Protocol | ProtocolChooser = True,
         update_interval_s: float = 0.25,
         traffic_lines: int = DEFAULT_CAPACITY,
+        access: AccessPolicy | None = None,
     ) -> None:
         if not 0 <= port <= 65535:
             raise ValueError(f"port {port} must lie in [0, 65535]")
@@ -103,6 +140,7 @@ class Dashboard:
             raise ValueError(f"update interval {update_interval_s} s must lie in [0.05, 5]")
         self.mount = mount
         self.host = host
+        self.access = AccessControl(access, "dashboard")
         self._requested_port = port
         protocol = _trace_protocol(mount, trace)
         self.traffic = None if protocol is None else TrafficMonitor(protocol, traffic_lines)
@@ -114,13 +152,19 @@ class Dashboard:
 
     def build_app(self) -> web.Application:
         """The aiohttp application (also usable with aiohttp's test client)."""
-        app = web.Application(middlewares=[_same_origin, error_middleware])
+        app = web.Application(
+            middlewares=[_same_origin, _access_middleware(self.access), error_middleware]
+        )
         index = static_dir() / "index.html"
 
         async def page(request: web.Request) -> web.FileResponse:
             return web.FileResponse(index, headers={"Cache-Control": "no-cache"})
 
+        async def access(request: web.Request) -> web.Response:
+            return web.json_response({"read_only": self.access.read_only})
+
         app.router.add_get("/", page)
+        app.router.add_get("/api/access", access)
         app.router.add_get("/ws", self.hub.handle)
         add_api_routes(app, self.mount)
         app.router.add_static("/static/", static_dir(), follow_symlinks=False)

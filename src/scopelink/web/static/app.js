@@ -410,6 +410,19 @@ function connect() {
 
 // ---------------------------------------------------------------- controls
 
+// A read-only server refuses every command (403): grey the controls out instead of letting
+// each click fail.
+async function applyAccess() {
+  let access;
+  try { access = await (await fetch("/api/access")).json(); } catch (_) { return; }
+  if (!access || access.read_only !== true) return;
+  document.body.dataset.readOnly = "true";
+  $("read-only-note").hidden = false;
+  const controls = document.querySelectorAll(
+    'section[aria-label="Controls"] :is(button, input, select), #go-selected, #sync-selected');
+  for (const control of controls) control.disabled = true;
+}
+
 function debounce(fn, ms) {
   let timer = null;
   return (...args) => { clearTimeout(timer); timer = setTimeout(() => fn(...args), ms); };
@@ -594,6 +607,7 @@ function setup() {
   $("traffic-pause").addEventListener("change", (event) => { traffic.paused = event.target.checked; });
 
   setupPad();
+  applyAccess();
   connect();
 }
 
