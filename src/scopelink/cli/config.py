@@ -20,6 +20,7 @@ import platformdirs
 
 from scopelink.astro import Site
 from scopelink.mount import InvalidValueError, Limits
+from scopelink.servers.access import DEFAULT_POLICY, IPNetwork, parse_network
 
 __all__ = [
     "CONFIG_ENV_VAR",
@@ -62,6 +63,13 @@ class ServersConfig:
     lx200: int | None = DEFAULT_SERVER_PORTS["lx200"]
     stellarium: int | None = DEFAULT_SERVER_PORTS["stellarium"]
     synscan: int | None = DEFAULT_SERVER_PORTS["synscan"]
+    read_only: bool = False
+    """Every server refuses commands that would change the mount (docs/serve.md)."""
+    allow: tuple[IPNetwork, ...] = ()
+    """Client networks admitted besides loopback; empty admits every address."""
+    max_connections: int = DEFAULT_POLICY.max_connections
+    max_connections_per_client: int = DEFAULT_POLICY.max_connections_per_client
+    requests_per_second: float = DEFAULT_POLICY.requests_per_s
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,7 +118,14 @@ _TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers")
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
 _LIMITS_KEYS: Final = ("max_altitude",)
-_SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS)
+_ACCESS_KEYS: Final = (
+    "read_only",
+    "allow",
+    "max_connections",
+    "max_connections_per_client",
+    "requests_per_second",
+)
+_SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS, *_ACCESS_KEYS)
 
 
 class _Reader:
@@ -235,4 +250,40 @@ class _Reader:
                     f"expected a TCP port 0-65535 (0 picks a free one) or false (off), "
                     f"got {value!r}",
                 )
-        return ServersConfig(host=host, **ports)
+        return ServersConfig(
+            host=host,
+            alpaca=ports["alpaca"],
+            lx200=ports["lx200"],
+            stellarium=ports["stellarium"],
+            synscan=ports["synscan"],
+            **self.access(table),
+        )
+
+    def access(self, table: dict[str, Any]) -> dict[str, Any]:
+        """The [servers] access keys that are present, checked."""
+        values: dict[str, Any] = {}
+        read_only = table.get("read_only", False)
+        if not isinstance(read_only, bool):
+            raise self.error("servers.read_only", f"expected true or false, got {read_only!r}")
+        values["read_only"] = read_only
+        allow = table.get("allow", [])
+        if not (isinstance(allow, list) and all(isinstance(item, str) for item in allow)):
+            expected = "expected a list of networks like ['192.168.1.0/24']"
+            raise self.error("servers.allow", f"{expected}, got {allow!r}")
+        try:
+            values["allow"] = tuple(parse_network(item) for item in allow)
+        except ValueError as error:
+            raise self.error("servers.allow", str(error)) from None
+        for key in ("max_connections", "max_connections_per_client"):
+            if key in table:
+                value = table[key]
+                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                    expected = "expected a whole number >= 1"
+                    raise self.error(f"servers.{key}", f"{expected}, got {value!r}")
+                values[key] = value
+        if "requests_per_second" in table:
+            rate = self.number(table, "requests_per_second", "servers")
+            if rate is None or not rate > 0.0:
+                raise self.error("servers.requests_per_second", "expected a number > 0")
+            values["requests_per_second"] = rate
+        return values

@@ -35,6 +35,10 @@ alpaca = 11111
 lx200 = 4030
 stellarium = 10001
 synscan = 11880
+# read_only = true                  # servers show the mount but refuse every command
+# allow = ["192.168.1.0/24"]        # client networks admitted besides this machine
+# max_connections = 64              # per server; max_connections_per_client = 16
+# requests_per_second = 200         # per client address (excess waits, HTTP: 429)
 """
 
 _EXAMPLES = f"""\
@@ -161,5 +165,12 @@ def show(config: Config) -> str:
     lines += [
         f"{name} = {_toml_value(getattr(servers, name))}"
         for name in ("alpaca", "lx200", "stellarium", "synscan")
+    ]
+    lines += [
+        f"read_only = {_toml_value(servers.read_only)}",
+        f"allow = {[str(network) for network in servers.allow]}",
+        f"max_connections = {servers.max_connections}",
+        f"max_connections_per_client = {servers.max_connections_per_client}",
+        f"requests_per_second = {servers.requests_per_second}",
     ]
     return "\n".join(lines) + "\n"

@@ -16,8 +16,9 @@ import logging
 from contextlib import AsyncExitStack
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
-from scopelink.cli.config import DEFAULT_SERVER_PORTS
+from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
@@ -31,6 +32,7 @@ from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
 from scopelink.protocol.lx200 import SKYFI_PORT
+from scopelink.servers.access import DEFAULT_POLICY, AccessControl, AccessPolicy, parse_network
 from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
@@ -45,6 +47,7 @@ DEFAULT_SYNSCAN_PORT = DEFAULT_SERVER_PORTS["synscan"]
 DEFAULT_DASHBOARD_PORT = 8080
 
 _log = logging.getLogger(__name__)
+_Limit = TypeVar("_Limit", int, float)
 
 _EXAMPLES = """\
 examples:
@@ -54,6 +57,8 @@ examples:
   scopelink serve --device skytracker:/dev/ttyUSB0 --lx200-pty /tmp/lx200
   scopelink serve --device sim:az-gti --alpaca-port 0 --synscan-port -1
   scopelink serve --host 0.0.0.0          reachable from the LAN (logged as a warning)
+  scopelink serve --host 0.0.0.0 --allow 192.168.1.0/24 --read-only
+                                           the home LAN may watch, nobody may command
 
 ports: 0 picks a free one, -1 turns that server off; defaults come from the config file
 ('scopelink config path'), else Alpaca 11111 (+ discovery 32227), LX200 4030 (+ SkyFi 4031),
@@ -93,6 +98,38 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     _port(net, "--stellarium-port", "Stellarium's binary telescope protocol")
     _port(net, "--synscan-port", "the SynScan protocol over TCP (SkySafari, INDI, Stellarium)")
     _port(net, "--dashboard-port", "the web dashboard", DEFAULT_DASHBOARD_PORT)
+    access = parser.add_argument_group("access (defaults from the config's [servers])")
+    access.add_argument(
+        "--read-only",
+        action="store_true",
+        default=None,
+        help="every server shows the mount but refuses commands that would change it",
+    )
+    access.add_argument(
+        "--allow",
+        action="append",
+        metavar="CIDR",
+        help="admit only clients in this network (repeatable; this machine is always admitted)",
+    )
+    access.add_argument(
+        "--max-connections",
+        type=int,
+        metavar="N",
+        help="connections at once per server (default 64)",
+    )
+    access.add_argument(
+        "--max-client-connections",
+        type=int,
+        metavar="N",
+        help="connections at once per server from one address (default 16)",
+    )
+    access.add_argument(
+        "--rate-limit",
+        type=float,
+        metavar="PER_S",
+        help="commands or requests per second per client address (default 200; the excess "
+        "waits, HTTP answers 429 beyond a second's wait)",
+    )
     net.add_argument(
         "--lx200-pty",
         nargs="?",
@@ -141,6 +178,7 @@ class ServePlan:
     dashboard: int | None
     lx200_pty: str | None
     synscan_pty: str | None
+    access: AccessPolicy = DEFAULT_POLICY
 
     def runs_nothing(self) -> bool:
         listeners = (self.alpaca, self.lx200, self.stellarium, self.synscan, self.dashboard)
@@ -176,10 +214,35 @@ def plan_from(args: argparse.Namespace) -> tuple[DeviceCommand, ServePlan]:
         dashboard=_merge_port(args.dashboard_port, DEFAULT_DASHBOARD_PORT, "dashboard"),
         lx200_pty=args.lx200_pty,
         synscan_pty=args.synscan_pty,
+        access=_access_policy(args, servers),
     )
     if plan.runs_nothing():
         raise CommandError("no server to run", "leave at least one port on (not -1) or add a pty")
     return command, plan
+
+
+def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPolicy:
+    """Flags over the config file's [servers] access keys."""
+    try:
+        allow = tuple(parse_network(cidr) for cidr in args.allow) if args.allow else servers.allow
+    except ValueError as error:
+        raise CommandError(f"--allow: {error}") from None
+    try:
+        return AccessPolicy(
+            read_only=servers.read_only if args.read_only is None else args.read_only,
+            allow=allow,
+            max_connections=_or(args.max_connections, servers.max_connections),
+            max_connections_per_client=_or(
+                args.max_client_connections, servers.max_connections_per_client
+            ),
+            requests_per_s=_or(args.rate_limit, servers.requests_per_second),
+        )
+    except ValueError as error:
+        raise CommandError(str(error), "limits are whole numbers >= 1, the rate > 0") from None
+
+
+def _or(flag: _Limit | None, configured: _Limit) -> _Limit:
+    return configured if flag is None else flag
 
 
 def run(args: argparse.Namespace) -> int:
@@ -254,7 +317,8 @@ async def _start_servers(
 ) -> list[str]:
     """Start every planned server; the lines saying what listens where."""
     host = plan.host
-    lines: list[str] = []
+    policy = plan.access
+    lines: list[str] = [f"Access      {policy.describe()}"]
     if plan.alpaca is not None:
         alpaca = AlpacaServer(
             mount,
@@ -262,13 +326,14 @@ async def _start_servers(
             port=plan.alpaca,
             discovery_port=plan.discovery,
             state_dir=args.state_dir,
+            access=policy,
         )
         await stack.enter_async_context(alpaca)
         lines.append(f"Alpaca      http://{host}:{alpaca.port}/  (telescope/0)")
         if alpaca.discovery_port is not None:
             lines.append(f"Alpaca      discovery udp {host}:{alpaca.discovery_port}")
     if plan.lx200 is not None or plan.lx200_pty is not None:
-        lx200 = await stack.enter_async_context(LX200Server(mount))
+        lx200 = await stack.enter_async_context(LX200Server(mount, access=policy))
         if plan.lx200 is not None:
             bound_host, port = await lx200.on_tcp(host, plan.lx200)
             lines.append(f"LX200       tcp {bound_host}:{port}")
@@ -279,7 +344,7 @@ async def _start_servers(
             lines.append(f"LX200       pty {await lx200.on_pty(plan.lx200_pty or None)}")
     if plan.stellarium is not None:
         frame = Equinox.JNOW if args.stellarium_frame == "jnow" else Equinox.J2000
-        stellarium = StellariumServer(mount, host, plan.stellarium, frame=frame)
+        stellarium = StellariumServer(mount, host, plan.stellarium, frame=frame, access=policy)
         await stack.enter_async_context(stellarium)
         lines.append(f"Stellarium  tcp {host}:{stellarium.port}  ({frame.value})")
     decoded: dict[int, Protocol] = {}
@@ -287,6 +352,7 @@ async def _start_servers(
         config = SynScanConfig(model=synscan_model_code(mount))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
         synscan = await stack.enter_async_context(SynScanEmulator(mount, config, wire=None))
+        synscan.access = synscan.server.access = AccessControl(policy, "SynScan")
         if plan.synscan is not None:
             bound_host, port = await synscan.on_tcp(host, plan.synscan)
             decoded[port] = Protocol.SYNSCAN
@@ -301,7 +367,7 @@ async def _start_servers(
         except ValueError:
             driver_protocol = None  # the simulator has no link of its own
         trace = protocol_by_port(decoded, driver_protocol)
-        dashboard = Dashboard(mount, host, plan.dashboard, trace=trace)
+        dashboard = Dashboard(mount, host, plan.dashboard, trace=trace, access=policy)
         await stack.enter_async_context(dashboard)
         lines.append(f"Dashboard   {dashboard.url}")
     return lines
