@@ -8,6 +8,7 @@ from .line import (
     BadReplyError,
     BusRefusedError,
     LineOptions,
+    LineOutOfSyncError,
     ReplyTimeoutError,
     SkyTrackerLine,
 )
@@ -22,6 +23,7 @@ __all__ = [
     "CalibrationFactors",
     "CalibrationRuleError",
     "LineOptions",
+    "LineOutOfSyncError",
     "LinkFactory",
     "ReplyTimeoutError",
     "SkyTrackerLine",

@@ -3,8 +3,10 @@
 Every exchange takes a turn on the :class:`~scopelink.mount.scheduling.WireScheduler`, so user
 commands go before background polls. A Sky Commander exchange holds one turn from ``Q`` to ``q``
 (nothing else may pass while the bus is held). After a timeout or a reply that does not parse
-the line is resynchronised: ``q`` (harmless when the bus is not held), drain until quiet, and a
-fresh codec, so a late reply can never be read as the answer to a later command.
+the line is resynchronised: ``q`` (harmless when the bus is not held), then ``V`` as a sync
+point: the box answers in order, so once its known version string has come back every late
+reply sent before it has been read and discarded; then drain until quiet, and a fresh codec. A
+late reply can never be read as the answer to a later command.
 """
 
 from __future__ import annotations
@@ -24,12 +26,14 @@ from scopelink.protocol.skytracker import (
     BusAnswer,
     BusState,
     CommanderCommand,
+    ReadVersion,
     ReleaseBus,
     Reply,
     RequestBus,
     StrayByte,
     TrackerClient,
     TrackerCommand,
+    VersionReply,
     Wait,
 )
 
@@ -40,6 +44,7 @@ __all__ = [
     "BadReplyError",
     "BusRefusedError",
     "LineOptions",
+    "LineOutOfSyncError",
     "ReplyTimeoutError",
     "SkyTrackerLine",
 ]
@@ -58,7 +63,13 @@ RESYNC_MAX_S = 2.0
 
 
 class ReplyTimeoutError(DeviceError):
-    """No complete reply came in time (the line has been resynchronised)."""
+    """No complete reply came in time (the line has been resynchronised, or will be before the
+    next exchange)."""
+
+
+class LineOutOfSyncError(ReplyTimeoutError):
+    """The sync point (``V``) of a resync was not answered in time: the box is silent or still
+    busy with an earlier command. The next exchange tries to resynchronise again first."""
 
 
 class BadReplyError(DeviceError):
@@ -113,6 +124,8 @@ class SkyTrackerLine:
         self.stray_bytes = 0
         self.bus_refusals = 0
         self._interrupted = False
+        self._sync_marker: bytes | None = None
+        """The box's version reply, once read: the answer the resync's ``V`` waits for."""
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
@@ -215,8 +228,14 @@ class SkyTrackerLine:
         self, command: TrackerCommand | CommanderCommand, reply_within_s: float
     ) -> Reply | None:
         if self._interrupted:
+            if not await self.resync():
+                raise LineOutOfSyncError(
+                    f"cannot send {command.describe()!r}: the line {self.link.name} is not back "
+                    "in sync after an earlier fault (no answer to the 'V' sync point within "
+                    f"{self.options.reply_timeout_s * 1000:.0f} ms): is the Sky Tracker busy or "
+                    "off?"
+                )
             self._interrupted = False
-            await self.resync()
         self._flush_strays()
         data = self._client.send(command)
         try:
@@ -228,7 +247,7 @@ class SkyTrackerLine:
                 event = await self._next_reply()
         except TimeoutError:
             self._client.abandon_reply()
-            await self.resync()
+            await self._resync_after_fault()
             raise ReplyTimeoutError(
                 f"no reply to {command.describe()!r} within {reply_within_s * 1000:.0f} ms on "
                 f"{self.link.name}: is the Sky Tracker on, at 9600 baud, and the cable plugged in?"
@@ -244,8 +263,10 @@ class SkyTrackerLine:
             self._interrupted = True
             raise
         if isinstance(event, BadReply):
-            await self.resync()
+            await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
+        if isinstance(event, VersionReply) and self._sync_marker is None:
+            self._sync_marker = event.encode()
         return event
 
     async def _next_reply(self) -> Reply | BadReply:
@@ -268,12 +289,24 @@ class SkyTrackerLine:
         self.stray_bytes += 1
         logger.info("ignored %s", event.describe())
 
-    async def resync(self) -> None:
-        """Release the bus (in case), drain late bytes until quiet, start a fresh codec."""
+    async def _resync_after_fault(self) -> None:
+        """Resync; if the sync point was not answered, the next exchange tries again first."""
+        if not await self.resync():
+            self._interrupted = True
+
+    async def resync(self) -> bool:
+        """Release the bus (in case), send the ``V`` sync point and read up to its answer,
+        drain late bytes until quiet, start a fresh codec.
+
+        Returns False when the sync point was not answered within the reply timeout (the box is
+        silent or still busy): late replies may still come, so the line is not to be trusted.
+        Before the version is known (during connect) only the drain is done.
+        """
         self.resyncs += 1
         held = self._client.bus is BusState.HELD
         self._client = TrackerClient()
         discarded = b""
+        synced = True
         try:
             if held:
                 # Still inside the grant: CR ends any partial 'L' line the Sky Commander holds
@@ -283,8 +316,30 @@ class SkyTrackerLine:
                 discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
             await self.link.write(ReleaseBus().encode())
             self.commands_sent += 1 + held
+            if self._sync_marker is not None:
+                # The box answers in order: a reply it is late with comes before the answer to
+                # this 'V'. A quiet drain alone would let a reply later than the drain through,
+                # to be read as the answer to the next command.
+                await self.link.write(ReadVersion().encode())
+                self.commands_sent += 1
+                received, synced = await self._read_through(self._sync_marker)
+                discarded += received
             discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
         except LinkError as error:
             raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
         if discarded:
             logger.info("resync discarded %s", discarded.hex(" "))
+        if not synced:
+            logger.warning("no answer to the sync point 'V' on %s: not in sync", self.link.name)
+        return synced
+
+    async def _read_through(self, marker: bytes) -> tuple[bytes, bool]:
+        """Read until ``marker`` has come (True), or the reply timeout passes (False)."""
+        received = b""
+        try:
+            async with asyncio.timeout(self.options.reply_timeout_s):
+                while marker not in received:
+                    received += await self.link.read()
+        except TimeoutError:
+            return received, False
+        return received, True

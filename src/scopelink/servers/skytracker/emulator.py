@@ -65,7 +65,8 @@ class SkyTrackerEmulator(HostedDevice):
     """The Sky Tracker box driving ``mount``'s axes, its Sky Commander on a real link pair.
 
     ``strict_line`` makes the PC port lose characters that come faster than 8N2 (see
-    ``line.py``); ``faults`` apply to the Sky Tracker's own replies.
+    ``line.py``); ``faults`` apply to the Sky Tracker's own replies, ``commander_faults`` to the
+    Sky Commander's replies on the bus (those the box relays to the PC and its own polls).
     """
 
     def __init__(
@@ -77,10 +78,14 @@ class SkyTrackerEmulator(HostedDevice):
         pace: bool = True,
         strict_line: bool = False,
         jitter_allowance_s: float = DEFAULT_JITTER_ALLOWANCE_S,
+        commander_faults: FaultInjector | None = None,
     ) -> None:
         super().__init__(self.serve)
         self.mount = mount
         self.faults = faults if faults is not None else FaultInjector()
+        self.commander_faults = (
+            commander_faults if commander_faults is not None else FaultInjector()
+        )
         self.commander = commander_for(mount, data_dir)
         self._tracker_end, self._commander_end = memory_pair(
             ("sky tracker -> sky commander", "sky commander <- sky tracker")
@@ -114,7 +119,9 @@ class SkyTrackerEmulator(HostedDevice):
 
     async def __aenter__(self) -> Self:
         self._commander_task = asyncio.create_task(
-            self.commander.serve(DevicePort(self._commander_end, pace=self._pace)),
+            self.commander.serve(
+                DevicePort(self._commander_end, faults=self.commander_faults, pace=self._pace)
+            ),
             name="sky commander on the bus",
         )
         await self.tracker.__aenter__()
