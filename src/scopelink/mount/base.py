@@ -14,7 +14,7 @@ import dataclasses
 import math
 from abc import ABC, abstractmethod
 from collections.abc import AsyncGenerator, Callable
-from contextlib import AbstractAsyncContextManager, aclosing
+from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
 from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
@@ -25,6 +25,7 @@ from scopelink.mount.errors import (
     NotSupportedError,
     ParkedError,
 )
+from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
 from scopelink.mount.types import (
@@ -78,6 +79,9 @@ class Mount(ABC):
     refresh_uses_wire: bool = True
     """Whether :meth:`refresh` costs a round trip to a device (front ends then answer from
     :attr:`state` while the poller runs, instead of refreshing per request)."""
+    stops_itself_at_limits: bool = False
+    """Whether the device stops rate motions and tracking at the limits by itself (the
+    simulator); otherwise :attr:`guard` watches them and stops them in time."""
 
     def __init__(
         self,
@@ -102,6 +106,7 @@ class Mount(ABC):
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
+        self._guard = HorizonGuard(self, GuardSettings())
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -157,8 +162,25 @@ class Mount(ABC):
         """Where the last goto was sent (``None`` before the first)."""
         return self._target
 
+    @property
+    def guard(self) -> HorizonGuard:
+        """What stops rate motions and tracking at the limits (see :mod:`scopelink.mount.guard`)."""
+        return self._guard
+
+    def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
+        """The dead-man for one client of a front end: inside ``async with``, rate motions are
+        owned by the client, and those still running when the block ends are stopped."""
+        return self._guard.client(name)
+
+    def acting_for(self, token: str | None) -> AbstractContextManager[MotionClient | None]:
+        """Commands inside are on behalf of the :class:`MotionClient` with ``token`` (requests
+        that arrive apart from their client's connection, like the dashboard's HTTP calls)."""
+        return self._guard.acting_for(token)
+
     def _publish(self, state: MountState) -> None:
+        state = self._guard.annotate(state)
         self._broadcast.publish(state)
+        self._guard.observe(state)
 
     def _report_problem(self, problem: str) -> None:
         """Publish the last good reading again, with ``problem`` saying why it is not fresh."""
@@ -257,6 +279,8 @@ class Mount(ABC):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        self._guard.motions_stopped()  # a goto takes over from manual motion
+        self._guard.command_accepted()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
     async def goto_object(self, name: str) -> CatalogObject:
@@ -275,6 +299,8 @@ class Mount(ABC):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._goto_horizontal(alt_deg, az_deg)
+        self._guard.motions_stopped()
+        self._guard.command_accepted()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
@@ -287,6 +313,7 @@ class Mount(ABC):
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""
         self._require_connected()
         await self._abort()
+        self._guard.motions_stopped()
 
     async def move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Turn one axis at a signed rate (degrees per second); 0 stops it."""
@@ -298,7 +325,10 @@ class Mount(ABC):
             )
         if not (math.isfinite(rate_deg_s) and abs(rate_deg_s) <= limit):
             raise InvalidValueError(f"axis rate {rate_deg_s}°/s must lie within ±{limit}°/s")
+        if self._guard.enabled:
+            self._guard.check_move(axis, rate_deg_s)
         await self._move_axis(axis, rate_deg_s)
+        self._guard.motion_commanded(axis, rate_deg_s)
 
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """Nudge the mount at the guide rate for ``duration_ms`` milliseconds."""
@@ -320,11 +350,14 @@ class Mount(ABC):
         if mode is not TrackingMode.OFF:
             self._require_unparked()
         await self._set_tracking(mode)
+        if mode is not TrackingMode.OFF:
+            self._guard.command_accepted()
 
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""
         self._require_connected()
         await self._park()
+        self._guard.motions_stopped()
 
     async def unpark(self) -> None:
         self._require_connected()

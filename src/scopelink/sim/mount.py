@@ -77,6 +77,7 @@ class SimulatedMount(Mount):
 
     poll_interval_s = 0.05  # a refresh costs only CPU: 20 Hz is plenty for any front end
     refresh_uses_wire = False
+    stops_itself_at_limits = True  # the physics plans a stop at every limit
 
     def __init__(
         self,

@@ -1,0 +1,336 @@
+"""What keeps a real mount inside its limits after a command was accepted, and a dead-man.
+
+``Mount.goto_*`` check the target before anything reaches the link, but a rate motion
+(``move_axis``) or tracking has no end point to check: on a device that does not stop itself at
+the horizon (a SynScan hand control, a Sky Tracker), they would carry the tube below the horizon or
+past the altitude limit. :class:`HorizonGuard` watches the state while either runs (it holds the
+state poller), predicts from the observed altitude rate where the mount will be once a stop could
+take effect, and stops it before the limit:
+
+- a rate motion heading out is aborted (``Mount.abort``: tracking carries on where the protocol
+  lets it, as after any stop);
+- tracking that carries the mount out (a setting star) is turned off, as OnStep and the
+  simulator do: a tracking mount that keeps going drives into the ground.
+
+A motion that starts at or beyond a limit and heads further out is refused where its direction is
+known (the altitude axis of an alt-az mount); elsewhere the guard stops it at the first readings.
+Why the mount stopped is logged and shown in ``MountState.problems`` until the next motion command.
+
+The dead-man: front ends that hold a connection per client (LX200, the SynScan server,
+Stellarium, the dashboard's page) run each client inside :meth:`Mount.motion_client`; a rate
+motion started by that client and still running when it goes is stopped. Decisions and measured
+margins are in ``docs/reliability-safety.md``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import logging
+import secrets
+from collections.abc import AsyncIterator, Iterator
+from contextlib import aclosing, asynccontextmanager, contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from scopelink.mount.errors import LimitError, MountError
+from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
+
+if TYPE_CHECKING:
+    from scopelink.mount.base import Mount
+
+__all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, slots=True)
+class GuardSettings:
+    """How early the guard stops a motion.
+
+    ``margin_deg`` is kept between the predicted stopping point and the limit. The guard looks
+    ``reaction_polls`` poll periods ahead: one to see the next reading, the rest for the stop
+    commands to reach the device. ``min_lookahead_s`` (mount clock) is the floor of that
+    look-ahead for very fast links. The motors then brake: ``braking_deg_s2`` is the deceleration
+    assumed (lower than any Sky-Watcher ramp we know: the simulator's EQ6 brakes at 3.3°/s², the
+    Sky Tracker at 2°/s²), so the braking distance is over- rather than underestimated.
+    """
+
+    margin_deg: float = 0.2
+    reaction_polls: float = 4.0
+    min_lookahead_s: float = 0.05
+    braking_deg_s2: float = 1.5
+
+
+class MotionClient:
+    """One client of a front end (an LX200 connection, a dashboard page): the owner of the rate
+    motions it starts. ``token`` names it in requests that arrive apart from its connection."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.token = secrets.token_urlsafe(12)
+
+    def __repr__(self) -> str:
+        return f"MotionClient({self.name!r})"
+
+
+_acting_for: ContextVar[MotionClient | None] = ContextVar("scopelink_motion_client", default=None)
+"""The client on whose behalf the current task moves the mount (None: nobody in particular)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _RateMotion:
+    rate_deg_s: float
+    owner: MotionClient | None
+
+
+@dataclass(frozen=True, slots=True)
+class _Reading:
+    """The part of a state the prediction needs, with its time on the mount's clock."""
+
+    at_s: float
+    alt_deg: float
+    az_deg: float
+
+
+class HorizonGuard:
+    """Stops rate motions and tracking before they cross the limits of ``mount``."""
+
+    def __init__(self, mount: Mount, settings: GuardSettings | None = None) -> None:
+        self._mount = mount
+        self.settings = settings or GuardSettings()
+        self._motions: dict[MountAxis, _RateMotion] = {}
+        self._clients: dict[str, MotionClient] = {}
+        self._task: asyncio.Task[None] | None = None
+        self.notice = ""
+        """Why the guard last stopped the mount ("" once a new motion command was accepted)."""
+        self.stops = 0
+        """How many times the guard stopped a motion (for health displays and tests)."""
+
+    # --- what is moving, and for whom -------------------------------------------------------------
+
+    @property
+    def enabled(self) -> bool:
+        return not self._mount.stops_itself_at_limits
+
+    @property
+    def running(self) -> bool:
+        return self._task is not None and not self._task.done()
+
+    @property
+    def rate_motions(self) -> dict[MountAxis, float]:
+        """The rate motions commanded through ``move_axis`` and not stopped since."""
+        return {axis: motion.rate_deg_s for axis, motion in self._motions.items()}
+
+    def check_move(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """Refuse a rate motion that starts at or beyond a limit and heads further out, where
+        the direction is known: the altitude axis of an alt-az mount (positive is up)."""
+        if rate_deg_s == 0.0 or axis is not MountAxis.SECONDARY:
+            return
+        if self._mount.capabilities.alignment_mode is not AlignmentMode.ALT_AZ:
+            return
+        state = self._mount.state
+        if state.alt_deg is None or state.az_deg is None:
+            return
+        limits = self._mount.limits
+        margin = self.settings.margin_deg
+        floor = limits.horizon_at(state.az_deg)
+        if rate_deg_s < 0.0 and state.alt_deg <= floor + margin:
+            raise LimitError(
+                f"the mount is at altitude {state.alt_deg:.2f}°, at the configured horizon of "
+                f"{floor:.2f}°: it may only move up from here (nothing was sent to the mount)"
+            )
+        if rate_deg_s > 0.0 and state.alt_deg >= limits.max_altitude_deg - margin:
+            raise LimitError(
+                f"the mount is at altitude {state.alt_deg:.2f}°, at the configured limit of "
+                f"{limits.max_altitude_deg:.2f}°: it may only move down from here (nothing was "
+                "sent to the mount)"
+            )
+
+    def motion_commanded(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """``move_axis`` reached the device: remember the motion and its owner, and watch it."""
+        if rate_deg_s == 0.0:
+            self._motions.pop(axis, None)
+            return
+        self._motions[axis] = _RateMotion(rate_deg_s, _acting_for.get())
+        self.notice = ""
+        self._wake()
+
+    def motions_stopped(self) -> None:
+        """Every rate motion ended (abort, a goto taking over, park, disconnect)."""
+        self._motions.clear()
+
+    def command_accepted(self) -> None:
+        """A new motion command (goto, tracking on) supersedes the last stop's notice."""
+        self.notice = ""
+
+    # --- the dead-man ---------------------------------------------------------------------------
+
+    @asynccontextmanager
+    async def client(self, name: str) -> AsyncIterator[MotionClient]:
+        """Run a front end's client inside: rate motions it starts are stopped when it goes."""
+        client = MotionClient(name)
+        self._clients[client.token] = client
+        reset = _acting_for.set(client)
+        try:
+            yield client
+        finally:
+            with contextlib.suppress(ValueError):  # left from another context: nothing to reset
+                _acting_for.reset(reset)
+            del self._clients[client.token]
+            await self.stop_motions_of(client)
+
+    @contextmanager
+    def acting_for(self, token: str | None) -> Iterator[MotionClient | None]:
+        """Commands inside are on behalf of the client ``token`` names (if it is still here)."""
+        client = self._clients.get(token) if token else None
+        reset = _acting_for.set(client)
+        try:
+            yield client
+        finally:
+            _acting_for.reset(reset)
+
+    async def stop_motions_of(self, client: MotionClient) -> None:
+        """Stop the rate motions ``client`` started that nobody has changed since."""
+        axes = [axis for axis, motion in self._motions.items() if motion.owner is client]
+        for axis in axes:
+            logger.warning(
+                "%s went away while moving the %s axis: stopping it",
+                client.name,
+                axis.name.lower(),
+            )
+            try:
+                await asyncio.shield(self._mount.move_axis(axis, 0.0))
+            except MountError as error:
+                logger.warning("stopping the %s axis failed: %s", axis.name.lower(), error)
+
+    # --- the horizon guard --------------------------------------------------------------------
+
+    def observe(self, state: MountState) -> None:
+        """Called with every published state: start guarding when tracking is seen."""
+        if not state.connected:
+            self._motions.clear()
+            return
+        if state.tracking is not TrackingMode.OFF:
+            self._wake()
+
+    def annotate(self, state: MountState) -> MountState:
+        """``state`` with the last stop's reason among its problems."""
+        if self.notice and self.notice not in state.problems:
+            return dataclasses.replace(state, problems=(*state.problems, self.notice))
+        return state
+
+    def _needed(self, state: MountState) -> bool:
+        return state.connected and (bool(self._motions) or state.tracking is not TrackingMode.OFF)
+
+    def _wake(self) -> None:
+        if not self.enabled or self.running:
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # published outside a loop (a test setting state up): nothing moves
+            return
+        self._task = loop.create_task(self._run(), name="scopelink horizon guard")
+
+    async def close(self) -> None:
+        task, self._task = self._task, None
+        if task is not None:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+
+    async def _run(self) -> None:
+        try:
+            await self._watch()
+        except asyncio.CancelledError:
+            raise
+        except Exception:  # the guard must never take the event loop down with it
+            logger.exception("the horizon guard failed")
+
+    async def _watch(self) -> None:
+        mount = self._mount
+        previous: _Reading | None = None
+        period_s: float | None = None
+        ignore_until_s = float("-inf")
+        origin = mount.state.read_at
+        async with aclosing(mount.states()) as states:
+            async for state in states:
+                if not self._needed(state):
+                    return
+                if state.alt_deg is None or state.az_deg is None:
+                    continue
+                reading = _Reading(
+                    (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
+                )
+                if reading.at_s <= ignore_until_s:
+                    continue
+                if previous is None or reading.at_s <= previous.at_s:
+                    previous = previous or reading
+                    continue
+                elapsed = reading.at_s - previous.at_s
+                period_s = elapsed if period_s is None else max(elapsed, 0.8 * period_s)
+                reason = self._danger(previous, reading, period_s, state)
+                previous = reading
+                if reason is None:
+                    continue
+                await self._stop(state, reason)
+                # Readings until the stop has taken effect still show the braking motion.
+                ignore_until_s = (mount.now() - origin).total_seconds() + period_s
+                previous = None
+
+    def _danger(
+        self, previous: _Reading, reading: _Reading, period_s: float, state: MountState
+    ) -> str | None:
+        """Why the mount must stop now, or None while it stays inside the limits."""
+        settings = self.settings
+        elapsed = reading.at_s - previous.at_s
+        alt_rate = (reading.alt_deg - previous.alt_deg) / elapsed
+        az_rate = _wrap_signed(reading.az_deg - previous.az_deg) / elapsed
+        ahead_s = max(settings.min_lookahead_s, settings.reaction_polls * period_s)
+        # Braking from the fastest axis rate takes axis_rate / deceleration seconds, during which
+        # the altitude keeps changing at about half its present rate.
+        axis_rate = max((abs(rate) for rate in self.rate_motions.values()), default=0.0)
+        ahead_s += axis_rate / settings.braking_deg_s2 / 2.0
+        alt_then = reading.alt_deg + alt_rate * ahead_s
+        az_then = reading.az_deg + az_rate * ahead_s
+        limits = self._mount.limits
+        floor_now = limits.horizon_at(reading.az_deg)
+        floor_then = limits.horizon_at(az_then)
+        above_now = reading.alt_deg - floor_now
+        above_then = alt_then - floor_then
+        what = "a manual motion" if self._motions else f"{state.tracking.value} tracking"
+        if above_then < settings.margin_deg and above_then < above_now:
+            return (
+                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
+                f"{reading.az_deg % 360.0:.1f}°): it was heading below the configured horizon of "
+                f"{floor_then:.2f}°"
+            )
+        below_now = limits.max_altitude_deg - reading.alt_deg
+        below_then = limits.max_altitude_deg - alt_then
+        if below_then < settings.margin_deg and below_then < below_now:
+            return (
+                f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
+                f"the configured limit of {limits.max_altitude_deg:.2f}°"
+            )
+        return None
+
+    async def _stop(self, state: MountState, reason: str) -> None:
+        mount = self._mount
+        logger.warning("%s", reason)
+        self.notice = reason
+        self.stops += 1
+        try:
+            if self._motions:
+                await mount.abort()
+            elif state.tracking is not TrackingMode.OFF:
+                await mount.set_tracking(TrackingMode.OFF)
+        except MountError as error:
+            logger.error("the horizon guard could not stop the mount: %s", error)
+            self.notice = f"{reason}; stopping it FAILED: {error}"
+        mount._publish(mount.state)  # show the notice now, not at the next poll
+
+
+def _wrap_signed(degrees: float) -> float:
+    return (degrees + 180.0) % 360.0 - 180.0

@@ -1,0 +1,76 @@
+"""The horizon guard on real devices: the SynScan driver on TCP to the SynScan emulator, whose own
+horizon is -10°, so only the guard keeps the tube above scopelink's 10° horizon."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from scopelink.mount import LimitError, Limits, MountAxis, TrackingMode
+from scopelink.sim import AZ_GTI
+from tests.test_safety_support import (
+    HORIZON_DEG,
+    TOLERANCE_DEG,
+    synscan_rig,
+    wait_until_still,
+)
+
+FAST_DEG_S = 3.0
+"""Nearly the SynScan's fastest slew (800x sidereal, 3.34°/s)."""
+
+
+async def test_a_rate_motion_towards_the_horizon_is_stopped_above_it() -> None:
+    # In the west, turning the polar axis westwards (with tracking) lowers the tube.
+    async with synscan_rig(at=(13.0, 250.0)) as rig:
+        await rig.mount.move_axis(MountAxis.PRIMARY, FAST_DEG_S)
+        rest = await wait_until_still(rig)
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+        assert rest < 12.0  # it did move down, and was stopped near the horizon
+        assert rig.mount.guard.stops == 1
+        await rig.mount.refresh()
+        state = rig.mount.state
+        assert not state.slewing
+        assert any("below the configured horizon of 10.00°" in p for p in state.problems)
+
+
+async def test_tracking_that_carries_the_mount_below_the_horizon_is_turned_off() -> None:
+    # A star setting in the west, the clock 300x: 0.6° of sinking takes about a real second.
+    async with synscan_rig(at=(10.6, 270.0), rate=300.0, tracking=True) as rig:
+        state = await rig.mount.wait_for(lambda s: s.tracking is TrackingMode.OFF, timeout_s=15.0)
+        assert any("sidereal tracking was stopped" in p for p in state.problems)
+        assert rig.sim.tracking is TrackingMode.OFF  # the device itself stopped tracking
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+
+
+async def test_moving_away_from_the_horizon_is_never_stopped() -> None:
+    async with synscan_rig(at=(10.4, 250.0)) as rig:
+        await rig.mount.move_axis(MountAxis.PRIMARY, -FAST_DEG_S)  # eastwards: rising
+        await asyncio.sleep(0.8)
+        assert rig.mount.guard.stops == 0
+        assert rig.true_alt() > 10.8
+        await rig.mount.move_axis(MountAxis.PRIMARY, 0.0)
+
+
+async def test_an_altaz_mount_at_its_horizon_may_not_move_down() -> None:
+    async with synscan_rig(model=AZ_GTI, at=(10.1, 180.0)) as rig:
+        await rig.mount.refresh()
+        sent = len(rig.slews_received())
+        with pytest.raises(LimitError, match="may only move up"):
+            await rig.mount.move_axis(MountAxis.SECONDARY, -1.0)
+        assert len(rig.slews_received()) == sent  # nothing reached the link
+        await rig.mount.move_axis(MountAxis.SECONDARY, 1.0)  # up is allowed
+        await asyncio.sleep(0.3)
+        await rig.mount.move_axis(MountAxis.SECONDARY, 0.0)
+        assert rig.true_alt() > 10.15
+
+
+async def test_the_altitude_limit_stops_a_motion_upwards() -> None:
+    limits = Limits(horizon_deg=HORIZON_DEG, max_altitude_deg=80.0)
+    async with synscan_rig(model=AZ_GTI, at=(77.5, 180.0), limits=limits) as rig:
+        await rig.mount.move_axis(MountAxis.SECONDARY, FAST_DEG_S)
+        await wait_until_still(rig)
+        assert rig.max_alt_deg <= 80.0 + TOLERANCE_DEG, rig.max_alt_deg
+        await rig.mount.refresh()
+        state = rig.mount.state
+        assert any("above the configured limit of 80.00°" in p for p in state.problems)
