@@ -102,7 +102,7 @@ def create_config(path: Path, text: str) -> None:
 def _key_parts(path: Path, key: str) -> list[str]:
     parts = key.split(".")
     if not all(part.strip() for part in parts):
-        raise ConfigError(f"{path}: {key!r}: expected a dotted key like site.latitude")
+        raise ConfigError(f"{path}: {key}: expected a dotted key like site.latitude")
     return parts
 
 
