@@ -122,13 +122,23 @@ class HttpConnection(asyncio.Protocol):
         peer = transport.get_extra_info("peername")
         admitted = self._access.admit(str(peer[0]) if peer else None)
         if isinstance(admitted, Refusal):
-            # Refused before reading anything: one answer, then the connection closes.
             if admitted.forbidden:
-                self._refuse(HttpReply.text(403, f"forbidden: {admitted.reason}"))
+                reply = HttpReply.text(403, f"forbidden: {admitted.reason}")
             else:
-                self._refuse(_retry_after(503, f"busy: {admitted.reason}", 1.0))
+                reply = _retry_after(503, f"busy: {admitted.reason}", 1.0)
+            self._turn_away(transport, reply)
             return
         self._client = admitted
+
+    def _turn_away(self, transport: asyncio.Transport, reply: HttpReply) -> None:
+        """Answer before reading the request, then half-close. Closing at once would reset the
+        connection (the request is unread) and could destroy the answer before it is read; the
+        client closes on seeing ``Connection: close``, or we do after a grace period."""
+        self._broken = True
+        transport.write(reply.encode(keep_alive=False))
+        if transport.can_write_eof():
+            transport.write_eof()
+        asyncio.get_running_loop().call_later(_TURN_AWAY_GRACE_S, transport.close)
 
     def connection_lost(self, exc: Exception | None) -> None:
         self._registry.discard(self)
@@ -257,6 +267,9 @@ class HttpConnection(asyncio.Protocol):
             if len(self._queue) <= _MAX_PIPELINED:
                 transport.resume_reading()
 
+
+_TURN_AWAY_GRACE_S = 2.0
+"""How long a refused connection may stay open for its client to read the refusal."""
 
 _MAX_PIPELINED = 32
 """Requests queued on one connection before it stops reading (back-pressure)."""
