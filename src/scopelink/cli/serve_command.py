@@ -352,6 +352,7 @@ async def _start_servers(
         config = SynScanConfig(model=synscan_model_code(mount))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
         synscan = await stack.enter_async_context(SynScanEmulator(mount, config, wire=None))
+        synscan.server.dead_man = True  # a phone app that drops must not leave the mount slewing
         synscan.access = synscan.server.access = AccessControl(policy, "SynScan")
         if plan.synscan is not None:
             bound_host, port = await synscan.on_tcp(host, plan.synscan)

@@ -96,7 +96,8 @@ class LX200Server(HostedDevice):
         session = self.handset.session()
         connection = LX200ServerConnection()
         client = current_client()
-        async with self.mount.watching():
+        # Dead-man: a slew this client started (:Ms#...) stops when its connection goes.
+        async with self.mount.watching(), self.mount.motion_client(f"LX200 client {link.name}"):
             while True:
                 data = await self._read(link, connection)
                 if data is None:

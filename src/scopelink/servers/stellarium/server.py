@@ -121,7 +121,9 @@ class StellariumServer:
     async def _serve_admitted(self, link: Link, throttle: Callable[[], Awaitable[None]]) -> None:
         self.clients += 1
         try:
-            async with self.mount.watching():
+            # The protocol starts no rate motion; the dead-man is there for uniformity.
+            client = f"Stellarium client {link.name}"
+            async with self.mount.watching(), self.mount.motion_client(client):
                 sender = asyncio.create_task(self._send_positions(link), name=f"{link.name} out")
                 try:
                     await self._read_gotos(link, throttle)

@@ -9,8 +9,10 @@ link. Faults from a :class:`~scopelink.servers.faults.FaultInjector` apply per c
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 from collections.abc import Awaitable, Callable
+from contextlib import AbstractAsyncContextManager
 
 from scopelink.links import Link, LinkClosedError
 from scopelink.protocol.synscan import (
@@ -84,8 +86,19 @@ class SynScanServer:
         self.faults = faults or FaultInjector()
         self.access = AccessControl(name="SynScan")
 
+    dead_man = False
+    """Stop a rate slew a client started when its link goes (``scopelink serve`` turns it on for
+    phone apps; off in the device emulator, since a hand control on a cable cannot notice)."""
+
     async def serve(self, link: Link) -> None:
         """Answer commands from ``link`` until it closes (or a ``close`` fault closes it)."""
+        dead_man: AbstractAsyncContextManager[object] = contextlib.nullcontext()
+        if self.dead_man:
+            dead_man = self.hand_control.mount.motion_client(f"SynScan client {link.name}")
+        async with dead_man:
+            await self._serve_link(link)
+
+    async def _serve_link(self, link: Link) -> None:
         connection = SynScanServerConnection()
         client = current_client()
         try:
