@@ -151,7 +151,11 @@ class _Api:
         body = await read_body(request)
         axis = body.choice("axis", MountAxis)
         limit = self.mount.capabilities.max_axis_rate_deg_s
-        await self.mount.move_axis(axis, body.number("rate_deg_s", -limit, limit))
+        rate = body.number("rate_deg_s", -limit, limit)
+        # The page's live session owns the motion: it stops if the page goes (dead-man).
+        session = body.text("session") if body.has("session") else None
+        with self.mount.acting_for(session):
+            await self.mount.move_axis(axis, rate)
         return self._ok()
 
     async def tracking(self, request: web.Request) -> web.Response:

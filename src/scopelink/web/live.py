@@ -17,6 +17,7 @@ import logging
 from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
+from scopelink.mount.guard import MotionClient
 from scopelink.web.sky import SkyPositions, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
@@ -70,6 +71,13 @@ class LiveHub:
         """One page's WebSocket: a hello with everything, then the shared updates."""
         ws = web.WebSocketResponse(heartbeat=20.0, max_msg_size=4096)
         await ws.prepare(request)
+        # Dead-man: the pad's moves name this page's session; they stop when the page goes.
+        async with self._mount.motion_client(f"dashboard page {request.remote}") as client:
+            return await self._serve_page(ws, client)
+
+    async def _serve_page(
+        self, ws: web.WebSocketResponse, client: MotionClient
+    ) -> web.WebSocketResponse:
         traffic, _ = self._traffic_json(0)
         hello = {
             "type": "hello",
@@ -79,6 +87,7 @@ class LiveHub:
             "state": state_json(self._mount, self._mount.state),
             "sky": await asyncio.to_thread(self.sky_json),
             "interval_s": self.interval_s,
+            "session": client.token,
         }
         await ws.send_str(json.dumps(hello))
         self._sockets.add(ws)

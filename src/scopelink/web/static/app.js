@@ -12,6 +12,7 @@ const view = {
   sky: [],
   selected: null, // {name} of an object, or {alt, az} of a point
   connected: false,
+  session: null, // the live connection's session, sent with the pad's moves (dead-man)
 };
 
 // ---------------------------------------------------------------- messages
@@ -390,6 +391,7 @@ function connect() {
     try { message = JSON.parse(event.data); } catch (_) { return; }
     if (message.type === "hello") {
       view.mount = message.mount;
+      view.session = message.session; // the pad's moves name it: they stop if this page goes
       $("traffic-off").hidden = message.traffic_enabled;
       $("traffic").tBodies[0].replaceChildren();
       $("traffic-empty").hidden = !message.traffic_enabled;
@@ -499,14 +501,16 @@ function setupPad() {
         try { button.setPointerCapture(event.pointerId); } catch (_) { /* not a pointer */ }
       }
       const rate = Number(button.dataset.sign) * rateDegS();
-      const ok = await api("/api/move", { axis: button.dataset.axis, rate_deg_s: rate });
+      const ok = await api("/api/move", {
+        axis: button.dataset.axis, rate_deg_s: rate, session: view.session,
+      });
       if (!ok) stop();
     };
     const stop = () => {
       if (!held) return;
       held = false;
       button.classList.remove("held");
-      api("/api/move", { axis: button.dataset.axis, rate_deg_s: 0 });
+      api("/api/move", { axis: button.dataset.axis, rate_deg_s: 0, session: view.session });
     };
     button.addEventListener("pointerdown", start);
     button.addEventListener("pointerup", stop);
