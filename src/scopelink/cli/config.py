@@ -109,8 +109,10 @@ def parse_config(text: str, path: Path) -> Config:
     """Check and read the text of a settings file; errors name ``path`` and the key."""
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
+    except ValueError as error:  # TOMLDecodeError, or an integer of more than 4300 digits
         raise ConfigError(f"{path}: not valid TOML: {error}") from None
+    except RecursionError:  # tomllib recurses once per level of nested arrays and tables
+        raise ConfigError(f"{path}: not valid TOML: arrays or tables nested too deeply") from None
     return _Reader(path).config(data)
 
 
@@ -126,6 +128,16 @@ _ACCESS_KEYS: Final = (
     "requests_per_second",
 )
 _SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS, *_ACCESS_KEYS)
+
+
+def _finite(value: int | float) -> float | None:
+    """``value`` as a finite float, or None (nan, inf, or an integer beyond any float: TOML
+    integers have no size limit in tomllib)."""
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
 
 
 class _Reader:
@@ -173,9 +185,10 @@ class _Reader:
         # bool is an int in Python; 'true' as a latitude is a mistake, not 1°.
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(f"{prefix}.{key}", f"expected a number, got {value!r}")
-        if not math.isfinite(value):
+        number = _finite(value)
+        if number is None:
             raise self.error(f"{prefix}.{key}", f"expected a finite number, got {value!r}")
-        return float(value)
+        return number
 
     def site(self, table: dict[str, Any]) -> Site:
         self.known(table, "site.", _SITE_KEYS)
@@ -227,6 +240,7 @@ class _Reader:
                 isinstance(point, list)
                 and len(point) == 2
                 and all(isinstance(x, int | float) and not isinstance(x, bool) for x in point)
+                and all(_finite(x) is not None for x in point)
             ):
                 raise self.error(f"horizon.profile[{index}]", f"{expected}, got {point!r}")
             points.append((float(point[0]), float(point[1])))

@@ -39,7 +39,10 @@ class Body:
             raise BadRequestError(f"{key!r} is required")
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise BadRequestError(f"{key!r} must be a number, not {type(value).__name__}")
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # JSON integers have no size limit; 1e400 as an int gets here
+            raise BadRequestError(f"{key!r} must lie in [{low:g}, {high:g}]") from None
         if not (math.isfinite(number) and low <= number <= high):
             raise BadRequestError(f"{key!r} must lie in [{low:g}, {high:g}], not {number:g}")
         return number
@@ -89,6 +92,8 @@ async def read_body(request: web.Request) -> Body:
         decoded = json.loads(raw)
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise BadRequestError(f"the request body is not valid JSON: {error}") from None
+    except RecursionError:  # the C decoder recurses once per level: "[[[[..." in 4 KiB
+        raise BadRequestError("the request body nests too deeply to be a command") from None
     if not isinstance(decoded, dict):
         raise BadRequestError("the request body must be a JSON object")
     return Body(decoded)

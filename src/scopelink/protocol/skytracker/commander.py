@@ -83,10 +83,13 @@ class CommanderServer(ByteStream):
         return LineTooLong(offset, data, "over-long line continues")
 
     def discard_partial(self) -> IncompleteFrame | None:
-        """Drop an unfinished ``L`` line after an inter-byte timeout (the codec has no clock)."""
+        """Drop an unfinished ``L`` line after an inter-byte timeout (the codec has no clock).
+
+        The pause also ends an over-long line being skipped, even when its bytes so far were all
+        reported already: what follows the pause is a new command, not the old line's tail."""
+        self._skipping_line = False
         if not self._buffer:
             return None
-        self._skipping_line = False
         offset, data = self._consume(len(self._buffer))
         return IncompleteFrame(offset, data, "unfinished line dropped after a pause")
 

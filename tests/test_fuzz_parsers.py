@@ -1,0 +1,153 @@
+"""Fuzzing every parser, the fast subset: the checks of `bench.fuzz` under hypothesis (a few
+hundred examples per parser), the benchmark's own quick run, and regression tests for what the
+long run found. The million-input run is ``.venv/bin/python -m bench.fuzz``
+(docs/reliability-fuzzing.md)."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+from bench.fuzz import generate
+from bench.fuzz_targets import (
+    TARGETS,
+    FuzzFailureError,
+    Target,
+    check_commander_server,
+    check_synscan_server,
+)
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from scopelink.cli.config import ConfigError, load_config
+from scopelink.protocol import skytracker
+from scopelink.protocol.synscan import CommandParser
+from scopelink.web.params import BadRequestError, Body
+from tests.bench_support import run_quick_bench
+from tests.test_web_support import served
+
+EXAMPLES = 200
+
+
+def fuzz_inputs(target: Target) -> st.SearchStrategy[bytes]:
+    """Random bytes, or the benchmark's generator (mutated and chained seeds) driven by
+    hypothesis, so a failure shrinks."""
+    generated = st.randoms(use_true_random=False).map(lambda rng: generate(target, rng))
+    return st.one_of(st.binary(max_size=min(target.max_size, 300)), generated)
+
+
+@pytest.mark.parametrize("target", TARGETS, ids=[target.name for target in TARGETS])
+def test_parser_never_crashes_and_keeps_its_invariants(target: Target) -> None:
+    @settings(
+        max_examples=EXAMPLES,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
+    @given(fuzz_inputs(target), st.randoms(use_true_random=False))
+    def fuzz(data: bytes, rng: random.Random) -> None:
+        target.check(data, rng)
+
+    fuzz()
+
+
+def test_every_parser_the_brief_names_has_a_target() -> None:
+    names = {target.name for target in TARGETS}
+    assert names >= {
+        "synscan-server",
+        "synscan-client",
+        "skytracker-server",
+        "skytracker-client",
+        "commander-server",
+        "commander-client",
+        "lx200-server",
+        "stellarium-server",
+        "stellarium-client",
+        "alpaca-params",
+        "alpaca-http",
+        "dashboard-params",
+        "decode-trace-text",
+        "config",
+    }
+
+
+@pytest.mark.timeout(120)
+def test_quick_fuzz_run_finds_nothing() -> None:
+    result = run_quick_bench("bench.fuzz", timeout_s=120)
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("alpaca-http") for line in lines), result.stdout
+    total = next(line for line in lines if line.startswith("total "))
+    assert " 0 crashes, hangs or broken invariants" in total, result.stdout
+    assert any(line.startswith("slowest input:") for line in lines), result.stdout
+
+
+def test_the_checks_catch_a_parser_that_loses_step(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The checks can fail: with a SynScan parser whose pause forgets nothing, the valid commands
+    # sent after garbage are read as the garbage's payload, and the check says so.
+    def keep_everything(self: CommandParser) -> bytes:
+        return b""
+
+    monkeypatch.setattr(CommandParser, "discard_partial", keep_everything)
+    with pytest.raises(FuzzFailureError, match="after the pause"):
+        check_synscan_server(b"r0000", random.Random(3))
+
+
+# ------------------------------------------------------------------------------ found by fuzzing
+
+
+def test_sky_commander_pause_after_an_overlong_line_ends_the_skip() -> None:
+    # bench.fuzz commander-server:2785: the 32 bytes of an over-long 'L' line were all reported
+    # (LineTooLong) when the line went quiet; the pause must end the skip, or the next command
+    # would be swallowed up to its CR.
+    server = skytracker.CommanderServer()
+    server.receive_data(b"L" + b"9" * 31)
+    assert isinstance(server.next_event(), skytracker.LineTooLong)
+    assert server.next_event() is skytracker.NEED_DATA
+    server.discard_partial()
+    server.receive_data(skytracker.LoadObject(99, 5.588, -5.391).encode() + b"O")
+    assert server.next_event() == skytracker.LoadObject(99, 5.588, -5.391)
+    assert server.next_event() == skytracker.ReadOffsets()
+    check_commander_server(b"80L96L03 .2. 9.1 +8.0 7+229.03809.", random.Random(1))
+
+
+async def test_dashboard_refuses_deep_nesting_and_huge_integers_with_a_400() -> None:
+    # bench.fuzz dashboard-params: json.loads raised RecursionError on "[[[[...", and float()
+    # OverflowError on a 400-digit integer; both escaped as 500s.
+    async with served() as s:
+        for raw, words in (
+            (b"[" * 3000, "nests too deeply"),
+            (b'{"ra_hours": 1' + b"0" * 400 + b', "dec_deg": 0}', "'ra_hours' must lie in"),
+        ):
+            async with s.http.post(
+                "/api/goto", data=raw, headers={"Content-Type": "application/json"}
+            ) as response:
+                assert response.status == 400, raw[:20]
+                assert words in (await response.json())["error"]
+        assert not (await s.mount.refresh()).slewing
+    with pytest.raises(BadRequestError, match="must lie in"):
+        Body({"alt_deg": -(10**400)}).number("alt_deg", -90.0, 90.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("horizon = " + "[" * 2000, "nested too deeply"),
+        ("[site]\nlatitude = " + "{ a = " * 2000, "nested too deeply"),
+        ("[site]\nlatitude = 1" + "0" * 5000 + "\nlongitude = 0", "not valid TOML"),
+        ("[site]\nlatitude = 1" + "0" * 400 + "\nlongitude = 0", "site.latitude"),
+        ("[limits]\nmax_altitude = -1" + "0" * 400, "limits.max_altitude"),
+        ("[horizon]\nprofile = [[0, 1" + "0" * 400 + "]]", "horizon.profile[0]"),
+        ("[horizon]\nprofile = [[0, inf]]", "horizon.profile[0]"),
+    ],
+)
+def test_config_reader_names_the_file_for_every_bad_file(
+    tmp_path: Path, text: str, words: str
+) -> None:
+    # bench.fuzz config: tomllib's RecursionError and its 4300-digit ValueError escaped
+    # load_config, and so did OverflowError on integers beyond any float.
+    path = tmp_path / "config.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as raised:
+        load_config(path)
+    assert str(path) in str(raised.value)
+    assert words in str(raised.value)
