@@ -56,6 +56,8 @@ class HttpReply:
         connection = b"" if keep_alive else b"Connection: close\r\n"
         head = (
             f"HTTP/1.1 {self.status} {phrase}\r\nContent-Type: {self.content_type}\r\n"
+            # Error texts quote what the client sent: never let a browser sniff them as HTML.
+            "X-Content-Type-Options: nosniff\r\n"
             f"Content-Length: {len(self.body)}\r\n"
             + "".join(f"{name}: {value}\r\n" for name, value in self.headers)
         ).encode()

@@ -50,6 +50,12 @@ _API_PREFIX = "/api/v1/"
 _DEVICE_TYPE = "telescope"
 _JSON = "application/json; charset=utf-8"
 _METHODS = ("GET", "PUT")
+_SETUP_PAGE_HEADERS = (
+    # The page is static text: no script, style, image or frame may ever run in it.
+    ("Content-Security-Policy", "default-src 'none'; frame-ancestors 'none'; form-action 'none'"),
+    ("X-Frame-Options", "DENY"),
+    ("Referrer-Policy", "no-referrer"),
+)
 _READ_ONLY_PUTS = frozenset({"connected", "connect", "disconnect"})
 """PUTs a read-only server still takes: they open or close the client's session, not the mount."""
 
@@ -337,4 +343,4 @@ class AlpacaServer:
             port=self.port,
             discovery_port=self.discovery_port,
         )
-        return HttpReply(200, page.encode(), "text/html; charset=utf-8")
+        return HttpReply(200, page.encode(), "text/html; charset=utf-8", _SETUP_PAGE_HEADERS)

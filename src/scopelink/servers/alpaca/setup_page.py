@@ -1,11 +1,13 @@
 """The read-only HTML setup pages (``/setup`` and ``/setup/v1/telescope/0/setup``).
 
 Alpaca clients open these in a browser. They show what the server serves and where; every
-value is escaped, since names and limits come from configuration a user typed.
+value is escaped, since names and limits come from configuration a user typed; control
+characters and unencodable surrogates are shown as U+FFFD (docs/reliability-injection.md).
 """
 
 from __future__ import annotations
 
+import re
 from html import escape
 
 from scopelink.mount import Mount
@@ -14,8 +16,17 @@ from scopelink.servers.alpaca.telescope import TelescopeConfig
 __all__ = ["render_setup_page"]
 
 
+_UNSHOWABLE = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f\ud800-\udfff]")
+"""Control characters (NUL...) and lone surrogates (a name from argv bytes that were not UTF-8,
+which cannot be encoded): shown as U+FFFD rather than sent raw or failing the page."""
+
+
+def _text(value: object) -> str:
+    return escape(_UNSHOWABLE.sub("\ufffd", str(value)))
+
+
 def _row(name: str, value: object) -> str:
-    return f"<tr><th>{escape(name)}</th><td>{escape(str(value))}</td></tr>"
+    return f"<tr><th>{_text(name)}</th><td>{_text(value)}</td></tr>"
 
 
 def render_setup_page(
@@ -41,7 +52,7 @@ def render_setup_page(
         _row("Alpaca port", port),
         _row("Discovery port", discovery_port if discovery_port is not None else "off"),
     ]
-    title = escape(f"scopelink Alpaca telescope: {config.name}")
+    title = _text(f"scopelink Alpaca telescope: {config.name}")
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f"<title>{title}</title></head><body><h1>{title}</h1>"
