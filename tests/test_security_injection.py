@@ -24,12 +24,14 @@ from urllib.parse import quote
 
 import aiohttp
 import pytest
+from playwright.async_api import async_playwright, expect
 
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.alpaca.telescope import TelescopeConfig
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
 from scopelink.web.dashboard import static_dir
+from tests.conftest import require_executable
 from tests.test_web_support import SITE, START
 
 SCRIPT = "<script>window.pwned=1</script>"
@@ -362,3 +364,49 @@ def test_the_page_script_never_turns_text_into_markup() -> None:
     assert [sink for sink in sinks if sink in code] == []
     assert 'setTimeout("' not in code
     assert "textContent" in code  # the positive half: text is set as text
+
+
+async def test_websocket_ignores_hostile_messages_and_closes_on_huge_ones() -> None:
+    async with dashboard() as (_, http):
+        async with http.ws_connect("/ws") as socket:
+            async with asyncio.timeout(10):
+                assert json.loads((await socket.receive()).data)["type"] == "hello"
+                for text in HOSTILE:  # the lone surrogate goes as the bytes it came from
+                    await socket.send_bytes(text.encode("utf-8", "surrogateescape"))
+                    await socket.send_str(text.encode("utf-8", "replace").decode())
+                await socket.send_bytes(b"\x00\xff" * 100)
+                # Still live: the next update arrives, as JSON.
+                update = await socket.receive()
+                assert update.type == aiohttp.WSMsgType.TEXT
+                json.loads(update.data)
+        async with http.ws_connect("/ws") as socket:
+            async with asyncio.timeout(10):
+                await socket.receive()  # the hello
+                await socket.send_str(HUGE)
+                while (message := await socket.receive()).type == aiohttp.WSMsgType.TEXT:
+                    pass
+            assert message.type in (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED)
+            assert socket.close_code == aiohttp.WSCloseCode.MESSAGE_TOO_BIG
+        async with http.get("/api/state") as response:
+            assert response.status == 200  # the dashboard serves on
+
+
+async def test_hostile_device_names_are_text_in_the_browser() -> None:
+    """The real page in headless Chromium shows a hostile model name as text: no element is
+    made of it and no script in it runs."""
+    executable = require_executable("chromium")
+    name = '<img src=x onerror="window.pwned=1"><script>window.pwned=2</script>'
+    async with dashboard(name) as (served, _), async_playwright() as playwright:
+        browser = await playwright.chromium.launch(executable_path=executable)
+        try:
+            page = await browser.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda error: errors.append(str(error)))
+            await page.goto(served.url)
+            await expect(page.locator("#hl-identity")).to_contain_text(name, timeout=10_000)
+            assert await page.locator("#hl-identity img, #hl-identity script").count() == 0
+            assert await page.locator("img[src=x]").count() == 0
+            assert await page.evaluate("window.pwned === undefined")
+            assert errors == []
+        finally:
+            await browser.close()
