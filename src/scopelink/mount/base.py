@@ -21,6 +21,7 @@ from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
 from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.mount.errors import (
     InvalidValueError,
+    LimitError,
     NotConnectedError,
     NotSupportedError,
     ParkedError,
@@ -326,7 +327,10 @@ class Mount(ABC):
         if not (math.isfinite(rate_deg_s) and abs(rate_deg_s) <= limit):
             raise InvalidValueError(f"axis rate {rate_deg_s}°/s must lie within ±{limit}°/s")
         if self._guard.enabled:
-            self._guard.check_move(axis, rate_deg_s)
+            try:
+                self._guard.check_move(axis, rate_deg_s, self.state)
+            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
+                self._guard.check_move(axis, rate_deg_s, await self.refresh())
         await self._move_axis(axis, rate_deg_s)
         self._guard.motion_commanded(axis, rate_deg_s)
 

@@ -56,12 +56,18 @@ class GuardSettings:
     look-ahead for very fast links. The motors then brake: ``braking_deg_s2`` is the deceleration
     assumed (lower than any Sky-Watcher ramp we know: the simulator's EQ6 brakes at 3.3°/s², the
     Sky Tracker at 2°/s²), so the braking distance is over- rather than underestimated.
+
+    Tracking alone moves at most 15°/h: while the tracked position is more than ``near_deg``
+    (plus the margin) from every limit, the guard computes where tracking has carried it every
+    ``far_check_s`` (real) seconds instead of polling the device; nearer, it polls.
     """
 
     margin_deg: float = 0.2
     reaction_polls: float = 4.0
     min_lookahead_s: float = 0.05
     braking_deg_s2: float = 1.5
+    near_deg: float = 1.0
+    far_check_s: float = 0.25
 
 
 class MotionClient:
@@ -104,6 +110,7 @@ class HorizonGuard:
         self._motions: dict[MountAxis, _RateMotion] = {}
         self._clients: dict[str, MotionClient] = {}
         self._task: asyncio.Task[None] | None = None
+        self._poke = asyncio.Event()
         self.notice = ""
         """Why the guard last stopped the mount ("" once a new motion command was accepted)."""
         self.stops = 0
@@ -124,14 +131,13 @@ class HorizonGuard:
         """The rate motions commanded through ``move_axis`` and not stopped since."""
         return {axis: motion.rate_deg_s for axis, motion in self._motions.items()}
 
-    def check_move(self, axis: MountAxis, rate_deg_s: float) -> None:
+    def check_move(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> None:
         """Refuse a rate motion that starts at or beyond a limit and heads further out, where
         the direction is known: the altitude axis of an alt-az mount (positive is up)."""
         if rate_deg_s == 0.0 or axis is not MountAxis.SECONDARY:
             return
         if self._mount.capabilities.alignment_mode is not AlignmentMode.ALT_AZ:
             return
-        state = self._mount.state
         if state.alt_deg is None or state.az_deg is None:
             return
         limits = self._mount.limits
@@ -156,6 +162,7 @@ class HorizonGuard:
             return
         self._motions[axis] = _RateMotion(rate_deg_s, _acting_for.get())
         self.notice = ""
+        self._poke.set()
         self._wake()
 
     def motions_stopped(self) -> None:
@@ -243,21 +250,59 @@ class HorizonGuard:
 
     async def _run(self) -> None:
         try:
-            await self._watch()
+            while self._needed(self._mount.state):
+                if self._motions or self._near_limit(self._mount.state):
+                    await self._watch_closely()
+                else:
+                    await self._wait_while_far()
         except asyncio.CancelledError:
             raise
         except Exception:  # the guard must never take the event loop down with it
             logger.exception("the horizon guard failed")
 
-    async def _watch(self) -> None:
+    def _tracked_altitude(self, state: MountState) -> float | None:
+        """Where tracking has carried the last reading's sky position by now (tracking holds
+        RA/Dec fixed, so this costs astrometry only, no exchange with the device)."""
+        if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
+            return state.alt_deg
+        alt, _ = self._mount.observed_altaz(state.ra_j2000_hours, state.dec_j2000_deg)
+        return alt
+
+    def _near_limit(self, state: MountState, *, factor: float = 1.0) -> bool:
+        """Whether tracking may reach a limit soon: within ``near_deg`` of it (or unknown)."""
+        alt = self._tracked_altitude(state)
+        if alt is None or state.az_deg is None:
+            return True
+        limits = self._mount.limits
+        near = self.settings.margin_deg + factor * self.settings.near_deg
+        return alt - limits.horizon_at(state.az_deg) < near or limits.max_altitude_deg - alt < near
+
+    async def _wait_while_far(self) -> None:
+        """Tracking far from every limit: check the tracked altitude a few times a second, with
+        no exchange with the device, until it comes near a limit or a rate motion starts."""
+        self._poke.clear()
+        while not self._motions and self._needed(self._mount.state):
+            if self._near_limit(self._mount.state):
+                return
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(self.settings.far_check_s):
+                    await self._poke.wait()
+            self._poke.clear()
+
+    async def _watch_closely(self) -> None:
+        """Keep the poller running and judge every new reading until the mount is far from the
+        limits again with no rate motion."""
         mount = self._mount
         previous: _Reading | None = None
         period_s: float | None = None
         ignore_until_s = float("-inf")
         origin = mount.state.read_at
+        plausible_deg_s = 2.0 * mount.capabilities.max_axis_rate_deg_s + 1.0
         async with aclosing(mount.states()) as states:
             async for state in states:
                 if not self._needed(state):
+                    return
+                if not self._motions and not self._near_limit(state, factor=2.0):
                     return
                 if state.alt_deg is None or state.az_deg is None:
                     continue
@@ -270,6 +315,9 @@ class HorizonGuard:
                     previous = previous or reading
                     continue
                 elapsed = reading.at_s - previous.at_s
+                if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
+                    previous = reading  # a garbled reading or a jump: judge from the next one
+                    continue
                 period_s = elapsed if period_s is None else max(elapsed, 0.8 * period_s)
                 reason = self._danger(previous, reading, period_s, state)
                 previous = reading
