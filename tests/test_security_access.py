@@ -92,7 +92,7 @@ def test_bad_policies_and_networks_are_refused_with_the_reason() -> None:
         parse_network("192.168.1.0/33")
     with pytest.raises(ValueError, match="at least 1"):
         AccessPolicy(max_connections=0)
-    with pytest.raises(ValueError, match="rate must be positive"):
+    with pytest.raises(ValueError, match="rates must be positive"):
         AccessPolicy(requests_per_s=0.0)
     assert "read-only" in AccessPolicy(read_only=True).describe()
     assert "10.9.8.0/24" in ELSEWHERE_ONLY.describe()

@@ -70,6 +70,7 @@ class ServersConfig:
     max_connections: int = DEFAULT_POLICY.max_connections
     max_connections_per_client: int = DEFAULT_POLICY.max_connections_per_client
     requests_per_second: float = DEFAULT_POLICY.requests_per_s
+    server_requests_per_second: float = DEFAULT_POLICY.server_requests_per_s
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,6 +127,7 @@ _ACCESS_KEYS: Final = (
     "max_connections",
     "max_connections_per_client",
     "requests_per_second",
+    "server_requests_per_second",
 )
 _SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS, *_ACCESS_KEYS)
 
@@ -295,9 +297,10 @@ class _Reader:
                     expected = "expected a whole number >= 1"
                     raise self.error(f"servers.{key}", f"{expected}, got {value!r}")
                 values[key] = value
-        if "requests_per_second" in table:
-            rate = self.number(table, "requests_per_second", "servers")
-            if rate is None or not rate > 0.0:
-                raise self.error("servers.requests_per_second", "expected a number > 0")
-            values["requests_per_second"] = rate
+        for key in ("requests_per_second", "server_requests_per_second"):
+            if key in table:
+                rate = self.number(table, key, "servers")
+                if rate is None or not rate > 0.0:
+                    raise self.error(f"servers.{key}", "expected a number > 0")
+                values[key] = rate
         return values

@@ -38,7 +38,8 @@ synscan = 11880
 # read_only = true                  # servers show the mount but refuse every command
 # allow = ["192.168.1.0/24"]        # client networks admitted besides this machine
 # max_connections = 64              # per server; max_connections_per_client = 16
-# requests_per_second = 200         # per client address (excess waits, HTTP: 429)
+# requests_per_second = 50          # per client address (excess waits, HTTP: 429)
+# server_requests_per_second = 200  # per server, all clients together
 """
 
 _EXAMPLES = f"""\
@@ -172,5 +173,6 @@ def show(config: Config) -> str:
         f"max_connections = {servers.max_connections}",
         f"max_connections_per_client = {servers.max_connections_per_client}",
         f"requests_per_second = {servers.requests_per_second}",
+        f"server_requests_per_second = {servers.server_requests_per_second}",
     ]
     return "\n".join(lines) + "\n"

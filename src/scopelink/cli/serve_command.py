@@ -127,8 +127,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per client address (default 200; the excess "
+        help="commands or requests per second per client address (default 50; the excess "
         "waits, HTTP answers 429 beyond a second's wait)",
+    )
+    access.add_argument(
+        "--server-rate-limit",
+        type=float,
+        metavar="PER_S",
+        help="commands or requests per second per server from all clients (default 200)",
     )
     net.add_argument(
         "--lx200-pty",
@@ -236,6 +242,11 @@ def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPo
                 args.max_client_connections, servers.max_connections_per_client
             ),
             requests_per_s=_or(args.rate_limit, servers.requests_per_second),
+            burst=max(1, round(2 * _or(args.rate_limit, servers.requests_per_second))),
+            server_requests_per_s=_or(args.server_rate_limit, servers.server_requests_per_second),
+            server_burst=max(
+                1, round(2 * _or(args.server_rate_limit, servers.server_requests_per_second))
+            ),
         )
     except ValueError as error:
         raise CommandError(str(error), "limits are whole numbers >= 1, the rate > 0") from None

@@ -8,7 +8,9 @@ protocol's port does not lock clients out of another. What it decides, protocol-
   non-empty one admits only those networks, plus loopback unless ``loopback_always_allowed`` is
   off (tests turn it off to see a refusal without another machine).
 - **connection limits**: in total per server, and per client address.
-- **rate**: a token bucket per client address (``requests_per_s``, ``burst``). How excess is
+- **rate**: a token bucket per client address (``requests_per_s``, ``burst``) and one for the
+  whole server (``server_requests_per_s``, ``server_burst``), which bounds what any number of
+  clients can make the server do, so that the mount's poller keeps its share. How excess is
   handled is the server's choice, because each protocol has its own: line protocols (LX200,
   SynScan, Stellarium) wait (:meth:`Client.throttle`), which reads to the client as a slower
   line and loses nothing; HTTP waits up to ``max_delay_s`` and answers 429 beyond it.
@@ -25,6 +27,7 @@ import asyncio
 import contextlib
 import ipaddress
 import logging
+import math
 import time
 from collections.abc import AsyncIterator, Callable, Iterable
 from contextvars import ContextVar
@@ -79,17 +82,23 @@ class AccessPolicy:
     max_connections: int = 64
     """Connections at once per server (NINA uses 1-4, SkySafari 1, Stellarium 1)."""
     max_connections_per_client: int = 16
-    requests_per_s: float = 200.0
-    """Sustained commands or requests per second per client address (NINA polls ~20/s)."""
-    burst: int = 400
+    requests_per_s: float = 50.0
+    """Sustained commands or requests per second per client address (NINA polls ~10-30/s,
+    SkySafari and Stellarium a few)."""
+    burst: int = 100
+    server_requests_per_s: float = 200.0
+    """Sustained commands or requests per second per server, from all clients together."""
+    server_burst: int = 400
     max_delay_s: float = 1.0
     """HTTP: the longest a request is held for its token before the answer is 429."""
 
     def __post_init__(self) -> None:
         if self.max_connections < 1 or self.max_connections_per_client < 1:
             raise ValueError("connection limits must be at least 1")
-        if not self.requests_per_s > 0.0 or self.burst < 1:
-            raise ValueError("the request rate must be positive and the burst at least 1")
+        if not (self.requests_per_s > 0.0 and self.server_requests_per_s > 0.0):
+            raise ValueError("the request rates must be positive")
+        if self.burst < 1 or self.server_burst < 1:
+            raise ValueError("the bursts must be at least 1")
         if self.max_delay_s < 0.0:
             raise ValueError("the maximum delay cannot be negative")
 
@@ -118,7 +127,8 @@ class AccessPolicy:
         return (
             f"{mode}; clients: {who}; at most {self.max_connections} connections per server, "
             f"{self.max_connections_per_client} per client; "
-            f"{self.requests_per_s:g} requests/s per client (burst {self.burst})"
+            f"{self.requests_per_s:g} requests/s per client, "
+            f"{self.server_requests_per_s:g} per server"
         )
 
     @classmethod
@@ -132,6 +142,8 @@ OPEN_POLICY = AccessPolicy(
     max_connections_per_client=1_000_000,
     requests_per_s=1e12,
     burst=1_000_000_000,
+    server_requests_per_s=1e12,
+    server_burst=1_000_000_000,
 )
 """No limit at all: what a server built without a policy uses (library use, benchmarks)."""
 
@@ -194,28 +206,20 @@ class Client:
 
     async def throttle(self) -> None:
         """Wait for this client's next token (line protocols: the excess waits, nothing drops)."""
-        if self.bucket is None or self.control is None:
+        if self.control is None:
             return
-        wait = self.bucket.reserve(self.control.clock())
+        wait = self.control.take(self.bucket)
         if wait:
-            self.control.delayed += 1
             await asyncio.sleep(wait)
 
     def admit_request(self) -> float | None:
         """HTTP: the wait before handling this request, or None to answer 429 now."""
-        if self.bucket is None or self.control is None:
+        if self.control is None:
             return 0.0
-        wait = self.bucket.reserve(self.control.clock(), max_wait_s=self.control.policy.max_delay_s)
-        if wait is None:
-            self.control.refused_requests += 1
-        elif wait:
-            self.control.delayed += 1
-        return wait
+        return self.control.take(self.bucket, max_wait_s=self.control.policy.max_delay_s)
 
     def retry_after_s(self) -> float:
-        if self.bucket is None or self.control is None:
-            return 0.0
-        return self.bucket.wait_for_one(self.control.clock())
+        return 0.0 if self.control is None else self.control.wait_for_one(self.bucket)
 
     def release(self) -> None:
         if not self.released:
@@ -242,6 +246,9 @@ class AccessControl:
         self.clock = clock
         self._per_host: dict[str, int] = {}
         self._buckets: dict[str, TokenBucket] = {}
+        self._server_bucket = TokenBucket(
+            self.policy.server_requests_per_s, self.policy.server_burst, clock()
+        )
         self.open_connections = 0
         self.forbidden = 0
         """Connections and datagrams refused by the allow-list."""
@@ -285,33 +292,48 @@ class AccessControl:
             return Refusal(f"{host} already has {limit} connections to {self.name}", False)
         self.open_connections += 1
         self._per_host[host] = self._per_host.get(host, 0) + 1
-        bucket = self._buckets.get(host)
+        return Client(host, self, self._bucket_of(host))
+
+    def take(self, bucket: TokenBucket | None, max_wait_s: float = math.inf) -> float | None:
+        """One token from ``bucket`` (a client's) and from the server's: the wait until both are
+        there, or None (nothing taken) when that would exceed ``max_wait_s``."""
         if bucket is None:
-            bucket = TokenBucket(policy.requests_per_s, policy.burst, self.clock())
-            self._buckets[host] = bucket
-        return Client(host, self, bucket)
+            return 0.0  # not a network client
+        now = self.clock()
+        needed = max(bucket.wait_for_one(now), self._server_bucket.wait_for_one(now))
+        if needed > max_wait_s:
+            self.refused_requests += 1
+            return None
+        wait = max(bucket.reserve(now) or 0.0, self._server_bucket.reserve(now) or 0.0)
+        if wait:
+            self.delayed += 1
+        return wait
+
+    def wait_for_one(self, bucket: TokenBucket | None) -> float:
+        """How long until a request from ``bucket``'s client would go through (Retry-After)."""
+        if bucket is None:
+            return 0.0
+        now = self.clock()
+        return max(bucket.wait_for_one(now), self._server_bucket.wait_for_one(now))
 
     def request_wait(self, host: str | None) -> float | None:
         """For servers without connection hooks (the dashboard): take a token for one request
         from ``host``; the wait before handling it, or None to refuse it (429)."""
         if host is None:
             return 0.0
-        now = self.clock()
+        return self.take(self._bucket_of(host), max_wait_s=self.policy.max_delay_s)
+
+    def retry_after_s(self, host: str) -> float:
+        return self.wait_for_one(self._buckets.get(host))
+
+    def _bucket_of(self, host: str) -> TokenBucket:
         bucket = self._buckets.get(host)
         if bucket is None:
+            now = self.clock()
             self._forget_idle_buckets(now)
             bucket = TokenBucket(self.policy.requests_per_s, self.policy.burst, now)
             self._buckets[host] = bucket
-        wait = bucket.reserve(now, max_wait_s=self.policy.max_delay_s)
-        if wait is None:
-            self.refused_requests += 1
-        elif wait:
-            self.delayed += 1
-        return wait
-
-    def retry_after_s(self, host: str) -> float:
-        bucket = self._buckets.get(host)
-        return 0.0 if bucket is None else bucket.wait_for_one(self.clock())
+        return bucket
 
     def _forget_idle_buckets(self, now: float) -> None:
         if len(self._buckets) <= 4 * self.policy.max_connections:

@@ -1,0 +1,283 @@
+"""A client flood against the servers cannot starve the mount's serial poller.
+
+Run ``.venv/bin/python -m bench.security_flood`` (about 40 s) or with ``--quick`` (a few seconds,
+what the smoke test runs). See ``docs/reliability-security.md``.
+
+The rig is ``scopelink serve`` on a real wire: the SynScan driver polls an emulated hand control
+over TCP paced at 9600 baud 8N1, and Alpaca, LX200 and the SynScan server stand in front of the
+driver, all in this process and event loop, as in serve. A second process (``--flood``) then
+opens hundreds of TCP connections across the three servers and, on each connection admitted,
+sends reads back to back. The figure is the poller's rate (``mount.poller.polls`` per second)
+under the flood against its unloaded rate, measured in the same run; with the default access
+policy, and with no limits at all for comparison. Connections beyond the limits must be refused
+cleanly: Alpaca answers 503 and closes, LX200 and SynScan close without a byte.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import sys
+import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from tempfile import TemporaryDirectory
+
+from scopelink.astro import Site
+from scopelink.drivers.synscan import SynScanMount
+from scopelink.links import precise_event_loop
+from scopelink.servers.access import DEFAULT_POLICY, OPEN_POLICY, AccessControl, AccessPolicy
+from scopelink.servers.alpaca import AlpacaServer
+from scopelink.servers.lx200 import LX200Server
+from scopelink.servers.synscan import SynScanEmulator
+from scopelink.sim import EQ6, SimClock, SimulatedMount
+
+SITE = Site(40.4, -3.7)
+PROTOCOLS = ("alpaca", "lx200", "synscan")
+ALPACA_READ = (
+    b"GET /api/v1/telescope/0/rightascension?ClientID=1&ClientTransactionID=1 HTTP/1.1\r\n"
+    b"Host: 127.0.0.1\r\n\r\n"
+)
+LINE_READS = {"lx200": b":GR#", "synscan": b"e"}
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@dataclass(frozen=True)
+class Sizes:
+    connections_per_server: int
+    seconds: float
+
+
+FULL = Sizes(connections_per_server=150, seconds=10.0)
+QUICK = Sizes(connections_per_server=40, seconds=1.5)
+
+
+# --- the flood (its own process) -----------------------------------------------------------------
+
+
+@dataclass
+class Tally:
+    admitted: int = 0
+    refused: int = 0
+    answered: int = 0
+    too_many: int = 0
+    errors: int = 0
+
+
+async def _read_http(reader: asyncio.StreamReader) -> int:
+    head = await reader.readuntil(b"\r\n\r\n")
+    length = 0
+    for line in head.split(b"\r\n"):
+        if line.lower().startswith(b"content-length:"):
+            length = int(line.split(b":", 1)[1])
+    await reader.readexactly(length)
+    return int(head.split(b" ", 2)[1])
+
+
+async def _flood_one(
+    protocol: str, port: int, tally: Tally, started: asyncio.Event, stop: asyncio.Event
+) -> None:
+    """One connection: reads back to back until ``stop``; after its first answer (or refusal)
+    it waits for ``started``, given once every connection has had one."""
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    except OSError:
+        tally.errors += 1
+        return
+    first = True
+    try:
+        while not stop.is_set():
+            if protocol == "alpaca":
+                writer.write(ALPACA_READ)
+                status = await _read_http(reader)
+                if first and status == 503:
+                    tally.refused += 1
+                    return
+                if status == 429:
+                    tally.too_many += 1
+                    await asyncio.sleep(0.05)
+            else:
+                writer.write(LINE_READS[protocol])
+                await reader.readuntil(b"#")
+            tally.answered += 1
+            if first:
+                tally.admitted += 1
+                first = False
+                await started.wait()
+    except (asyncio.IncompleteReadError, ConnectionError):
+        if first:
+            tally.refused += 1  # closed without a byte: a line protocol's refusal
+        else:
+            tally.errors += 1
+    finally:
+        writer.close()
+        with contextlib.suppress(OSError):
+            await writer.wait_closed()
+
+
+async def flood(ports: dict[str, int], connections: int, seconds: float) -> dict[str, Tally]:
+    """Open every connection, print ``ready`` once each has been answered or refused, then
+    flood for ``seconds``."""
+    tallies = {protocol: Tally() for protocol in ports}
+    started, stop = asyncio.Event(), asyncio.Event()
+    tasks = [
+        asyncio.create_task(_flood_one(protocol, port, tallies[protocol], started, stop))
+        for protocol, port in ports.items()
+        for _ in range(connections)
+    ]
+    total = connections * len(ports)
+    while sum(t.admitted + t.refused + t.errors for t in tallies.values()) < total:  # noqa: ASYNC110
+        await asyncio.sleep(0.01)  # a poll: the tallies are plain counters
+    print("ready", flush=True)
+    started.set()
+    await asyncio.sleep(seconds)
+    stop.set()
+    await asyncio.gather(*tasks)
+    return tallies
+
+
+# --- the served side (this process) -------------------------------------------------------------
+
+
+@dataclass
+class Rig:
+    mount: SynScanMount
+    ports: dict[str, int]
+    controls: dict[str, AccessControl] = field(default_factory=dict)
+
+
+@asynccontextmanager
+async def serving(policy: AccessPolicy, state_dir: Path) -> AsyncIterator[Rig]:
+    """The SynScan driver on a 9600-baud emulated hand control, with Alpaca, LX200 and the SynScan
+    server in front of it under ``policy``, as ``scopelink serve`` wires them."""
+    device = SimulatedMount(EQ6, site=SITE, clock=SimClock(start=datetime.now(UTC)))
+    async with SynScanEmulator(device) as emulator:
+        host, port = await emulator.on_tcp("127.0.0.1", 0)
+        mount = SynScanMount(f"tcp://{host}:{port}", site=SITE)
+        await mount.connect()
+        try:
+            async with contextlib.AsyncExitStack() as stack:
+                await stack.enter_async_context(mount.watching())
+                alpaca = AlpacaServer(
+                    mount, port=0, discovery_port=None, state_dir=state_dir, access=policy
+                )
+                await stack.enter_async_context(alpaca)
+                await alpaca.telescope.connect()
+                lx200 = await stack.enter_async_context(LX200Server(mount, access=policy))
+                _, lx200_port = await lx200.on_tcp("127.0.0.1", 0)
+                synscan = await stack.enter_async_context(SynScanEmulator(mount, wire=None))
+                synscan.access = synscan.server.access = AccessControl(policy, "SynScan")
+                _, synscan_port = await synscan.on_tcp("127.0.0.1", 0)
+                ports = {"alpaca": alpaca.port, "lx200": lx200_port, "synscan": synscan_port}
+                controls = {
+                    "alpaca": alpaca.access,
+                    "lx200": lx200.access,
+                    "synscan": synscan.access,
+                }
+                yield Rig(mount, ports, controls)
+        finally:
+            await mount.disconnect()
+
+
+async def poll_rate(mount: SynScanMount, seconds: float) -> float:
+    start_polls, start = mount.poller.polls, time.monotonic()
+    await asyncio.sleep(seconds)
+    return (mount.poller.polls - start_polls) / (time.monotonic() - start)
+
+
+@dataclass(frozen=True)
+class FloodResult:
+    unloaded_polls_s: float
+    loaded_polls_s: float
+    tallies: dict[str, dict[str, int]]
+    refused_by_servers: dict[str, int]
+
+    @property
+    def ratio(self) -> float:
+        return self.loaded_polls_s / self.unloaded_polls_s
+
+
+async def measure(policy: AccessPolicy, sizes: Sizes) -> FloodResult:
+    """Poll rate unloaded, then under a flood from another process, on one rig."""
+    with TemporaryDirectory() as state_dir:
+        async with serving(policy, Path(state_dir)) as rig:
+            await asyncio.sleep(0.5)  # the first polls include the connection's settling
+            before = await poll_rate(rig.mount, sizes.seconds / 2)
+            process = await asyncio.create_subprocess_exec(
+                sys.executable,
+                "-m",
+                "bench.security_flood",
+                "--flood",
+                json.dumps(rig.ports),
+                str(sizes.connections_per_server),
+                str(sizes.seconds + 0.5),
+                stdout=asyncio.subprocess.PIPE,
+                cwd=ROOT,
+            )
+            assert process.stdout is not None
+            async with asyncio.timeout(60):
+                ready = await process.stdout.readline()
+            if ready.strip() != b"ready":
+                raise RuntimeError(f"the flood process did not start: {ready!r}")
+            await asyncio.sleep(0.2)  # past the bursts: the steady flood
+            loaded = await poll_rate(rig.mount, sizes.seconds)
+            output, _ = await process.communicate()
+            if process.returncode != 0:
+                raise RuntimeError(f"the flood process failed ({process.returncode})")
+            await asyncio.sleep(0.5)  # refused connections' sockets closed
+            # Unloaded before and after, so a drift in the machine's other load evens out.
+            unloaded = (before + await poll_rate(rig.mount, sizes.seconds / 2)) / 2
+            refused = {name: control.refused_connections for name, control in rig.controls.items()}
+    return FloodResult(unloaded, loaded, json.loads(output), refused)
+
+
+def describe(name: str, result: FloodResult) -> list[str]:
+    lines = [
+        f"{name:<16}{result.unloaded_polls_s:>10.1f}{result.loaded_polls_s:>10.1f}"
+        f"{100 * result.ratio:>8.1f} %"
+    ]
+    for protocol in PROTOCOLS:
+        tally = result.tallies[protocol]
+        lines.append(
+            f"  {protocol:<8} admitted {tally['admitted']:>4}  refused {tally['refused']:>4} "
+            f"(server counted {result.refused_by_servers[protocol]})  "
+            f"answered {tally['answered']:>7}  429 {tally['too_many']:>5}  "
+            f"errors {tally['errors']}"
+        )
+    return lines
+
+
+async def main(sizes: Sizes) -> None:
+    connections = sizes.connections_per_server * len(PROTOCOLS)
+    print(
+        f"SynScan driver poller at 9600 baud under {connections} connections "
+        f"({sizes.connections_per_server} each to Alpaca, LX200, SynScan), {sizes.seconds:g} s"
+    )
+    print(f"{'policy':<16}{'unloaded':>10}{'flooded':>10}{'ratio':>10}   (polls/s)")
+    for name, policy in (("default limits", DEFAULT_POLICY), ("no limits", OPEN_POLICY)):
+        for line in describe(name, await measure(policy, sizes)):
+            print(line)
+    sys.stdout.flush()
+
+
+def run() -> None:
+    parser = argparse.ArgumentParser(prog="python -m bench.security_flood", description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="a few seconds, fewer connections")
+    parser.add_argument("--flood", nargs=3, metavar=("PORTS", "CONNECTIONS", "SECONDS"))
+    args = parser.parse_args()
+    if args.flood:
+        ports = json.loads(args.flood[0])
+        tallies = asyncio.run(flood(ports, int(args.flood[1]), float(args.flood[2])))
+        print(json.dumps({name: vars(tally) for name, tally in tallies.items()}))
+        return
+    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
+        runner.run(main(QUICK if args.quick else FULL))
+
+
+if __name__ == "__main__":
+    run()
