@@ -10,6 +10,7 @@ temporary file was left behind (removed by the next write).
 from __future__ import annotations
 
 import json
+import os
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,7 +27,8 @@ from scopelink.servers.storage import temporaries_of
 
 from .test_persistence_support import KillRound, Zygote, delays, devices_for, stored_object_for
 
-KILLS = 30
+KILLS = int(os.environ.get("SCOPELINK_KILLS", "30"))
+"""Kills per writer; the soak in docs/reliability-persistence.md sets more."""
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,126 @@
+"""What durability costs: an atomic, fsynced write against a plain write of the same bytes.
+
+Measured on the files scopelink keeps: the settings file (the commented example, ~1 KB, also
+through the whole ``scopelink config set`` path: read, tomlkit edit, check with the reader,
+atomic write), the Sky Commander's object store (59 slots, ~3 KB) and Alpaca's UniqueID (~50 B).
+Peers measured in the same run and directory: ``Path.write_bytes`` (no fsync, not atomic: what a
+crash can tear) and write + fsync in place (durable but not atomic). The atomic write adds a
+rename and a directory fsync to the second.
+
+    .venv/bin/python -m bench.persistence            # 200 writes each, in a temporary directory
+    .venv/bin/python -m bench.persistence --quick    # 3 writes each (smoke test)
+    .venv/bin/python -m bench.persistence --dir /mnt/sdcard   # on the disk you care about
+
+The ``kill -9`` soak is the test itself with more kills per writer:
+``SCOPELINK_KILLS=500 .venv/bin/pytest tests/test_persistence_kill.py -s``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from contextlib import redirect_stdout
+from pathlib import Path
+
+from scopelink.cli.config_command import EXAMPLE_CONFIG
+from scopelink.cli.main import main as scopelink_main
+from scopelink.servers.storage import write_atomically
+
+
+def _plain(path: Path, data: bytes) -> None:
+    path.write_bytes(data)
+
+
+def _fsynced_in_place(path: Path, data: bytes) -> None:
+    with open(path, "wb") as file:
+        file.write(data)
+        file.flush()
+        os.fsync(file.fileno())
+
+
+def _medians_us(writes: list[Callable[[int], None]], runs: int) -> list[float]:
+    """Median time of each write; interleaved run by run, so the disk's mood (other processes'
+    flushes) weighs on every contender alike."""
+    times: list[list[float]] = [[] for _ in writes]
+    for index in range(runs):
+        for write, spent in zip(writes, times, strict=True):
+            started = time.perf_counter()
+            write(index)
+            spent.append(time.perf_counter() - started)
+    return [statistics.median(spent) * 1e6 for spent in times]
+
+
+def _writing(
+    writer: Callable[[Path, bytes], None], path: Path, data: bytes
+) -> Callable[[int], None]:
+    return lambda _: writer(path, data)
+
+
+def _files() -> dict[str, bytes]:
+    slots = {f"{n:02d}": [n * 0.25 % 24, n - 29.0] for n in range(59)}
+    return {
+        "settings file": EXAMPLE_CONFIG.encode(),
+        "object store (59 slots)": json.dumps({"slots": slots}, indent=1).encode(),
+        "UniqueID": b'{"UniqueID": "7b0c9c3e-5d0a-4c55-9a5f-1f1f8d2a6c11"}\n',
+    }
+
+
+def run(directory: Path, runs: int) -> None:
+    print(f"median per write, {runs} writes each, in {directory}")
+    print(f"{'file':26} {'bytes':>6} {'plain':>9} {'fsync':>9} {'atomic':>9}  atomic/fsync")
+    for name, data in _files().items():
+        writers = (_plain, _fsynced_in_place, write_atomically)
+        plain, fsynced, atomic = _medians_us(
+            [_writing(writer, directory / f"{n}.bin", data) for n, writer in enumerate(writers)],
+            runs,
+        )
+        print(
+            f"{name:26} {len(data):6d} {plain:7.0f}µs {fsynced:7.0f}µs {atomic:7.0f}µs"
+            f"  {atomic / fsynced:5.2f}x"
+        )
+    config = directory / "config.toml"
+    config.write_text(EXAMPLE_CONFIG, encoding="utf-8")
+    os.environ["SCOPELINK_CONFIG"] = str(config)
+
+    def config_set(index: int) -> None:
+        with redirect_stdout(io.StringIO()):
+            status = scopelink_main(["config", "set", "site.elevation", str(index)])
+        assert status == 0
+
+    whole, atomic_alone = _medians_us(
+        [
+            config_set,
+            lambda _: write_atomically(directory / "atomic.toml", EXAMPLE_CONFIG.encode()),
+        ],
+        runs,
+    )
+    print(
+        f"'scopelink config set' in process: {whole:.0f}µs, "
+        f"{whole / atomic_alone:.2f}x its atomic write alone ({atomic_alone:.0f}µs)"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="3 writes each (smoke test)")
+    parser.add_argument("--runs", type=int, default=200)
+    parser.add_argument("--dir", type=Path, help="where to write (default: a temporary dir)")
+    args = parser.parse_args()
+    runs = 3 if args.quick else args.runs
+    if args.dir is not None:
+        args.dir.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=args.dir) as directory:
+            run(Path(directory), runs)
+    else:
+        with tempfile.TemporaryDirectory() as directory:
+            run(Path(directory), runs)
+
+
+if __name__ == "__main__":
+    main()
