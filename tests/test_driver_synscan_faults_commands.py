@@ -39,7 +39,9 @@ async def test_malformed_acknowledgements_of_commands_are_recovered() -> None:
         assert_position_matches(await r.mount.refresh(), r.sim.snapshot())
         assert r.mount.state.ra_j2000_hours == pytest.approx(7.52, abs=1e-5)
         assert len(r.emulator.faults.fired) == 3
-        assert r.mount.wire.statistics.resyncs == 4  # connect, then one per fault
+        # One failed exchange per fault (resyncs may be more: a poll cancelled when the horizon
+        # guard's poller stops resynchronises too).
+        assert r.mount.wire.statistics.failures == 3
 
 
 @pytest.mark.parametrize(("transport", "kind"), [("pty", FaultKind.DROP), ("tcp", FaultKind.SHORT)])

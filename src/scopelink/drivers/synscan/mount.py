@@ -19,8 +19,8 @@ import contextlib
 import dataclasses
 import logging
 import math
-from collections.abc import Callable
-from datetime import datetime, timedelta, timezone
+from collections.abc import Callable, Iterator
+from datetime import UTC, datetime, timedelta, timezone
 from typing import Any, Self, TypeVar
 
 from scopelink.astro import (
@@ -38,6 +38,7 @@ from scopelink.drivers.synscan.identify import (
     synscan_tracking,
 )
 from scopelink.drivers.synscan.settling import SettleDetector
+from scopelink.drivers.synscan.stops import OwedStops
 from scopelink.drivers.synscan.wire import DEFAULT_TIMEOUT_S, LinkFactory, SynScanWire
 from scopelink.links import Link, open_link
 from scopelink.mount import (
@@ -73,6 +74,7 @@ from scopelink.protocol.synscan import (
     GetModel,
     GetPointingState,
     GetRaDec,
+    GetTime,
     GetTrackingMode,
     GetVersion,
     GotoAzAlt,
@@ -185,6 +187,11 @@ class SynScanMount(Mount):
         self._motion_epoch = 0
         """Counts gotos and aborts: a poll that overlapped one must not judge it by its L."""
         self._pulses: dict[MountAxis, asyncio.Task[None]] = {}
+        self._owed = OwedStops()
+        """Stops a failed exchange left unconfirmed: sent before anything else once the wire
+        works again (see ``stops.py``). Kept across disconnect: the next connect sends them."""
+        self._paying = False
+        self._failures_at_full_read = 0
 
     @classmethod
     def open(cls, link: str | LinkFactory, **options: Any) -> Self:
@@ -275,7 +282,10 @@ class SynScanMount(Mount):
             self._connected = False
             self._axis_rates.clear()
             await self.wire.close()
-            self._publish(dataclasses.replace(self.state, connected=False, slewing=False))
+            # A stop that failed stays owed (and the state says the mount may move): the next
+            # connect sends it first.
+            slewing = bool(self._owed)
+            self._publish(dataclasses.replace(self.state, connected=False, slewing=slewing))
 
     async def _motor_version(self, axis: Axis) -> tuple[int, int] | None:
         reply = await self.wire.ask(GetDeviceVersion(axis))
@@ -295,6 +305,7 @@ class SynScanMount(Mount):
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
         epoch = self._motion_epoch
+        failures = self.wire.statistics.failures
         # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
         # keypad: read them around motion and every few cycles, not in every one (see the docs).
         full = (
@@ -302,6 +313,8 @@ class SynScanMount(Mount):
             or self._slewing
             or epoch != self._epoch_at_full_read
             or self._cycles_since_full_read + 1 >= FULL_READ_EVERY
+            # A failed exchange may have been a command the hand control carried out late.
+            or self.wire.statistics.failures != self._failures_at_full_read
         )
         tracking: TrackingModeReply | None = None
         try:
@@ -328,6 +341,7 @@ class SynScanMount(Mount):
         if tracking is not None:
             self._cycles_since_full_read = 0
             self._epoch_at_full_read = epoch
+            self._failures_at_full_read = failures
             mode = mount_tracking(tracking.mode)
             if mode is None:
                 problems += (f"unknown tracking mode {tracking.mode} reported",)
@@ -361,7 +375,8 @@ class SynScanMount(Mount):
 
     @property
     def _slewing(self) -> bool:
-        return self._goto_running or any(self._axis_rates.values())
+        # An unconfirmed stop means the mount may still move: say so until it is confirmed.
+        return self._goto_running or any(self._axis_rates.values()) or bool(self._owed)
 
     def _goto_still_running(self, in_progress: bool, alt: float, az: float) -> bool:
         if not in_progress:
@@ -393,14 +408,16 @@ class SynScanMount(Mount):
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         await self._require_aligned("goto")
-        await self._cancel_pulses()
-        await self._ask(GotoRaDec.from_hours_degrees(ra_j2000_hours, dec_j2000_deg), Ack)
+        pulsing = await self._cancel_pulses()
+        with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
+            await self._ask(GotoRaDec.from_hours_degrees(ra_j2000_hours, dec_j2000_deg), Ack)
         self._goto_started(None)
 
     async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
         await self._require_aligned("goto")
-        await self._cancel_pulses()
-        await self._ask(GotoAzAlt.from_degrees(az_deg, alt_deg), Ack)
+        pulsing = await self._cancel_pulses()
+        with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
+            await self._ask(GotoAzAlt.from_degrees(az_deg, alt_deg), Ack)
         self._goto_started((alt_deg, az_deg))
 
     def _goto_started(self, altaz_target: tuple[float, float] | None) -> None:
@@ -437,26 +454,29 @@ class SynScanMount(Mount):
         """``M``, then rate 0 on both axes (firmware up to 3.36 resumes rate motion after ``M``),
         tracking re-enabled as it was, and ``L`` checked (``M`` sent again if a goto still runs)."""
         await self._cancel_pulses()
-        async with self.wire.exclusive():
-            await self._ask(CancelGoto(), Ack)
-            for axis in MountAxis:
-                await self._send_rate_zero(axis)
-            self._axis_rates.clear()
-            await self._resume_tracking()
-            for attempt in range(2):
-                running = await self._ask(IsGotoInProgress(), GotoInProgress)
-                if not running.in_progress:
-                    break
-                if attempt == 1:
-                    raise DeviceError("abort: the hand control still reports a goto in progress")
+        with self._stops_owed_on_failure(cancel_goto=True, axes=set(MountAxis)):
+            async with self.wire.exclusive():
                 await self._ask(CancelGoto(), Ack)
+                for axis in MountAxis:
+                    await self._send_rate_zero(axis)
+                self._axis_rates.clear()
+                await self._resume_tracking()
+                for attempt in range(2):
+                    running = await self._ask(IsGotoInProgress(), GotoInProgress)
+                    if not running.in_progress:
+                        break
+                    if attempt == 1:
+                        raise DeviceError(
+                            "abort: the hand control still reports a goto in progress"
+                        )
+                    await self._ask(CancelGoto(), Ack)
         self._motion_epoch += 1
         self._goto_running = False
         self._settle = None
         self._publish(dataclasses.replace(self.state, slewing=False, pulse_guiding=False))
 
     async def _send_rate_zero(self, axis: MountAxis) -> None:
-        reply = await self.wire.ask(FixedRateSlew(_AXES[axis], positive=True, rate=0))
+        reply = await self._wire_ask(FixedRateSlew(_AXES[axis], positive=True, rate=0))
         if isinstance(reply, PassthroughFailed):
             logger.warning("%s: stop of the %s axis not acknowledged", self.wire.name, axis.name)
 
@@ -466,10 +486,48 @@ class SynScanMount(Mount):
             await self._ask(SetTrackingMode(synscan_tracking(self._tracking)), Ack)
 
     async def _stop_axis(self, axis: MountAxis) -> None:
+        with self._stops_owed_on_failure(axes={axis}):
+            async with self.wire.exclusive():
+                await self._send_rate_zero(axis)
+                self._axis_rates.pop(axis, None)
+                await self._resume_tracking()
+
+    @contextlib.contextmanager
+    def _stops_owed_on_failure(
+        self, *, cancel_goto: bool = False, axes: set[MountAxis] | None = None
+    ) -> Iterator[None]:
+        """If the exchanges inside fail, owe the stops that undo them (see ``stops.py``)."""
+        try:
+            yield
+        except DeviceError as error:
+            self._owed.owe(cancel_goto=cancel_goto, axes=axes or set(), cause=str(error))
+            logger.warning("%s: %s", self.wire.name, self._owed.describe())
+            problems = (self._owed.describe(),)
+            self._publish(dataclasses.replace(self.state, slewing=True, problems=problems))
+            raise
+
+    async def _pay_owed_stops(self) -> None:
+        """Send the owed stops, holding the wire, before the exchange that found them owed."""
         async with self.wire.exclusive():
-            await self._send_rate_zero(axis)
-            self._axis_rates.pop(axis, None)
-            await self._resume_tracking()
+            if not self._owed or self._paying:
+                return
+            self._paying = True
+            try:
+                if self._owed.cancel_goto:
+                    await self._ask(CancelGoto(), Ack)
+                    self._owed.cancel_goto = False
+                    self._motion_epoch += 1
+                    self._goto_running = False
+                    self._settle = None
+                for axis in sorted(self._owed.axes, key=lambda axis: axis.value):
+                    await self._send_rate_zero(axis)
+                    self._owed.axes.discard(axis)
+                    self._axis_rates.pop(axis, None)
+                await self._resume_tracking()
+            finally:
+                self._paying = False
+            logger.warning("%s: the owed stops were sent (%s)", self.wire.name, self._owed.cause)
+            self._owed.clear()
 
     # --- manual motion ----------------------------------------------------------------------------
 
@@ -480,7 +538,8 @@ class SynScanMount(Mount):
             await self._stop_axis(axis)
         else:
             command = VariableRateSlew.from_arcsec_per_second(_AXES[axis], rate_deg_s * 3600.0)
-            await self._ask_passthrough(command)
+            with self._stops_owed_on_failure(axes={axis}):
+                await self._ask_passthrough(command)
             self._axis_rates[axis] = rate_deg_s
             self._goto_running = False
             self._settle = None
@@ -498,7 +557,8 @@ class SynScanMount(Mount):
             return
         self._require_unparked()
         self._cancel_pulse(axis)
-        await self._ask_passthrough(FixedRateSlew(_AXES[axis], positive, speed))
+        with self._stops_owed_on_failure(axes={axis}):
+            await self._ask_passthrough(FixedRateSlew(_AXES[axis], positive, speed))
         multiple = (2, 8, 16, 32, 64, 128, 400, 600, 800)[speed - 1]
         rate = multiple * SIDEREAL_RATE_DEG_S
         self._axis_rates[axis] = rate if positive else -rate
@@ -521,7 +581,8 @@ class SynScanMount(Mount):
             # A rate slew replaces tracking on that axis: carry the tracking rate along.
             rate += math.copysign(SIDEREAL_RATE_DEG_S, self.site.latitude_deg)
         command = VariableRateSlew.from_arcsec_per_second(_AXES[axis], rate * 3600.0)
-        await self._ask_passthrough(command)
+        with self._stops_owed_on_failure(axes={axis}):
+            await self._ask_passthrough(command)
         # Timed from write to write: the hand control's delay in obeying each command cancels.
         ends_at = self.wire.last_write_at + duration_ms / 1000.0
         self._pulses[axis] = asyncio.create_task(
@@ -545,9 +606,10 @@ class SynScanMount(Mount):
     async def _end_pulse(self, axis: MountAxis, ends_at: float) -> None:
         await asyncio.sleep(ends_at - asyncio.get_running_loop().time())
         try:
-            async with self.wire.exclusive():
-                await self._send_rate_zero(axis)
-                await self._resume_tracking()
+            with self._stops_owed_on_failure(axes={axis}):
+                async with self.wire.exclusive():
+                    await self._send_rate_zero(axis)
+                    await self._resume_tracking()
         except MountError as error:
             logger.warning("%s: ending a guide pulse failed: %s", self.wire.name, error)
             self._report_problem(f"ending a guide pulse failed: {error}")
@@ -586,11 +648,12 @@ class SynScanMount(Mount):
         park = self.park_position
         self._limits.check_altaz(park.alt_deg, park.az_deg, what="park position")
         await self._require_aligned("park goto")
-        await self._cancel_pulses()
-        async with self.wire.exclusive():
-            await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
-            self._tracking = TrackingMode.OFF
-            await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
+        pulsing = await self._cancel_pulses()
+        with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
+            async with self.wire.exclusive():
+                await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
+                self._tracking = TrackingMode.OFF
+                await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
         self._parked = True
         self._goto_started((park.alt_deg, park.az_deg))
         self._publish(dataclasses.replace(self.state, parked=True, tracking=TrackingMode.OFF))
@@ -606,12 +669,39 @@ class SynScanMount(Mount):
             )
         self._site_mismatch = ""
 
+    async def read_site(self) -> Site:
+        """The site the hand control holds (``w``), with our elevation and weather."""
+        self._require_connected()
+        location = await self._ask(GetLocation(), Location)
+        longitude = (location.longitude + 180.0) % 360.0 - 180.0
+        return dataclasses.replace(
+            self.site, latitude_deg=location.latitude, longitude_deg=longitude
+        )
+
+    async def read_time(self) -> datetime:
+        """The hand control's clock (``h``), in UTC (its zone and DST flag applied)."""
+        self._require_connected()
+        reply = await self._ask(GetTime(), DateTime)
+        return reply.to_datetime().astimezone(UTC)
+
     async def _set_time(self, utc: datetime) -> None:
         zone = timezone(timedelta(hours=self.utc_offset_hours))
         local = utc.astimezone(zone).replace(microsecond=0)
         await self._ask(SetTime(DateTime.from_datetime(local)), Ack)
 
     # --- exchanges ----------------------------------------------------------------------------
+
+    async def _wire_ask(
+        self,
+        command: AnyCommand,
+        priority: Priority = Priority.COMMAND,
+        *,
+        meanwhile: Callable[[], object] | None = None,
+    ) -> AnyReply:
+        """Every exchange of the driver: owed stops go first (see ``stops.py``)."""
+        if self._owed and not self._paying:
+            await self._pay_owed_stops()
+        return await self.wire.ask(command, priority, meanwhile=meanwhile)
 
     async def _ask(
         self,
@@ -621,7 +711,7 @@ class SynScanMount(Mount):
         *,
         meanwhile: Callable[[], object] | None = None,
     ) -> R:
-        reply = await self.wire.ask(command, priority, meanwhile=meanwhile)
+        reply = await self._wire_ask(command, priority, meanwhile=meanwhile)
         if not isinstance(reply, expected):
             raise DeviceError(
                 f"{self.wire.name}: {command.describe()!r} answered {reply.describe()!r}"
@@ -629,7 +719,7 @@ class SynScanMount(Mount):
         return reply
 
     async def _ask_passthrough(self, command: AnyCommand) -> None:
-        reply = await self.wire.ask(command)
+        reply = await self._wire_ask(command)
         if isinstance(reply, PassthroughFailed):
             raise DeviceError(
                 f"{command.describe()!r}: the motor controller did not answer the hand control "

@@ -52,6 +52,10 @@ recent ones."""
 _DRAIN_QUIET_S = 0.05
 """Input silent this long after a failure: the device has finished sending whatever it had."""
 
+_ECHO_PATIENCE = 3
+"""A resynchronising echo waits one timeout past the last stale byte, up to this many timeouts:
+a device still sending the rest of a slow reply is alive, and answers the echo right after."""
+
 
 class _ExchangeError(Exception):
     """One exchange went wrong; the message says how (it becomes part of a DeviceError)."""
@@ -211,7 +215,7 @@ class SynScanWire:
         self._discard(dropped)
         value = self._echo_value()
         try:
-            reply = await self._exchange(Echo(value))
+            reply = await self._exchange(Echo(value), patient=True)
         except _ExchangeError as error:
             raise DeviceError(
                 f"{why}; resynchronising failed: {error} — is the hand control switched on and "
@@ -230,8 +234,14 @@ class SynScanWire:
         return _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]  # everything avoided: any will do
 
     async def _exchange(
-        self, command: AnyCommand, meanwhile: Callable[[], object] | None = None
+        self,
+        command: AnyCommand,
+        meanwhile: Callable[[], object] | None = None,
+        *,
+        patient: bool = False,
     ) -> AnyReply:
+        """One command and its reply within ``timeout_s``; ``patient``: the timeout restarts
+        whenever stale bytes are discarded (see ``_ECHO_PATIENCE``)."""
         link = self._link
         if link is None or link.closed:
             raise _ExchangeError(f"{self.name} is closed")
@@ -244,8 +254,8 @@ class SynScanWire:
             await link.write(data)
             if meanwhile is not None:
                 meanwhile()
-            async with asyncio.timeout(self.timeout_s):
-                reply = await self._read_reply(link, command)
+            async with asyncio.timeout(self.timeout_s) as deadline:
+                reply = await self._read_reply(link, deadline if patient else None)
             completed = True
             return reply
         except TimeoutError:
@@ -261,7 +271,9 @@ class SynScanWire:
                 # Cancelled or failed half way: the stream is out of step until resynchronised.
                 self._needs_resync = True
 
-    async def _read_reply(self, link: Link, command: AnyCommand) -> AnyReply:
+    async def _read_reply(self, link: Link, deadline: asyncio.Timeout | None) -> AnyReply:
+        loop = asyncio.get_running_loop()
+        give_up_at = loop.time() + _ECHO_PATIENCE * self.timeout_s
         while True:
             event = self._codec.next_event()
             if event is NEED_DATA:
@@ -270,6 +282,8 @@ class SynScanWire:
                 self._codec.receive_data(data)
             elif isinstance(event, UnexpectedData):
                 self._discard(event.data)
+                if deadline is not None:
+                    deadline.reschedule(min(loop.time() + self.timeout_s, give_up_at))
             elif isinstance(event, MalformedReply):
                 raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
             else:
