@@ -100,15 +100,19 @@ async def synscan_rig(
     rate: float = 1.0,
     limits: Limits | None = None,
     tracking: bool = False,
+    real_time: bool = False,
 ) -> AsyncIterator[Rig]:
     """The SynScan driver (horizon 10° unless ``limits``) on TCP to the SynScan emulator
     (9600-baud pacing) in front of a simulated ``model`` pointing at ``at`` (alt, az); the
-    simulator's clock runs ``rate`` times real time."""
+    simulator's clock runs ``rate`` times real time; ``real_time`` sets it to the PC's clock (for
+    a driver in another process, which reads the PC's clock)."""
     clock = SimClock.accelerated(500.0, START)
     sim = SimulatedMount(model, site=SITE, clock=clock, limits=DEVICE_LIMITS)
     await sim.connect()
     await place(sim, *at)
     clock.set_rate(rate)
+    if real_time:  # the axes stand still, so alt/az stay where they were placed
+        clock.set_time(datetime.now(UTC))
     config = SynScanConfig(model=model.synscan_model_code or 0)
     async with SynScanEmulator(sim, config) as emulator:
         host, port = await emulator.on_tcp("127.0.0.1", 0)
