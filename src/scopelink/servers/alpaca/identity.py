@@ -13,7 +13,7 @@ import os
 import uuid
 from pathlib import Path
 
-from scopelink.servers.storage import write_atomically
+from scopelink.servers.storage import remove_stale_temporaries, write_atomically
 
 __all__ = ["UNIQUE_ID_FILE", "default_state_dir", "load_or_create_unique_id"]
 
@@ -29,6 +29,7 @@ def default_state_dir() -> Path:
 def load_or_create_unique_id(state_dir: Path) -> str:
     """The UniqueID stored in ``state_dir``; made and stored on first use."""
     path = state_dir / UNIQUE_ID_FILE
+    remove_stale_temporaries(path)  # what a kill -9 during the first start left
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:

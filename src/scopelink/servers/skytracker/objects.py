@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from scopelink.protocol.skytracker.commander_messages import STORED_SLOTS
-from scopelink.servers.storage import write_atomically
+from scopelink.servers.storage import remove_stale_temporaries, write_atomically
 
 OBJECTS_FILE = "skycommander-objects.json"
 CALIBRATION_FILE = "skytracker-calibration.json"
@@ -39,6 +39,7 @@ class ObjectStore:
 
     def __init__(self, directory: Path) -> None:
         self.path = Path(directory) / OBJECTS_FILE
+        remove_stale_temporaries(self.path)  # what a kill -9 mid-write left
         self._slots: dict[int, StoredObject] = {}
         raw = _read_json(self.path)
         if raw is not None:
