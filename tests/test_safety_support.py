@@ -149,7 +149,8 @@ async def skytracker_rig(
     data_dir: Path, *, at: tuple[float, float] = (20.0, 180.0), rate: float = 1.0
 ) -> AsyncIterator[Rig]:
     """The Sky Tracker driver (horizon 10°) on TCP to the Sky Tracker emulator in front of the
-    simulated Sky Tracker pointing at ``at``; every bus frame the emulator answers is recorded."""
+    simulated Sky Tracker pointing at ``at``; every command the box and its Sky Commander
+    receive is recorded."""
     clock = SimClock.accelerated(rate, START)
     sim = SimulatedMount(SKY_TRACKER, site=SITE, clock=clock, limits=DEVICE_LIMITS)
     sim.set_axis_position(MountAxis.PRIMARY, at[1])
@@ -163,6 +164,19 @@ async def skytracker_rig(
             limits=Limits(horizon_deg=HORIZON_DEG),
         )
         rig = Rig(mount, sim)
+        tracker, commander = emulator.tracker, emulator.commander
+        handle, respond = tracker.handle, commander.respond
+
+        def recording_handle(command: object) -> bytes:
+            rig.received.append(command)
+            return handle(command)
+
+        def recording_respond(event: object) -> bytes:
+            rig.received.append(event)
+            return respond(event)
+
+        tracker.handle = recording_handle  # type: ignore[method-assign]
+        commander.respond = recording_respond  # type: ignore[method-assign]
         await mount.connect()
         sampler = asyncio.create_task(_sampler(rig))
         try:
