@@ -26,6 +26,7 @@ from scopelink.protocol.skytracker import (
     BusAnswer,
     BusState,
     CommanderCommand,
+    PositionReply,
     ReadVersion,
     ReleaseBus,
     Reply,
@@ -60,6 +61,7 @@ DEFAULT_BUS_RETRY_DELAYS_S: tuple[float, ...] = (0.05, 0.1, 0.2, 0.4, 0.8, 1.6)
 RESYNC_QUIET_S = 0.1
 """After a fault, input is drained until the line has been quiet this long."""
 RESYNC_MAX_S = 2.0
+POSITION_REPLY_SIZE = PositionReply.size
 
 
 class ReplyTimeoutError(DeviceError):
@@ -126,6 +128,8 @@ class SkyTrackerLine:
         self._interrupted = False
         self._sync_marker: bytes | None = None
         """The box's version reply, once read: the answer the resync's ``V`` waits for."""
+        self._commander_behind = False
+        """A Sky Commander exchange failed: it may still owe replies (see _catch_up_commander)."""
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
@@ -175,6 +179,8 @@ class SkyTrackerLine:
                     self.bus_refusals += 1
                     continue
                 try:
+                    if self._commander_behind:
+                        await self._catch_up_commander()
                     return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
                 except (ReplyTimeoutError, BadReplyError) as error:
                     # Loading an object, realigning on it and reading the position can all be
@@ -204,6 +210,35 @@ class SkyTrackerLine:
             refused=refused,
             unanswered=unanswered,
         )
+
+    async def _catch_up_commander(self) -> None:
+        """Inside a grant, after a failed Sky Commander exchange: ask for a position (``\r``)
+        and read its 16-byte reply and on until quiet. The Sky Commander answers in order, so
+        whatever it still owed (a late reply, the resync's position) comes first and is
+        discarded with it; only then may the next reply be taken as the answer to a command.
+        Replies it sends while the bus is released never reach the PC (the box keeps them)."""
+        self._flush_strays()
+        await self.link.write(b"\r")
+        self.commands_sent += 1
+        received = b""
+        try:
+            async with asyncio.timeout(self.options.reply_timeout_s):
+                while len(received) < POSITION_REPLY_SIZE:
+                    received += await self.link.read()
+        except TimeoutError:
+            raise ReplyTimeoutError(
+                f"the Sky Commander behind {self.link.name} has not answered since an earlier "
+                f"fault: no reply to a position request within "
+                f"{self.options.reply_timeout_s * 1000:.0f} ms (is its cable to the Sky Tracker "
+                "plugged in?)"
+            ) from None
+        except LinkError as error:
+            self._interrupted = True
+            raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
+        received += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
+        if len(received) > POSITION_REPLY_SIZE:
+            logger.info("the Sky Commander caught up: discarded %s", received.hex(" "))
+        self._commander_behind = False
 
     async def _request_bus(self) -> bool | None:
         """True granted, False refused, None no (good) answer (the line was resynchronised)."""
@@ -314,6 +349,8 @@ class SkyTrackerLine:
                 # reply is drained here, before 'q', so it cannot reach the box's own next poll.
                 await self.link.write(b"\r")
                 discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
+                # Still behind if it is slow (its replies may come in a later grant).
+                self._commander_behind = True
             await self.link.write(ReleaseBus().encode())
             self.commands_sent += 1 + held
             if self._sync_marker is not None:

@@ -52,6 +52,7 @@ from scopelink.protocol.skytracker import (
     ReadVersion,
     Realign,
     ReleaseDirections,
+    Reply,
     SelectMode,
     SetCalibration,
     SetGuideSpeed,
@@ -61,11 +62,14 @@ from scopelink.protocol.skytracker import (
     TrackerStatus,
     VersionReply,
 )
+from scopelink.protocol.skytracker.calfloat import encode_calfloat_pair
 
 from .calibration import CalibrationFactors, CalibrationRuleError
 from .line import (
+    BadReplyError,
     BusRefusedError,
     LineOptions,
+    LineOutOfSyncError,
     ReplyTimeoutError,
     SkyTrackerLine,
 )
@@ -274,7 +278,9 @@ class SkyTrackerMount(Mount):
         command after power-on): a refusal raises :class:`CalibrationRuleError`, not connected.
         """
         if self._line is not None:
-            return
+            if not self._line.link.closed:
+                return
+            self._line = None  # the link went away under us: open it again
         link = await self._open_link()
         line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
         self._line = line
@@ -285,13 +291,14 @@ class SkyTrackerMount(Mount):
             if calibration is not None:
                 await self._write_calibration_first(line, calibration)
             self._version = await self._read_version(line)
-            speeds = await line.tracker(ReadGuideSpeed())
+            speeds = await self._read_agreed(line, ReadGuideSpeed())
             assert isinstance(speeds, GuideSpeedReply)
             self._guide_speeds = (speeds.azimuth_arcsec_per_s, speeds.elevation_arcsec_per_s)
             if self._wanted_guide_speed is not None:
                 await self._set_guide_speeds((self._wanted_guide_speed,) * 2)
             self._pulse_speeds = self._guide_speeds
-            self._note_status(await line.tracker(ReadStatus()))
+            self._note_status(await self._read_agreed(line, ReadStatus()))
+            await self._release_orphaned_arrows(line)
             await self._detect_commander(line)
         except BaseException:
             self._line = None
@@ -301,6 +308,49 @@ class SkyTrackerMount(Mount):
         self._problems = ()
         self._publish_now()
 
+    async def _release_orphaned_arrows(self, line: SkyTrackerLine) -> None:
+        """``b`` when the box reports arrows pressed: a motion started over a link that broke
+        (or by another program) that nobody on this connection can stop any more. The hand
+        box's own arrows stay pressed while its user holds them."""
+        assert self._status is not None
+        if not self._status.directions:
+            return
+        logger.warning("arrows still pressed at connect (%s): releasing them", self._status)
+        replies = await line.tracker_sequence([ReleaseDirections(), ReadStatus()])
+        self._note_status(await self._read_agreed(line, ReadStatus(), first=replies[-1]))
+
+    async def _read_agreed(
+        self,
+        line: SkyTrackerLine,
+        command: TrackerCommand,
+        priority: Priority = Priority.COMMAND,
+        *,
+        first: Reply | None = None,
+        expected: Reply | None = None,
+    ) -> Reply:
+        """The reply to ``command``, trusted: the status byte, the two ``k`` bytes and the ``s``
+        floats have no redundancy (a garbled one still reads as some value), so a reply that is
+        not ``expected`` (or with nothing expected) is read again until two readings in a row
+        agree, at most three readings; then :class:`BadReplyError`."""
+        reply = first if first is not None else await line.tracker(command, priority)
+        assert reply is not None
+        if expected is not None and reply == expected:
+            return reply
+        for _ in range(2):
+            again = await line.tracker(command, priority)
+            assert again is not None
+            if again == reply or (expected is not None and again == expected):
+                if again != reply:
+                    logger.info(
+                        "garbled reply to %s: %s, then %s", command.describe(), reply, again
+                    )
+                return again
+            reply = again
+        raise BadReplyError(
+            f"three different replies in a row to {command.describe()!r} on {line.link.name}: "
+            "the line garbles replies (check the cable, 9600 baud, the stop bits)"
+        )
+
     @staticmethod
     async def _read_version(line: SkyTrackerLine) -> str:
         """``V``, asked twice if need be: a probe by another program (e.g. a SynScan driver's
@@ -308,9 +358,16 @@ class SkyTrackerMount(Mount):
         ``V`` as payload; once that frame is complete (or dropped), ``V`` is answered."""
         try:
             reply = await line.tracker(ReadVersion())
-        except ReplyTimeoutError as error:
+        except (ReplyTimeoutError, BadReplyError) as error:
             logger.info("no version on the first try, asking again: %s", error)
             reply = await line.tracker(ReadVersion())
+            # The first answer may only have been late, and so read as the second's: now that
+            # the version is known, the resync's sync point reads past any answer still due.
+            if not await line.resync():
+                raise LineOutOfSyncError(
+                    f"the Sky Tracker on {line.link.name} answered 'V' only late and then "
+                    "not the sync point: is it busy or off?"
+                ) from error
         assert isinstance(reply, VersionReply)
         return reply.text
 
@@ -362,7 +419,7 @@ class SkyTrackerMount(Mount):
 
     async def read_calibration(self) -> CalibrationFactors:
         """``s``: the motor calibration factors (always allowed)."""
-        reply = await self._require_line().tracker(ReadCalibration())
+        reply = await self._read_agreed(self._require_line(), ReadCalibration())
         assert isinstance(reply, CalibrationReply)
         return CalibrationFactors(reply.azimuth_factor, reply.elevation_factor)
 
@@ -387,15 +444,25 @@ class SkyTrackerMount(Mount):
     ) -> None:
         if line.commands_sent:
             raise CalibrationRuleError("'S' must be the first command on the line")
+        command = SetCalibration(factors.azimuth_factor, factors.elevation_factor)
         try:
-            reply = await line.tracker(
-                SetCalibration(factors.azimuth_factor, factors.elevation_factor)
-            )
-        except ReplyTimeoutError:
+            reply = await line.tracker(command)
+        except (ReplyTimeoutError, BadReplyError) as error:
+            # A refused 'S' gets no reply; so does one whose 'A' was lost. 's' tells them apart.
+            logger.info("no good acknowledgement of 'S' (%s): reading the factors back", error)
+            stored = await self._read_agreed(line, ReadCalibration())
+            assert isinstance(stored, CalibrationReply)
+            wanted = encode_calfloat_pair(command.azimuth_factor, command.elevation_factor)
+            if encode_calfloat_pair(stored.azimuth_factor, stored.elevation_factor) == wanted:
+                logger.info("'S' was taken (its acknowledgement was lost)")
+                return
             raise CalibrationRuleError(
-                "the Sky Tracker did not acknowledge 'S': it takes calibration only as the first "
-                "command after it is switched on, and once. Something talked to it since "
-                "power-on (an earlier connection?): switch it off and on and try again"
+                f"the Sky Tracker did not acknowledge 'S' nor take it ({error}; it still holds "
+                f"factors "
+                f"{stored.azimuth_factor:g}, {stored.elevation_factor:g}): it takes calibration "
+                "only as the first command after it is switched on, and once, so something "
+                "talked to it since power-on (an earlier connection?), or 'S' was lost on the "
+                "line: switch it off and on and try again"
             ) from None
         if not isinstance(reply, Acknowledge):
             raise DeviceError(f"unexpected reply to 'S': {reply}")
@@ -413,7 +480,7 @@ class SkyTrackerMount(Mount):
                 await asyncio.sleep(GOTO_STATUS_POLL_S - since)
         started = self.now()
         try:
-            self._note_status(await line.tracker(ReadStatus(), Priority.POLL))
+            self._note_status(await self._read_status(line, Priority.POLL))
             self._goto_status_at = time.monotonic()
             if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
                 await self._poll_position(line)
@@ -459,10 +526,14 @@ class SkyTrackerMount(Mount):
 
     async def read_status(self) -> TrackerStatus:
         """``R``: the box's mode flags and pressed arrows now."""
-        reply = await self._require_line().tracker(ReadStatus())
-        self._note_status(reply)
+        self._note_status(await self._read_status(self._require_line(), Priority.COMMAND))
         assert self._status is not None
         return self._status
+
+    async def _read_status(self, line: SkyTrackerLine, priority: Priority) -> Reply:
+        """``R``; a status other than the last one is read again (the byte has no redundancy)."""
+        last = StatusReply(self._status) if self._status is not None else None
+        return await self._read_agreed(line, ReadStatus(), priority, expected=last)
 
     async def wait_for_goto(self, timeout_s: float | None = None) -> MountState:
         """Poll ``R`` until the GOTO bit clears (TRACK follows), then refresh everything."""
@@ -485,7 +556,7 @@ class SkyTrackerMount(Mount):
         pressed = status.directions if status is not None else Direction(0)
         state = MountState(
             read_at=self.now(),
-            connected=self._line is not None,
+            connected=self._line is not None and not self._line.link.closed,
             ra_j2000_hours=position.ra_j2000_hours if position else None,
             dec_j2000_deg=position.dec_j2000_deg if position else None,
             ra_of_date_hours=position.ra_of_date_hours if position else None,
@@ -545,10 +616,16 @@ class SkyTrackerMount(Mount):
         if speeds is not None:
             confirm.append(ReadGuideSpeed())
         replies = await line.tracker_sequence([*commands, *confirm])
-        self._note_status(replies[len(commands)])
+        status = replies[len(commands)]
+        assert isinstance(status, StatusReply)
+        if status.status.mode is not mode or pressed & ~status.status.directions:
+            status = await self._read_agreed(line, ReadStatus(), first=status)
+        self._note_status(status)
         assert self._status is not None
         if speeds is not None:
             reply = replies[-1]
+            wanted = GuideSpeedReply(*speeds)
+            reply = await self._read_agreed(line, ReadGuideSpeed(), first=reply, expected=wanted)
             assert isinstance(reply, GuideSpeedReply)
             self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
         sent = " ".join(c.encode().decode("latin-1") for c in commands)
@@ -710,7 +787,7 @@ class SkyTrackerMount(Mount):
     async def _set_guide_speeds(self, speeds: tuple[int, int]) -> None:
         line = self._require_line()
         await line.tracker(SetGuideSpeed(*speeds))
-        reply = await line.tracker(ReadGuideSpeed())
+        reply = await self._read_agreed(line, ReadGuideSpeed(), expected=GuideSpeedReply(*speeds))
         assert isinstance(reply, GuideSpeedReply)
         self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
         if self._guide_speeds != speeds:

@@ -1,0 +1,544 @@
+"""Fault matrix of the Sky Tracker driver: every command x every fault the emulators inject.
+
+Each cell runs on its own emulator (TCP, so a closed link can be reopened) with the simulator
+behind it: the fault is armed on the reply (or, for commands without one, on the command) that
+the row names, the command runs, and then, whatever happened:
+
+* the command either did what it should (checked against the emulated box and Sky Commander)
+  or raised a :class:`MountError` whose message names the cause of the fault;
+* the cached state holds no value from a bad reply: the position is the last good one or the
+  true one, the box's mode and guide speeds as they were or as they are;
+* once the fault clears (resume, the late reply sent, the link reopened) the driver reads the
+  true position, mode and guide speeds again within one reply timeout (plus the resync).
+
+The cells of one row run concurrently (each waits on timeouts, not on the CPU), so the whole
+matrix takes a few seconds. ``.venv/bin/python -m tests.test_fault_matrix_skytracker`` prints
+the matrix as a Markdown table (``docs/reliability-faults-skytracker.md``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import re
+import sys
+import tempfile
+import time
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from scopelink.drivers.skytracker import CalibrationFactors, LineOptions
+from scopelink.mount import GuideDirection, MountAxis, MountError, TrackingMode
+from scopelink.protocol.skytracker import Direction, GuideSpeedReply, ReadGuideSpeed, TrackerMode
+from scopelink.servers.faults import Fault, FaultInjector, FaultKind
+
+from .test_driver_skytracker_support import Rig, rig, separation_deg, sky_at
+
+TIMEOUT_S = 0.25
+OPTIONS = LineOptions(reply_timeout_s=TIMEOUT_S, grant_timeout_s=0.1, bus_retry_delays_s=(0.05,))
+"""Short timeouts so the matrix is quick; the grant timeout is the spec's 100 ms."""
+CLOCK_RATE = 10.0
+"""Simulated seconds per real second: slow enough that ~10 emulators side by side keep up."""
+DELAY_BELOW_S = 0.04
+"""Under the grant timeout (100 ms) too, so a late grant is still in time."""
+DELAY_BEYOND_S = 2 * TIMEOUT_S
+SLOW_GAP_S = 0.005
+"""Between the bytes of a slow reply: 16 bytes then take 75 ms, well within the timeout."""
+RECOVERY_BOUND_S = TIMEOUT_S + 0.6
+"""After the fault clears, the first refresh succeeds within one reply timeout, the resync's
+100 ms of quiet and its sync point, and a margin for a loaded machine."""
+POSITION_TOLERANCE_DEG = 0.02
+"""3-decimal coordinates, and the sky's drift between reading the truth and the reply."""
+
+
+@dataclass(frozen=True, slots=True)
+class Injection:
+    """One column of the matrix."""
+
+    name: str
+    kind: FaultKind
+    seconds: float | None = None
+
+    def fault(self, key: str) -> Fault:
+        return Fault(self.kind, key, self.seconds)
+
+
+INJECTIONS = (
+    Injection("drop", FaultKind.DROP),
+    Injection("short", FaultKind.SHORT),
+    Injection("malformed", FaultKind.MALFORMED),
+    Injection("delay<timeout", FaultKind.DELAY, DELAY_BELOW_S),
+    Injection("delay>timeout", FaultKind.DELAY, DELAY_BEYOND_S),
+    Injection("slow", FaultKind.SLOW, SLOW_GAP_S),
+    Injection("stall", FaultKind.STALL),
+    Injection("halt", FaultKind.HALT),
+    Injection("close+reopen", FaultKind.CLOSE),
+)
+MUST_SUCCEED = {"delay<timeout", "slow"}
+CAUSES = {
+    # What the error must say for each fault: the reply that did not come, a garbled reply,
+    # or the link that went away.
+    "drop": r"no reply|no answer|not back in sync|did not lend",
+    "short": r"no reply|no answer|not back in sync|did not lend",
+    "malformed": r"bad reply|garbled|did not lend|disagree",
+    "delay>timeout": r"no reply|no answer|not back in sync|did not lend",
+    "stall": r"no reply|no answer|not back in sync|did not lend",
+    "halt": r"no reply|no answer|not back in sync|did not lend",
+    "close+reopen": r"link .*(closed|failed|lost)|not connected",
+}
+
+
+# --- the truth behind the emulator --------------------------------------------------------------
+
+
+def true_position(r: Rig) -> tuple[float, float]:
+    """Where the Sky Commander says the scope points now (the simulator plus its alignment)."""
+    return r.emulator.commander.position_j2000()
+
+
+def box_mode(r: Rig) -> TrackerMode:
+    return r.emulator.tracker.mode
+
+
+def box_pressed(r: Rig) -> Direction:
+    return r.emulator.tracker.remote_pressed
+
+
+async def goto_ended(r: Rig) -> None:
+    """Until the box has ended a GOTO under way (it refuses the bus, so the driver keeps the
+    last position meanwhile, by design)."""
+    async with asyncio.timeout(10.0):
+        while box_mode(r) is TrackerMode.GOTO:  # noqa: ASYNC110 - the box has no event for it
+            await asyncio.sleep(0.02)
+
+
+def driver_position(r: Rig) -> tuple[float, float] | None:
+    state = r.driver.state
+    if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
+        return None
+    return state.ra_j2000_hours, state.dec_j2000_deg
+
+
+async def assert_truth_read(r: Rig) -> None:
+    """A refresh reads the true position and mode; ``k`` the true guide speeds.
+
+    A GOTO keeps the bus (and so the position) from the driver: wait for it first.
+    """
+    for _ in range(3):  # a GOTO may end between the box's mode and the driver's read of it
+        before, mode_before = true_position(r), box_mode(r)
+        await r.driver.refresh()
+        after, mode_after = true_position(r), box_mode(r)
+        if mode_before is mode_after:
+            break
+    read = driver_position(r)
+    assert read is not None, "no position"
+    off = min(separation_deg(read, before), separation_deg(read, after))
+    assert off < POSITION_TOLERANCE_DEG, f"position {read} is {off:.4f}° from the truth {after}"
+    assert r.driver.tracker_mode is mode_after, f"mode {r.driver.tracker_mode}, box {mode_after}"
+    assert r.driver.state.problems == (), f"problems {r.driver.state.problems}"
+    speeds = await r.driver.line.tracker(ReadGuideSpeed())
+    truth = GuideSpeedReply(*r.emulator.tracker.guide_speeds_arcsec_s)
+    assert speeds == truth, f"read {speeds}, box {truth}"
+
+
+# --- the rows -----------------------------------------------------------------------------------
+
+Step = Callable[[Rig], Awaitable[None]]
+
+
+async def nothing(r: Rig) -> None:
+    return None
+
+
+@dataclass(frozen=True, slots=True)
+class Row:
+    """One command, and the reply (or command) its fault is armed on."""
+
+    name: str
+    key: str
+    act: Step
+    check: Step
+    prepare: Step = nothing
+    on_commander: bool = False
+    """The fault is injected at the Sky Commander (a reply the box relays through the bus)."""
+    connect: bool = True
+
+
+async def refresh(r: Rig) -> None:
+    await r.driver.refresh()
+
+
+async def check_refresh(r: Rig) -> None:
+    read, truth = driver_position(r), true_position(r)
+    assert read is not None, "no position"
+    off = separation_deg(read, truth)
+    assert off < POSITION_TOLERANCE_DEG, f"position {read} is {off:.4f}° from the truth {truth}"
+    assert r.driver.tracker_mode is box_mode(r), f"mode {r.driver.tracker_mode}, box {box_mode(r)}"
+
+
+async def read_position(r: Rig) -> None:
+    ra, dec = await r.driver.read_position()
+    truth = true_position(r)
+    off = separation_deg((ra, dec), truth)
+    assert off < POSITION_TOLERANCE_DEG, f"read {(ra, dec)}, {off:.4f}° from the truth {truth}"
+
+
+async def read_status(r: Rig) -> None:
+    status, truth = await r.driver.read_status(), r.emulator.tracker.status()
+    assert status == truth, f"read {status}, box {truth}"
+
+
+async def connect_again(r: Rig) -> None:
+    await r.driver.disconnect()
+    await r.driver.connect()
+
+
+async def check_connected(r: Rig) -> None:
+    assert r.driver.state.connected
+    assert r.driver.identity.firmware == "v4.0"
+    await check_refresh(r)
+
+
+START_ALTAZ = (45.0, 150.0)
+"""Well above the horizon (the Mount's horizon guard stays out of the way)."""
+GOTO_ALTAZ = (40.0, 130.0)
+
+
+async def point_for_goto(r: Rig) -> None:
+    r.point(GOTO_ALTAZ[0] - 2.0, GOTO_ALTAZ[1] - 2.0)
+    await r.driver.refresh()
+
+
+GOTO_TARGETS: dict[int, tuple[float, float]] = {}
+"""The J2000 target of each rig's goto, by the driver's id (the sky turns after it is asked)."""
+
+
+async def goto(r: Rig) -> None:
+    target = GOTO_TARGETS.setdefault(id(r.driver), sky_at(r.sim, *GOTO_ALTAZ))
+    await r.driver.goto_equatorial(*target)
+
+
+async def check_goto(r: Rig) -> None:
+    assert box_mode(r) in (TrackerMode.GOTO, TrackerMode.TRACK), f"box in {box_mode(r)}"
+    current = r.emulator.commander.current_object
+    assert current is not None, "no current object"
+    target = GOTO_TARGETS[id(r.driver)]
+    off = separation_deg((current.ra_hours, current.dec_degrees), target)
+    assert off < 0.05, f"object {current} is {off:.3f}° from the target"
+
+
+async def start_goto(r: Rig) -> None:
+    await point_for_goto(r)
+    await goto(r)
+
+
+async def wait_for_goto(r: Rig) -> None:
+    await r.driver.wait_for_goto(timeout_s=10.0)
+
+
+async def check_landed(r: Rig) -> None:
+    assert box_mode(r) is TrackerMode.TRACK, f"box in {box_mode(r)}"
+    await check_refresh(r)
+
+
+SYNC_OFFSET_DEG = 0.5
+
+
+def sync_target(r: Rig) -> tuple[float, float]:
+    """Half a degree north of where the scope points (the alignment then follows the sky)."""
+    ra, dec = r.sim_j2000()
+    return ra, dec + SYNC_OFFSET_DEG
+
+
+async def sync(r: Rig) -> None:
+    await r.driver.sync_equatorial(*sync_target(r))
+
+
+async def check_sync(r: Rig) -> None:
+    assert r.emulator.commander.aligned, "not realigned"
+    off = separation_deg(true_position(r), sync_target(r))
+    assert off < 0.05, f"realigned {off:.3f}° from the target"
+
+
+async def press_utility_arrow(r: Rig) -> None:
+    await r.driver.move_axis(MountAxis.PRIMARY, 2.0)
+
+
+async def abort(r: Rig) -> None:
+    await r.driver.abort()
+
+
+async def check_stopped(r: Rig) -> None:
+    status = r.emulator.tracker.status()
+    assert status.directions == Direction(0), f"box {status}"
+    assert status.mode is TrackerMode.UTILITY, f"box {status}"
+
+
+async def track(r: Rig) -> None:
+    await r.driver.set_tracking(TrackingMode.ALT_AZ)
+
+
+async def check_tracking(r: Rig) -> None:
+    assert box_mode(r) is TrackerMode.TRACK, f"box in {box_mode(r)}"
+    assert r.driver.state.tracking is TrackingMode.ALT_AZ, f"driver {r.driver.state.tracking}"
+
+
+GUIDE_RATE_ARCSEC_S = 20
+
+
+async def move_axis_guide(r: Rig) -> None:
+    await r.driver.move_axis(MountAxis.SECONDARY, GUIDE_RATE_ARCSEC_S / 3600.0)
+
+
+async def check_moving(r: Rig) -> None:
+    status, speeds = r.emulator.tracker.status(), r.emulator.tracker.guide_speeds_arcsec_s
+    assert status.mode is TrackerMode.GUIDE, f"box {status}"
+    assert status.directions == Direction.UP, f"box {status}"
+    assert speeds[1] == GUIDE_RATE_ARCSEC_S, f"box speeds {speeds}"
+
+
+async def pulse(r: Rig) -> None:
+    await r.driver.pulse_guide(GuideDirection.WEST, 150)
+
+
+async def check_pulse(r: Rig) -> None:
+    # The pulse may be over already on a loaded machine: then the box is back in TRACK.
+    pressed, mode = box_pressed(r), box_mode(r)
+    assert (pressed, mode) in (
+        (Direction.RIGHT, TrackerMode.GUIDE),
+        (Direction(0), TrackerMode.TRACK),
+    ), f"box {r.emulator.tracker.status()}"
+
+
+async def set_guide_speed(r: Rig) -> None:
+    await r.driver.set_guide_speed(30, 40)
+
+
+async def check_guide_speed(r: Rig) -> None:
+    speeds = r.emulator.tracker.guide_speeds_arcsec_s
+    assert speeds == (30, 40), f"box speeds {speeds}"
+
+
+async def standby(r: Rig) -> None:
+    await r.driver.standby()
+
+
+async def check_standby(r: Rig) -> None:
+    assert box_mode(r) is TrackerMode.STANDBY, f"box in {box_mode(r)}"
+
+
+async def read_calibration(r: Rig) -> None:
+    factors = await r.driver.read_calibration()
+    stored = r.emulator.tracker.calibration.calibration
+    truth = CalibrationFactors(stored.azimuth_factor, stored.elevation_factor)
+    assert factors == truth, f"read {factors}, box {truth}"
+
+
+FACTORS = CalibrationFactors.for_telescope(24.0, 10.0)
+
+
+async def write_calibration(r: Rig) -> None:
+    await r.driver.write_calibration(FACTORS)
+
+
+async def check_calibration(r: Rig) -> None:
+    stored = r.emulator.tracker.calibration.calibration
+    assert abs(stored.azimuth_factor - FACTORS.azimuth_factor) < 1e-3, f"box {stored}"
+    assert r.driver.state.connected, "not connected"
+
+
+async def disconnect(r: Rig) -> None:
+    await r.driver.disconnect()
+
+
+async def check_disconnected(r: Rig) -> None:
+    assert not r.driver.state.connected, "still connected"
+    assert box_pressed(r) == Direction(0), f"box {r.emulator.tracker.status()}"
+
+
+ROWS = (
+    Row("connect", "V", connect_again, check_connected),
+    Row("connect", "k", connect_again, check_connected),
+    Row("write_calibration", "S", write_calibration, check_calibration, connect=False),
+    Row("refresh", "R", refresh, check_refresh),
+    Row("refresh", "Q", refresh, check_refresh),
+    Row("refresh", "CR", refresh, check_refresh, on_commander=True),
+    Row("read_position", "Q", read_position, nothing),
+    Row("read_position", "CR", read_position, nothing, on_commander=True),
+    Row("read_status", "R", read_status, nothing),
+    Row("goto", "L", goto, check_goto, point_for_goto, on_commander=True),
+    Row("goto", "G", goto, check_goto, point_for_goto),
+    Row("goto", "R", goto, check_goto, point_for_goto),
+    Row("wait_for_goto", "R", wait_for_goto, check_landed, start_goto),
+    Row("sync", "L", sync, check_sync, on_commander=True),
+    Row("sync", "N", sync, check_sync, on_commander=True),
+    Row("sync", "CR", sync, check_sync, on_commander=True),
+    Row("abort", "R", abort, check_stopped, press_utility_arrow),
+    Row("set_tracking", "T", track, check_tracking),
+    Row("set_tracking", "R", track, check_tracking),
+    Row("move_axis", "R", move_axis_guide, check_moving, track),
+    Row("move_axis", "k", move_axis_guide, check_moving, track),
+    Row("pulse_guide", "R", pulse, check_pulse, track),
+    Row("set_guide_speed", "k", set_guide_speed, check_guide_speed),
+    Row("standby", "R", standby, check_standby),
+    Row("read_calibration", "s", read_calibration, read_calibration),
+    Row("disconnect", "R", disconnect, check_disconnected, press_utility_arrow),
+)
+
+
+# --- one cell -----------------------------------------------------------------------------------
+
+
+@dataclass
+class Outcome:
+    """What happened in one cell (for the table), and what went wrong (for the test)."""
+
+    row: Row
+    injection: Injection
+    result: str = ""
+    recovery_s: float | None = None
+    failures: list[str] = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        return f"{self.row.name}/{self.row.key} x {self.injection.name}"
+
+
+def injector(r: Rig, row: Row) -> FaultInjector:
+    return r.emulator.commander_faults if row.on_commander else r.emulator.faults
+
+
+async def run_cell(row: Row, injection: Injection, data_dir: Path) -> Outcome:
+    outcome = Outcome(row, injection)
+    try:
+        async with asyncio.timeout(20.0):
+            await _run_cell(row, injection, data_dir, outcome)
+    except Exception as error:  # every surprise is a failure of this cell
+        outcome.failures.append(f"{type(error).__name__}: {error}")
+    return outcome
+
+
+async def _run_cell(row: Row, injection: Injection, data_dir: Path, outcome: Outcome) -> None:
+    connect = row.connect
+    async with rig(data_dir, "tcp", options=OPTIONS, connect=connect, clock_rate=CLOCK_RATE) as r:
+        r.point(*START_ALTAZ)
+        if row.connect:
+            await r.driver.refresh()
+        await row.prepare(r)
+        position_before = driver_position(r)
+        mode_before = r.driver.tracker_mode
+        faults = injector(r, row)
+        faults.add(injection.fault(row.key))
+        started = time.monotonic()
+        error: MountError | None = None
+        try:
+            await row.act(r)
+        except MountError as raised:
+            error = raised
+        fired = bool(faults.fired)
+        if not fired:
+            outcome.failures.append(f"the fault on {row.key!r} never fired")
+        if error is None:
+            outcome.result = "ok"
+            try:
+                await row.check(r)
+            except AssertionError as failed:
+                outcome.failures.append(f"succeeded with a wrong effect: {failed!r}")
+        else:
+            outcome.result = f"{type(error).__name__}"
+            if injection.name in MUST_SUCCEED:
+                outcome.failures.append(f"a {injection.name} reply must be taken: {error}")
+            elif not re.search(CAUSES[injection.name], str(error)):
+                outcome.failures.append(f"the error does not name the cause: {error}")
+            kept = driver_position(r)
+            if kept != position_before and kept is not None:
+                truth = true_position(r)
+                if separation_deg(kept, truth) >= POSITION_TOLERANCE_DEG:
+                    outcome.failures.append(f"position {kept} is neither kept nor true {truth}")
+            if row.act is refresh and not any(
+                re.search(CAUSES[injection.name], p) for p in r.driver.state.problems
+            ):
+                outcome.failures.append(f"problems do not name it: {r.driver.state.problems}")
+        mode = r.driver.tracker_mode
+        if r.driver.state.connected and mode not in (mode_before, box_mode(r)):
+            outcome.failures.append(
+                f"cached mode {mode} is neither the last good {mode_before} nor {box_mode(r)}"
+            )
+        # The fault clears.
+        if injection.kind is FaultKind.DELAY and error is not None:
+            await asyncio.sleep(max(0.0, started + (injection.seconds or 0.0) - time.monotonic()))
+        faults.clear()
+        if not r.driver.state.connected or injection.kind is FaultKind.CLOSE:
+            await r.driver.connect()  # reopen
+        await goto_ended(r)
+        cleared = time.monotonic()
+        while True:
+            try:
+                await assert_truth_read(r)
+                break
+            except MountError as still:
+                if time.monotonic() - cleared > RECOVERY_BOUND_S:
+                    outcome.failures.append(f"not recovered after the fault cleared: {still}")
+                    return
+                await asyncio.sleep(0.01)
+        outcome.recovery_s = time.monotonic() - cleared
+        if outcome.recovery_s > RECOVERY_BOUND_S:
+            outcome.failures.append(f"recovered only after {outcome.recovery_s:.2f} s")
+
+
+def injections(row: Row) -> tuple[Injection, ...]:
+    """Every column; but closing the Sky Commander's port would cut the emulated cable between
+    the two boxes for good (it is no PC link, nothing reopens it)."""
+    if row.on_commander:
+        return tuple(i for i in INJECTIONS if i.kind is not FaultKind.CLOSE)
+    return INJECTIONS
+
+
+async def run_row(row: Row, data_dir: Path) -> list[Outcome]:
+    return list(
+        await asyncio.gather(
+            *(
+                run_cell(row, injection, data_dir / injection.name.replace("+", "_"))
+                for injection in injections(row)
+            )
+        )
+    )
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda row: f"{row.name}-{row.key}")
+async def test_fault_matrix_row(tmp_path: Path, row: Row) -> None:
+    outcomes = await run_row(row, tmp_path)
+    failures = [f"{o.label}: {failure}" for o in outcomes for failure in o.failures]
+    assert not failures, "\n".join(failures)
+
+
+# --- the table for the docs ---------------------------------------------------------------------
+
+
+async def print_matrix(only: list[str]) -> None:
+    with tempfile.TemporaryDirectory() as directory:
+        header = "| command / faulted reply | " + " | ".join(i.name for i in INJECTIONS) + " |"
+        print(header)
+        print("|" + "---|" * (len(INJECTIONS) + 1))
+        for index, row in enumerate(ROWS):
+            if only and f"{row.name}-{row.key}" not in only and row.name not in only:
+                continue
+            outcomes = await run_row(row, Path(directory) / str(index))
+            cells = []
+            for o in outcomes:
+                text = o.result + (f" {o.recovery_s:.2f}s" if o.recovery_s is not None else "")
+                if o.failures:
+                    text += " FAIL: " + "; ".join(o.failures)
+                cells.append(text)
+            where = " (SC)" if row.on_commander else ""
+            cells += ["n/a"] * (len(INJECTIONS) - len(cells))
+            print(f"| {row.name} / `{row.key}`{where} | " + " | ".join(cells) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(print_matrix(sys.argv[1:]))
+    sys.exit(0)
