@@ -134,7 +134,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--server-rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per server from all clients (default 200)",
+        help="commands or requests per second per server from all clients (default 100)",
     )
     net.add_argument(
         "--lx200-pty",
@@ -245,7 +245,7 @@ def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPo
             burst=max(1, round(2 * _or(args.rate_limit, servers.requests_per_second))),
             server_requests_per_s=_or(args.server_rate_limit, servers.server_requests_per_second),
             server_burst=max(
-                1, round(2 * _or(args.server_rate_limit, servers.server_requests_per_second))
+                1, round(_or(args.server_rate_limit, servers.server_requests_per_second))
             ),
         )
     except ValueError as error:

@@ -86,9 +86,11 @@ class AccessPolicy:
     """Sustained commands or requests per second per client address (NINA polls ~10-30/s,
     SkySafari and Stellarium a few)."""
     burst: int = 100
-    server_requests_per_s: float = 200.0
-    """Sustained commands or requests per second per server, from all clients together."""
-    server_burst: int = 400
+    server_requests_per_s: float = 100.0
+    """Sustained commands or requests per second per server, from all clients together: what
+    keeps a crowd of clients from taking the event loop from the mount's poller (a flood at
+    200/s per server already costs the poller a third of its rate on a busy 2-core machine)."""
+    server_burst: int = 100
     max_delay_s: float = 1.0
     """HTTP: the longest a request is held for its token before the answer is 429."""
 
