@@ -28,6 +28,7 @@ from playwright.async_api import async_playwright, expect
 
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.alpaca.telescope import TelescopeConfig
+from scopelink.servers.lx200 import LX200Server
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
 from scopelink.web.dashboard import static_dir
@@ -391,12 +392,17 @@ async def test_websocket_ignores_hostile_messages_and_closes_on_huge_ones() -> N
             assert response.status == 200  # the dashboard serves on
 
 
-async def test_hostile_device_names_are_text_in_the_browser() -> None:
-    """The real page in headless Chromium shows a hostile model name as text: no element is
-    made of it and no script in it runs."""
+async def test_hostile_names_and_bytes_are_text_in_the_browser() -> None:
+    """The real page in headless Chromium shows a hostile model name, and hostile bytes a
+    network client sent to a server (the traffic panel), as text: no element is made of them
+    and no script in them runs."""
     executable = require_executable("chromium")
     name = '<img src=x onerror="window.pwned=1"><script>window.pwned=2</script>'
-    async with dashboard(name) as (served, _), async_playwright() as playwright:
+    async with (
+        dashboard(name) as (served, _),
+        LX200Server(served.mount) as lx200,
+        async_playwright() as playwright,
+    ):
         browser = await playwright.chromium.launch(executable_path=executable)
         try:
             page = await browser.new_page()
@@ -404,7 +410,14 @@ async def test_hostile_device_names_are_text_in_the_browser() -> None:
             page.on("pageerror", lambda error: errors.append(str(error)))
             await page.goto(served.url)
             await expect(page.locator("#hl-identity")).to_contain_text(name, timeout=10_000)
+            host, port = await lx200.on_tcp(port=0)
+            _, writer = await asyncio.open_connection(host, port)
+            writer.write(b':<img src=x onerror="window.pwned=3">#:GR#')
+            await writer.drain()
+            await expect(page.locator("#traffic")).to_contain_text("img src=x", timeout=10_000)
+            writer.close()
             assert await page.locator("#hl-identity img, #hl-identity script").count() == 0
+            assert await page.locator("#traffic img, #traffic script").count() == 0
             assert await page.locator("img[src=x]").count() == 0
             assert await page.evaluate("window.pwned === undefined")
             assert errors == []
