@@ -23,7 +23,7 @@ from scopelink.servers.storage import (
     temporaries_of,
     write_atomically,
 )
-from tests.test_cli_support import scopelink, scopelink_here
+from tests.test_cli_support import scopelink_here
 
 
 def example(tmp_path: Path) -> Path:
@@ -130,8 +130,9 @@ def test_unset_removes_a_value_a_table_and_an_emptied_table(tmp_path: Path) -> N
 
 def test_init_writes_the_example_once_and_never_overwrites(tmp_path: Path) -> None:
     path = tmp_path / "config.toml"
-    result = scopelink(path, "config", "init")
-    assert result.returncode == 0, result.stderr
+    status, out, err = scopelink_here(path, "config", "init")
+    assert status == 0, err
+    assert out == f"wrote {path}\n"
     assert path.read_text(encoding="utf-8") == EXAMPLE_CONFIG
     set_values(path, [("device", "sim")])
     mine = path.read_bytes()
