@@ -84,7 +84,7 @@ async def test_alpaca_gotos_below_the_horizon_never_reach_the_device(tmp_path: P
 
 
 async def test_alpaca_move_axis_is_stopped_above_the_horizon(tmp_path: Path) -> None:
-    async with synscan_rig(at=WEST_LOW) as rig:
+    async with synscan_rig(at=WEST_LOW, rate=2.0) as rig:
         server = AlpacaServer(
             rig.mount, host="127.0.0.1", port=0, discovery_port=None, state_dir=tmp_path
         )
@@ -146,7 +146,10 @@ async def test_lx200_goto_below_the_horizon_is_refused_with_1() -> None:
 
 
 async def test_lx200_move_south_on_an_altaz_mount_stops_above_the_horizon() -> None:
-    async with synscan_rig(model=AZ_GTI, at=(13.0, 180.0)) as rig, lx200_client(rig) as lx200:
+    async with (
+        synscan_rig(model=AZ_GTI, at=(13.0, 180.0), rate=2.0) as rig,
+        lx200_client(rig) as lx200,
+    ):
         await lx200.send(":RS#")  # the slew rate
         await lx200.send(":Ms#")  # south on an alt-az mount: down
         await wait_until_still(rig)
@@ -211,7 +214,10 @@ async def test_synscan_server_gotos_below_the_horizon_never_reach_the_device() -
 
 
 async def test_synscan_server_rate_slew_is_stopped_and_a_dropped_client_stops_it() -> None:
-    async with synscan_rig(at=WEST_LOW) as rig, SynScanEmulator(rig.mount, wire=None) as server:
+    async with (
+        synscan_rig(at=WEST_LOW, rate=2.0) as rig,
+        SynScanEmulator(rig.mount, wire=None) as server,
+    ):
         server.server.dead_man = True
         host, port = await server.on_tcp("127.0.0.1", 0)
         link = TcpLink(*await asyncio.open_connection(host, port), name="phone app")
@@ -249,7 +255,7 @@ async def test_dashboard_goto_below_the_horizon_is_409_and_never_reaches_the_dev
 
 async def test_dashboard_pad_is_stopped_at_the_horizon_and_by_a_closed_page() -> None:
     async with (
-        synscan_rig(at=WEST_LOW) as rig,
+        synscan_rig(at=WEST_LOW, rate=2.0) as rig,
         Dashboard(rig.mount, port=0) as dashboard,
         aiohttp.ClientSession(base_url=dashboard.url) as http,
     ):

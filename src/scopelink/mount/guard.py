@@ -295,8 +295,10 @@ class HorizonGuard:
         mount = self._mount
         previous: _Reading | None = None
         period_s: float | None = None
-        ignore_until_s = float("-inf")
-        origin = mount.state.read_at
+        origin = mount.now()
+        # A reading from before the watch (the cache may be minutes old) would spoil both the
+        # rate and the poll period: judge from fresh readings only.
+        ignore_until_s = 0.0
         plausible_deg_s = 2.0 * mount.capabilities.max_axis_rate_deg_s + 1.0
         async with aclosing(mount.states()) as states:
             async for state in states:
