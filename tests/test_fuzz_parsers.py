@@ -5,8 +5,11 @@ long run found. The million-input run is ``.venv/bin/python -m bench.fuzz``
 
 from __future__ import annotations
 
+import asyncio
+import json
 import random
 from pathlib import Path
+from urllib.parse import quote_from_bytes
 
 import pytest
 from bench.fuzz import generate
@@ -25,6 +28,8 @@ from scopelink.protocol import skytracker
 from scopelink.protocol.synscan import CommandParser
 from scopelink.web.params import BadRequestError, Body
 from tests.bench_support import run_quick_bench
+from tests.test_alpaca_http_layer import API, read_reply
+from tests.test_alpaca_support import serve, sim_mount
 from tests.test_web_support import served
 
 EXAMPLES = 200
@@ -90,6 +95,105 @@ def test_the_checks_catch_a_parser_that_loses_step(monkeypatch: pytest.MonkeyPat
     monkeypatch.setattr(CommandParser, "discard_partial", keep_everything)
     with pytest.raises(FuzzFailureError, match="after the pause"):
         check_synscan_server(b"r0000", random.Random(3))
+
+
+_LEFT_OUT = {"slewtocoordinates", "slewtotarget", "slewtoaltaz", "connected", "disconnect"}
+"""Synchronous slews wait for the slew to end (their async twins plus a wait; left out to stay
+fast); the connection stays up so every member gets past its connection check."""
+
+_ALPACA_PARAMETERS = [
+    "Action",
+    "Altitude",
+    "Axis",
+    "Azimuth",
+    "Connected",
+    "Declination",
+    "Direction",
+    "Duration",
+    "Rate",
+    "RightAscension",
+    "SiteElevation",
+    "SiteLatitude",
+    "SiteLongitude",
+    "SlewSettleTime",
+    "TargetDeclination",
+    "TargetRightAscension",
+    "Tracking",
+    "TrackingRate",
+    "UTCDate",
+    "Parameters",
+]
+"""Every parameter the telescope's members read."""
+
+_VALUES = Target(
+    "alpaca-values",
+    (b"12.5", b"-30", b"0", b"3", b"1e3", b"True", b"false", b"2026-11-23T00:00:00Z", b"nan"),
+    lambda data, rng: None,
+    b"+-.eE0123456789 :TZ",
+    max_size=40,
+)
+"""Values to mutate (the generator of bench.fuzz; this target's check is never called)."""
+
+
+def _fuzzed_form(rng: random.Random) -> bytes:
+    """Every parameter a member may read, each with a mutated value, in a random order."""
+    pairs = [(b"ClientTransactionID", str(rng.randrange(2**32)).encode())]
+    for name in _ALPACA_PARAMETERS:
+        spelt = name.lower() if rng.random() < 0.05 else name  # PUT names are case-sensitive
+        pairs.append((spelt.encode(), generate(_VALUES, rng)))
+    rng.shuffle(pairs)
+    return b"&".join(
+        quote_from_bytes(name).encode() + b"=" + quote_from_bytes(value).encode()
+        for name, value in pairs
+    )
+
+
+@pytest.mark.timeout(60)
+async def test_alpaca_server_answers_fuzzed_parameters_without_internal_errors(
+    tmp_path: Path,
+) -> None:
+    # End to end over a real socket: mutated parameter values, as query strings and PUT bodies,
+    # to every telescope member of a real AlpacaServer on the simulated mount. A handler that
+    # raised would show as a 500 or as ASCOM's "internal error" driver error.
+    rng = random.Random(2026)
+    statuses: set[tuple[int, int]] = set()
+    async with serve(sim_mount(), state_dir=tmp_path) as server:
+        members = sorted(set(server.telescope.members) - _LEFT_OUT)
+        reader, writer = await asyncio.open_connection("127.0.0.1", server.port)
+        try:
+            writer.write(_put(f"{API}/connected", b"Connected=True&ClientTransactionID=1"))
+            assert (await read_reply(reader))[0] == 200
+            for _ in range(300):
+                name = rng.choice(members)
+                form = _fuzzed_form(rng)
+                member = server.telescope.members[name]
+                if member.put is None or (member.get is not None and rng.random() < 0.5):
+                    get = f"GET {API}/{name}?{form.decode()} HTTP/1.1\r\nHost: x\r\n\r\n"
+                    writer.write(get.encode())
+                else:
+                    writer.write(_put(f"{API}/{name}", form))
+                status, _, body = await read_reply(reader)
+                assert status in (200, 400, 405), (name, form, status, body)
+                if status == 200:
+                    reply = json.loads(body)
+                    assert not reply["ErrorMessage"].startswith("internal error"), (name, form)
+                    statuses.add((status, reply["ErrorNumber"]))
+            writer.write(f"GET {API}/connected HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+            status, _, body = await read_reply(reader)
+            assert status == 200
+            assert json.loads(body)["ErrorNumber"] == 0
+        finally:
+            writer.close()
+    # The inputs reached the members: accepted values and refused ones (InvalidValue 0x401).
+    assert {(200, 0), (200, 0x401)} <= statuses, statuses
+
+
+def _put(path: str, body: bytes) -> bytes:
+    head = (
+        f"PUT {path} HTTP/1.1\r\nHost: x\r\nContent-Type: application/x-www-form-urlencoded\r\n"
+        f"Content-Length: {len(body)}\r\n\r\n"
+    )
+    return head.encode() + body
 
 
 # ------------------------------------------------------------------------------ found by fuzzing
