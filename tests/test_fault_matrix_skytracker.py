@@ -28,8 +28,6 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pytest
-
 from scopelink.drivers.skytracker import CalibrationFactors, LineOptions
 from scopelink.mount import GuideDirection, MountAxis, MountError, TrackingMode
 from scopelink.protocol.skytracker import Direction, GuideSpeedReply, ReadGuideSpeed, TrackerMode
@@ -38,18 +36,25 @@ from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from .test_driver_skytracker_support import Rig, rig, separation_deg, sky_at
 
 TIMEOUT_S = 0.25
-OPTIONS = LineOptions(reply_timeout_s=TIMEOUT_S, grant_timeout_s=0.1, bus_retry_delays_s=(0.05,))
-"""Short timeouts so the matrix is quick; the grant timeout is the spec's 100 ms."""
-CLOCK_RATE = 10.0
-"""Simulated seconds per real second: slow enough that ~10 emulators side by side keep up."""
+OPTIONS = LineOptions(reply_timeout_s=TIMEOUT_S, grant_timeout_s=0.2, bus_retry_delays_s=(0.05,))
+"""Short reply timeouts so the matrix is quick. The grant timeout is twice the spec's 100 ms:
+the emulated box grants only after its own Sky Commander exchange, which a loaded machine
+running ~25 emulators at once can stretch past 100 ms."""
+CLOCK_RATE = 5.0
+"""Simulated seconds per real second: slow enough that ~25 emulators side by side keep up (each
+box polls its Sky Commander every 0.5 simulated seconds)."""
 DELAY_BELOW_S = 0.04
 """Under the grant timeout (100 ms) too, so a late grant is still in time."""
 DELAY_BEYOND_S = 2 * TIMEOUT_S
 SLOW_GAP_S = 0.005
 """Between the bytes of a slow reply: 16 bytes then take 75 ms, well within the timeout."""
-RECOVERY_BOUND_S = TIMEOUT_S + 0.6
-"""After the fault clears, the first refresh succeeds within one reply timeout, the resync's
-100 ms of quiet and its sync point, and a margin for a loaded machine."""
+RECOVERY_BOUND_S = 2.0
+"""After the fault clears, the first refresh succeeds (on a quiet machine within 0.25 s: at
+most one resync, 100 ms of quiet and its sync point). The bound only catches hangs: on a
+loaded 2-core machine the emulators themselves answer late."""
+RECOVERY_ATTEMPTS = 2
+"""The first refresh after the fault clears must succeed; a second is allowed only because a
+loaded machine can stretch the emulated box's bus grant past the grant timeout."""
 POSITION_TOLERANCE_DEG = 0.02
 """3-decimal coordinates, and the sky's drift between reading the truth and the reply."""
 
@@ -165,6 +170,7 @@ class Row:
     on_commander: bool = False
     """The fault is injected at the Sky Commander (a reply the box relays through the bus)."""
     connect: bool = True
+    clock_rate: float = CLOCK_RATE
 
 
 async def refresh(r: Rig) -> None:
@@ -207,8 +213,14 @@ START_ALTAZ = (45.0, 150.0)
 GOTO_ALTAZ = (40.0, 130.0)
 
 
+GOTO_DISTANCE_DEG = 0.5
+"""A short GOTO that still runs a while after it starts (the box closes in pass by pass)."""
+GOTO_RATE = 20.0
+"""The GOTO rows run the clock faster, so the box lands within a second or so."""
+
+
 async def point_for_goto(r: Rig) -> None:
-    r.point(GOTO_ALTAZ[0] - 2.0, GOTO_ALTAZ[1] - 2.0)
+    r.point(GOTO_ALTAZ[0] - GOTO_DISTANCE_DEG, GOTO_ALTAZ[1] - GOTO_DISTANCE_DEG)
     await r.driver.refresh()
 
 
@@ -369,10 +381,10 @@ ROWS = (
     Row("read_position", "Q", read_position, nothing),
     Row("read_position", "CR", read_position, nothing, on_commander=True),
     Row("read_status", "R", read_status, nothing),
-    Row("goto", "L", goto, check_goto, point_for_goto, on_commander=True),
-    Row("goto", "G", goto, check_goto, point_for_goto),
-    Row("goto", "R", goto, check_goto, point_for_goto),
-    Row("wait_for_goto", "R", wait_for_goto, check_landed, start_goto),
+    Row("goto", "L", goto, check_goto, point_for_goto, on_commander=True, clock_rate=GOTO_RATE),
+    Row("goto", "G", goto, check_goto, point_for_goto, clock_rate=GOTO_RATE),
+    Row("goto", "R", goto, check_goto, point_for_goto, clock_rate=GOTO_RATE),
+    Row("wait_for_goto", "R", wait_for_goto, check_landed, start_goto, clock_rate=GOTO_RATE),
     Row("sync", "L", sync, check_sync, on_commander=True),
     Row("sync", "N", sync, check_sync, on_commander=True),
     Row("sync", "CR", sync, check_sync, on_commander=True),
@@ -400,6 +412,7 @@ class Outcome:
     injection: Injection
     result: str = ""
     recovery_s: float | None = None
+    took_s: float = 0.0
     failures: list[str] = field(default_factory=list)
 
     @property
@@ -413,17 +426,19 @@ def injector(r: Rig, row: Row) -> FaultInjector:
 
 async def run_cell(row: Row, injection: Injection, data_dir: Path) -> Outcome:
     outcome = Outcome(row, injection)
+    started = time.monotonic()
     try:
         async with asyncio.timeout(20.0):
             await _run_cell(row, injection, data_dir, outcome)
     except Exception as error:  # every surprise is a failure of this cell
         outcome.failures.append(f"{type(error).__name__}: {error}")
+    outcome.took_s = time.monotonic() - started
     return outcome
 
 
 async def _run_cell(row: Row, injection: Injection, data_dir: Path, outcome: Outcome) -> None:
-    connect = row.connect
-    async with rig(data_dir, "tcp", options=OPTIONS, connect=connect, clock_rate=CLOCK_RATE) as r:
+    connect, rate = row.connect, row.clock_rate
+    async with rig(data_dir, "tcp", options=OPTIONS, connect=connect, clock_rate=rate) as r:
         r.point(*START_ALTAZ)
         if row.connect:
             await r.driver.refresh()
@@ -475,15 +490,14 @@ async def _run_cell(row: Row, injection: Injection, data_dir: Path, outcome: Out
             await r.driver.connect()  # reopen
         await goto_ended(r)
         cleared = time.monotonic()
-        while True:
+        for attempt in range(RECOVERY_ATTEMPTS):
             try:
                 await assert_truth_read(r)
                 break
             except MountError as still:
-                if time.monotonic() - cleared > RECOVERY_BOUND_S:
+                if attempt + 1 == RECOVERY_ATTEMPTS:
                     outcome.failures.append(f"not recovered after the fault cleared: {still}")
                     return
-                await asyncio.sleep(0.01)
         outcome.recovery_s = time.monotonic() - cleared
         if outcome.recovery_s > RECOVERY_BOUND_S:
             outcome.failures.append(f"recovered only after {outcome.recovery_s:.2f} s")
@@ -497,21 +511,33 @@ def injections(row: Row) -> tuple[Injection, ...]:
     return INJECTIONS
 
 
-async def run_row(row: Row, data_dir: Path) -> list[Outcome]:
-    return list(
-        await asyncio.gather(
-            *(
-                run_cell(row, injection, data_dir / injection.name.replace("+", "_"))
-                for injection in injections(row)
-            )
-        )
-    )
+CELLS_AT_ONCE = 12
+"""Cells running side by side: they wait on timeouts, not on the CPU, but each has an emulator
+(and, during motions, a back-to-back poller), so not all ~230 at once."""
 
 
-@pytest.mark.parametrize("row", ROWS, ids=lambda row: f"{row.name}-{row.key}")
-async def test_fault_matrix_row(tmp_path: Path, row: Row) -> None:
-    outcomes = await run_row(row, tmp_path)
-    failures = [f"{o.label}: {failure}" for o in outcomes for failure in o.failures]
+async def run_matrix(rows: tuple[Row, ...], data_dir: Path) -> list[list[Outcome]]:
+    """Every cell of ``rows``, at most CELLS_AT_ONCE at a time; outcomes by row."""
+    turns = asyncio.Semaphore(CELLS_AT_ONCE)
+
+    async def cell(where: Path, row: Row, injection: Injection) -> Outcome:
+        async with turns:
+            return await run_cell(row, injection, where)
+
+    tasks = [
+        [
+            asyncio.ensure_future(cell(data_dir / f"{index}-{column}", row, injection))
+            for column, injection in enumerate(injections(row))
+        ]
+        for index, row in enumerate(rows)
+    ]
+    return [list(await asyncio.gather(*row_tasks)) for row_tasks in tasks]
+
+
+async def test_fault_matrix(tmp_path: Path) -> None:
+    """Every cell of the matrix; the failures name their cells."""
+    outcomes = await run_matrix(ROWS, tmp_path)
+    failures = [f"{o.label}: {failure}" for row in outcomes for o in row for failure in o.failures]
     assert not failures, "\n".join(failures)
 
 
@@ -523,10 +549,10 @@ async def print_matrix(only: list[str]) -> None:
         header = "| command / faulted reply | " + " | ".join(i.name for i in INJECTIONS) + " |"
         print(header)
         print("|" + "---|" * (len(INJECTIONS) + 1))
-        for index, row in enumerate(ROWS):
-            if only and f"{row.name}-{row.key}" not in only and row.name not in only:
-                continue
-            outcomes = await run_row(row, Path(directory) / str(index))
+        rows = tuple(
+            row for row in ROWS if not only or f"{row.name}-{row.key}" in only or row.name in only
+        )
+        for row, outcomes in zip(rows, await run_matrix(rows, Path(directory)), strict=True):
             cells = []
             for o in outcomes:
                 text = o.result + (f" {o.recovery_s:.2f}s" if o.recovery_s is not None else "")
