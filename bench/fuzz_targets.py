@@ -31,6 +31,8 @@ from urllib.parse import parse_qsl
 from aiohttp import web
 
 from scopelink.cli.config import ConfigError, load_config
+from scopelink.cli.errors import CommandError
+from scopelink.cli.targets import Coordinates, parse_target
 from scopelink.decode import Direction, Protocol, TraceInputError, annotate, parse_trace
 from scopelink.mount import MountAxis, TrackingMode
 from scopelink.protocol import lx200, skytracker, stellarium, synscan
@@ -801,6 +803,24 @@ _CONFIG_SEEDS = (
 )
 
 
+# ------------------------------------------------------------------------------- CLI targets
+
+
+def check_cli_target(data: bytes, rng: random.Random) -> None:
+    """A TARGET on the command line (``goto``, ``sync``): a name, or two angles in range."""
+    words = data.decode("utf-8", "replace").split(" ")
+    altaz = rng.random() < 0.3
+    try:
+        target = parse_target(words, altaz=altaz)
+    except CommandError:
+        return
+    if isinstance(target, Coordinates):
+        # Ranges are the Mount's to check (InvalidValueError names the bound): "82 0" is read.
+        expect(isinstance(target.first, float) and isinstance(target.second, float), f"{target}")
+    else:
+        expect(bool(target.name) and target.name == target.name.strip(), f"{target!r}")
+
+
 # ----------------------------------------------------------------------------------------- table
 
 
@@ -895,6 +915,18 @@ TARGETS: tuple[Target, ...] = (
         check_trace_text,
         b"\\\n<->:xrn0 ",
         max_size=512,
+    ),
+    Target(
+        "cli-target",
+        (
+            b"05:35:17 -05:23:28",
+            b"5.5 -5.4",
+            b"5h35m17s -5\xc2\xb023'28\"",
+            b"5 35 17 -5 23 28",
+            b"M31",
+        ),
+        check_cli_target,
+        b" :.+-hmsd0123456789'\"",
     ),
     Target("config", _CONFIG_SEEDS, check_config, b'[]{}=."\n#0123456789-', max_size=6000),
 )
