@@ -474,3 +474,20 @@ async def test_dashboard_refuses_strangers_and_floods() -> None:
                     assert json.loads(await response.text())["kind"] == "TooManyRequests"
         assert statuses[:3] == [200, 200, 200]
         assert 429 in statuses[3:]
+
+
+async def test_dashboard_live_pages_count_against_the_connection_limits() -> None:
+    async with dashboard(AccessPolicy(max_connections_per_client=1)) as (_, http):
+        first = await http.ws_connect("/ws")
+        try:
+            with pytest.raises(aiohttp.WSServerHandshakeError) as refused:
+                await http.ws_connect("/ws")
+            assert refused.value.status == 503
+            async with http.get("/api/state") as response:
+                assert response.status == 200  # plain requests are not connections held
+        finally:
+            await first.close()
+        await asyncio.sleep(0.1)
+        again = await http.ws_connect("/ws")
+        assert (await again.receive_json(timeout=5))["type"] == "hello"
+        await again.close()

@@ -23,7 +23,7 @@ from aiohttp.typedefs import Middleware
 
 from scopelink.decode import Protocol
 from scopelink.mount import Mount
-from scopelink.servers.access import AccessControl, AccessPolicy
+from scopelink.servers.access import AccessControl, AccessPolicy, Refusal
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
@@ -80,8 +80,9 @@ async def _same_origin(request: web.Request, handler: Handler) -> web.StreamResp
 
 
 def _access_middleware(control: AccessControl) -> Middleware:
-    """The allow-list (403), read-only (403 on every POST) and the per-address request rate
-    (held up to the policy's ``max_delay_s``, then 429 with Retry-After)."""
+    """The allow-list (403), read-only (403 on every POST), the request rate (held up to the
+    policy's ``max_delay_s``, then 429 with Retry-After) and the connection limits for the
+    live pages' WebSockets (503)."""
 
     @web.middleware
     async def access(request: web.Request, handler: Handler) -> web.StreamResponse:
@@ -104,7 +105,18 @@ def _access_middleware(control: AccessControl) -> Middleware:
             )
         if wait:
             await asyncio.sleep(wait)
-        return await handler(request)
+        if request.path != "/ws":
+            return await handler(request)
+        # A live page holds its WebSocket open: those count against the connection limits.
+        admitted = control.admit(host)
+        if isinstance(admitted, Refusal):
+            return web.json_response(
+                {"error": admitted.reason, "kind": "Busy"}, status=503, headers={"Retry-After": "1"}
+            )
+        try:
+            return await handler(request)
+        finally:
+            admitted.release()
 
     return access
 
