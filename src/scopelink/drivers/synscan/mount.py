@@ -113,6 +113,10 @@ SYNC_TOLERANCE_DEG = 0.05
 """A sync read back further than this from its target was not obeyed (the hand control ignores
 syncs beyond ~7° silently). Generous against drift between the ``s`` and the ``e`` read back."""
 
+STALE_TIME_S = 0.5
+"""A ``set_time`` exchange that took this long (a retry after a fault) is sent again with the
+time moved on by as much: the hand control's clock has whole seconds, and half of one is lost."""
+
 _AXES = {MountAxis.PRIMARY: Axis.AZM_RA, MountAxis.SECONDARY: Axis.ALT_DEC}
 
 R = TypeVar("R", bound=AnyReply)
@@ -612,7 +616,8 @@ class SynScanMount(Mount):
                     await self._resume_tracking()
         except MountError as error:
             logger.warning("%s: ending a guide pulse failed: %s", self.wire.name, error)
-            self._report_problem(f"ending a guide pulse failed: {error}")
+            if not self._owed:  # an owed stop already names the problem, and is sent later
+                self._report_problem(f"ending a guide pulse failed: {error}")
         finally:
             if self._pulses.get(axis) is asyncio.current_task():
                 del self._pulses[axis]
@@ -685,9 +690,18 @@ class SynScanMount(Mount):
         return reply.to_datetime().astimezone(UTC)
 
     async def _set_time(self, utc: datetime) -> None:
+        loop = asyncio.get_running_loop()
+        started = loop.time()
+        await self._ask(self._set_time_command(utc), Ack)
+        late_s = loop.time() - started
+        if late_s >= STALE_TIME_S:
+            # Re-sent after a fault: the hand control got a time that was old by then.
+            await self._ask(self._set_time_command(utc + timedelta(seconds=late_s)), Ack)
+
+    def _set_time_command(self, utc: datetime) -> SetTime:
         zone = timezone(timedelta(hours=self.utc_offset_hours))
         local = utc.astimezone(zone).replace(microsecond=0)
-        await self._ask(SetTime(DateTime.from_datetime(local)), Ack)
+        return SetTime(DateTime.from_datetime(local))
 
     # --- exchanges ----------------------------------------------------------------------------
 

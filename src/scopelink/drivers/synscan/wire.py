@@ -186,7 +186,11 @@ class SynScanWire:
         why = str(failure) if failure else "the previous exchange failed"
         try:
             if not self.is_open:
-                await self._reopen()
+                try:
+                    await self._reopen()
+                except DeviceError as error:
+                    # Name both: why the link went (closed during ...) and why it stays gone.
+                    raise DeviceError(f"{why}, and {error}") from None
             await self._resynchronise(why)
         except DeviceError as error:
             raise DeviceError(f"{command.describe()!r} not sent: {error}") from None
