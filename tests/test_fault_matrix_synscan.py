@@ -671,3 +671,20 @@ async def test_a_time_re_sent_after_a_fault_is_moved_on_by_the_time_the_retry_to
         assert [record.command for record in r.emulator.faults.fired] == ["H"]
         gap = r.emulator.hand_control.now() - r.sim.now()
         assert abs(gap.total_seconds()) <= 1.0, gap
+
+
+async def test_the_fault_recovery_benchmark_runs_and_prints_its_tables(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A tiny run of ``bench.fault_recovery_synscan`` (so the benchmark code cannot rot); it exits
+    on a wrong position or a motion left running."""
+    from bench.fault_recovery_synscan import CASES, main
+
+    await main(0.3)
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("SynScan driver fault recovery, timeout 0.3 s")
+    rows = {line[:22].strip(): line.split() for line in lines[2 : 2 + len(CASES)]}
+    assert rows["no fault"][2] == "answered"
+    assert rows["stall"][1] == "error"
+    assert rows["close and reopen"][3] == "recovered"
+    assert any(line.startswith("halt") and "x timeout" in line for line in lines)
