@@ -28,8 +28,17 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import pytest
+
 from scopelink.drivers.skytracker import CalibrationFactors, LineOptions
-from scopelink.mount import GuideDirection, MountAxis, MountError, TrackingMode
+from scopelink.mount import (
+    GuideDirection,
+    MountAxis,
+    MountError,
+    NotConnectedError,
+    NotSupportedError,
+    TrackingMode,
+)
 from scopelink.protocol.skytracker import Direction, GuideSpeedReply, ReadGuideSpeed, TrackerMode
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 
@@ -276,7 +285,7 @@ async def check_sync(r: Rig) -> None:
 
 
 async def press_utility_arrow(r: Rig) -> None:
-    await r.driver.move_axis(MountAxis.PRIMARY, 2.0)
+    await r.driver.move_axis(MountAxis.PRIMARY, 4.0)  # UTILITY arrow, 4°/s
 
 
 async def abort(r: Rig) -> None:
@@ -539,6 +548,132 @@ async def test_fault_matrix(tmp_path: Path) -> None:
     outcomes = await run_matrix(ROWS, tmp_path)
     failures = [f"{o.label}: {failure}" for row in outcomes for o in row for failure in o.failures]
     assert not failures, "\n".join(failures)
+
+
+# --- a broken link during motion ----------------------------------------------------------------
+#
+# The box has no watchdog: an arrow pressed over a link that then breaks stays pressed, and a
+# GOTO runs on. Nothing can reach the box without the link; once it is reopened, connect()
+# releases the arrows nobody can stop any more (a GOTO ends by itself, on a target that passed
+# the limit checks, so it is left to land).
+
+
+async def eventually(condition: Callable[[], bool], timeout_s: float = 5.0) -> None:
+    async with asyncio.timeout(timeout_s):
+        while not condition():  # noqa: ASYNC110 - the emulator offers no event to wait on
+            await asyncio.sleep(0.01)
+
+
+def azimuth_rate(r: Rig) -> float:
+    azimuth, _ = r.sim.axes
+    return azimuth.rate_at(r.sim.elapsed())
+
+
+async def first_error(command: Callable[[], Awaitable[object]]) -> MountError:
+    """The error of ``command`` tried up to three times: the guard's poller, running during
+    motions, may meet an armed fault before the command does."""
+    for _ in range(3):
+        try:
+            await command()
+        except MountError as error:
+            return error
+    raise AssertionError("no error in three tries")
+
+
+async def break_link(r: Rig) -> None:
+    """The link closes at the next reply, whoever asks (the guard's poller may be first)."""
+    r.emulator.faults.add(Fault(FaultKind.CLOSE))
+    error = await first_error(r.driver.refresh)
+    assert isinstance(error, NotConnectedError), error
+    assert re.search(r"link .*(closed|failed)|not connected", str(error)), error
+    assert not r.driver.state.connected
+    r.emulator.faults.clear()
+
+
+async def test_arrows_pressed_when_the_link_broke_are_released_on_reconnect(
+    tmp_path: Path,
+) -> None:
+    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+        r.point(*START_ALTAZ)
+        await r.driver.move_axis(MountAxis.PRIMARY, 4.0)  # UTILITY arrow, 4°/s
+        await break_link(r)
+        await asyncio.sleep(0.1)
+        assert box_pressed(r) == Direction.RIGHT  # no link, no way to stop it
+        assert azimuth_rate(r) > 0.0
+        await r.driver.connect()
+        assert box_pressed(r) == Direction(0)
+        assert not r.driver.state.slewing
+        await eventually(lambda: azimuth_rate(r) == 0.0)  # ramped down
+
+
+async def test_a_guide_pulse_cut_by_the_link_is_ended_on_reconnect(tmp_path: Path) -> None:
+    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+        r.point(*START_ALTAZ)
+        await r.driver.set_tracking(TrackingMode.ALT_AZ)
+        await r.driver.pulse_guide(GuideDirection.WEST, 300)
+        assert box_pressed(r) == Direction.RIGHT
+        await break_link(r)
+        await asyncio.sleep(0.4)  # the pulse's end finds no link
+        assert box_pressed(r) == Direction.RIGHT
+        assert any("could not end a guide pulse" in p for p in r.driver.state.problems)
+        await r.driver.connect()
+        assert box_pressed(r) == Direction(0)
+        assert box_mode(r) is TrackerMode.GUIDE  # still tracking (GUIDE is TRACK + fine arrows)
+        assert r.driver.state.tracking is TrackingMode.ALT_AZ
+        assert not r.driver.state.pulse_guiding
+
+
+async def test_a_goto_cut_by_the_link_lands_and_is_left_alone(tmp_path: Path) -> None:
+    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=GOTO_RATE) as r:
+        await point_for_goto(r)
+        await goto(r)
+        await break_link(r)
+        await goto_ended(r)
+        assert box_mode(r) is TrackerMode.TRACK  # landed and tracks, no link needed
+        await r.driver.connect()
+        await check_landed(r)
+
+
+async def test_a_deaf_box_cannot_be_stopped_until_it_listens_again(tmp_path: Path) -> None:
+    """A halted box reads nothing: the abort fails naming the silence; once the box reads
+    again the next abort stops the motion within one timeout."""
+    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+        r.point(*START_ALTAZ)
+        await r.driver.move_axis(MountAxis.PRIMARY, 4.0)  # UTILITY arrow, 4°/s
+        r.emulator.faults.add(Fault(FaultKind.HALT, "R"))  # deaf after the next status read
+        error = await first_error(r.driver.read_status)
+        assert re.search(r"no reply|not back in sync", str(error)), error
+        error = await first_error(r.driver.abort)
+        assert re.search(r"no reply|not back in sync", str(error)), error
+        assert box_pressed(r) == Direction.RIGHT  # 'b' waits unread
+        r.emulator.faults.resume()
+        started = time.monotonic()
+        await r.driver.abort()
+        assert time.monotonic() - started < RECOVERY_BOUND_S
+        assert box_pressed(r) == Direction(0)
+        await eventually(lambda: azimuth_rate(r) == 0.0)  # ramped down
+        await assert_truth_read(r)
+
+
+async def test_what_the_box_cannot_do_never_reaches_the_link(tmp_path: Path) -> None:
+    """The public methods without a Sky Tracker command are refused or done on the PC: with
+    every reply armed to close the link, nothing fires."""
+    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+        r.point(*START_ALTAZ)
+        await r.driver.refresh()
+        sent = r.driver.line.commands_sent
+        r.emulator.faults.add(Fault(FaultKind.CLOSE, times=None))
+        for refused in (
+            r.driver.park(),
+            r.driver.unpark(),
+            r.driver.goto_horizontal(45.0, 180.0),
+            r.driver.set_time(r.sim.clock.now()),
+        ):
+            with pytest.raises(NotSupportedError):
+                await refused
+        await r.driver.set_site(r.driver.site)
+        assert r.driver.line.commands_sent == sent
+        assert not r.emulator.faults.fired
 
 
 # --- the table for the docs ---------------------------------------------------------------------
