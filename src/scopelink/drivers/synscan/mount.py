@@ -271,7 +271,8 @@ class SynScanMount(Mount):
         """Stop manual motion this driver started (nothing could stop it later), then close.
 
         Gotos and tracking carry on, as INDI leaves them: a mount tracking an exposure should not
-        stop because the PC let go of the link.
+        stop because the PC let go of the link. A stop that fails here stays owed (the state
+        says the mount may move) and is sent first by the next :meth:`connect`.
         """
         if not self._connected:
             await self.wire.close()
