@@ -74,3 +74,16 @@ async def test_the_altitude_limit_stops_a_motion_upwards() -> None:
         await rig.mount.refresh()
         state = rig.mount.state
         assert any("above the configured limit of 80.00°" in p for p in state.problems)
+
+
+async def test_tracking_far_from_the_limits_costs_no_wire_traffic_until_a_slew_starts() -> None:
+    async with synscan_rig(at=(13.0, 250.0), tracking=True) as rig:
+        await asyncio.sleep(0.1)
+        assert rig.mount.guard.running  # following the tracked position by astrometry...
+        sent = len(rig.received)
+        await asyncio.sleep(0.5)
+        assert len(rig.received) == sent  # ...without a single exchange
+        await rig.mount.move_axis(MountAxis.PRIMARY, FAST_DEG_S)  # wakes it: polls, then stops
+        await wait_until_still(rig)
+        assert rig.mount.guard.stops >= 1
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg

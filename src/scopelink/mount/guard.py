@@ -110,7 +110,8 @@ class HorizonGuard:
         self._motions: dict[MountAxis, _RateMotion] = {}
         self._clients: dict[str, MotionClient] = {}
         self._task: asyncio.Task[None] | None = None
-        self._poke = asyncio.Event()
+        self._poke: asyncio.Event | None = None
+        """Set by a new rate motion while the guard waits far from the limits."""
         self.notice = ""
         """Why the guard last stopped the mount ("" once a new motion command was accepted)."""
         self.stops = 0
@@ -162,7 +163,8 @@ class HorizonGuard:
             return
         self._motions[axis] = _RateMotion(rate_deg_s, _acting_for.get())
         self.notice = ""
-        self._poke.set()
+        if self._poke is not None:
+            self._poke.set()
         self._wake()
 
     def motions_stopped(self) -> None:
@@ -233,12 +235,15 @@ class HorizonGuard:
         return state.connected and (bool(self._motions) or state.tracking is not TrackingMode.OFF)
 
     def _wake(self) -> None:
-        if not self.enabled or self.running:
+        if not self.enabled:
             return
         try:
             loop = asyncio.get_running_loop()
         except RuntimeError:  # published outside a loop (a test setting state up): nothing moves
             return
+        if self.running and self._task is not None and self._task.get_loop() is loop:
+            return
+        # (A task left pending in a loop that has since closed never finishes: start afresh.)
         self._task = loop.create_task(self._run(), name="scopelink horizon guard")
 
     async def close(self) -> None:
@@ -280,14 +285,17 @@ class HorizonGuard:
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
         no exchange with the device, until it comes near a limit or a rate motion starts."""
-        self._poke.clear()
-        while not self._motions and self._needed(self._mount.state):
-            if self._near_limit(self._mount.state):
-                return
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(self.settings.far_check_s):
-                    await self._poke.wait()
-            self._poke.clear()
+        poke = self._poke = asyncio.Event()  # created here: bound to the running loop
+        try:
+            while not self._motions and self._needed(self._mount.state):
+                if self._near_limit(self._mount.state):
+                    return
+                with contextlib.suppress(TimeoutError):
+                    async with asyncio.timeout(self.settings.far_check_s):
+                        await poke.wait()
+                poke.clear()
+        finally:
+            self._poke = None
 
     async def _watch_closely(self) -> None:
         """Keep the poller running and judge every new reading until the mount is far from the
