@@ -661,6 +661,22 @@ async def test_a_guide_pulse_whose_end_is_lost_is_ended_when_the_link_returns() 
         await probe_the_truth(r)
 
 
+async def test_a_device_that_keeps_answering_garbage_is_named_as_such() -> None:
+    """Garbage twice (the reply and the re-sent command's): the error says malformed reply, the
+    state keeps the last good position and names it; the next poll reads the truth."""
+    async with memory_rig(timeout_s=SHORT_TIMEOUT_S) as r:
+        good = r.mount.state
+        r.emulator.faults.add(Fault(FaultKind.MALFORMED, "e", times=2))
+        with pytest.raises(DeviceError) as raised:
+            await r.mount.refresh()
+        message = str(raised.value)
+        assert message.startswith(f"malformed reply on {NAME}: "), message
+        assert f"; after recovering, again: malformed reply on {NAME}" in message, message
+        assert same_coordinates(r.mount.state, good)
+        assert r.mount.state.problems[0].startswith("malformed reply")
+        await probe_the_truth(r)
+
+
 async def test_a_time_re_sent_after_a_fault_is_moved_on_by_the_time_the_retry_took() -> None:
     """A retried ``H`` would set the hand control's clock one timeout behind: the driver sends
     it once more with the time it is by then (the clock running in real time here)."""
