@@ -87,3 +87,16 @@ async def test_tracking_far_from_the_limits_costs_no_wire_traffic_until_a_slew_s
         await wait_until_still(rig)
         assert rig.mount.guard.stops >= 1
         assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+
+
+async def test_panning_into_a_rising_horizon_profile_is_stopped_before_it() -> None:
+    # A house to the south: the horizon rises from 10° at azimuth 150° to 25° at 200°, so a tube
+    # level at 15° meets it at azimuth 166.7° while its altitude never changes.
+    limits = Limits(horizon_deg=HORIZON_DEG, horizon_profile=((150.0, 10.0), (200.0, 25.0)))
+    async with synscan_rig(model=AZ_GTI, at=(15.0, 161.0), limits=limits, rate=2.0) as rig:
+        await rig.mount.move_axis(MountAxis.PRIMARY, 2.0)
+        await wait_until_still(rig)
+        alt, az = rig.sim.observed_at(rig.sim.elapsed())
+        assert az > 162.0  # it did pan
+        assert alt >= limits.horizon_at(az) - TOLERANCE_DEG, (alt, az, limits.horizon_at(az))
+        assert any("horizon of" in p for p in rig.mount.state.problems)

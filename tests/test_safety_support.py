@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
-from scopelink.astro import Site, observed_to_j2000
+from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Limits, Mount, MountAxis, TrackingMode
@@ -189,15 +189,16 @@ async def skytracker_rig(
 
 
 async def wait_until_still(rig: Rig, timeout_s: float = 10.0) -> float:
-    """Wait until the true altitude changes by less than 0.01°/s (the slew ended; tracking alone
-    moves at most 0.004°/s); returns it."""
+    """Wait until the true pointing moves by less than 0.01°/s (the slew ended; tracking alone
+    moves at most 0.004°/s); returns the altitude then."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout_s
-    last = rig.sample()
+    last = rig.sim.observed_at(rig.sim.elapsed())
     while loop.time() < deadline:
         await asyncio.sleep(0.1)
-        now = rig.sample()
-        if abs(now - last) < 1e-3:
-            return now
+        rig.sample()
+        now = rig.sim.observed_at(rig.sim.elapsed())
+        if angular_separation_deg(now[1], now[0], last[1], last[0]) < 1e-3:
+            return now[0]
         last = now
-    raise AssertionError(f"the mount was still moving after {timeout_s} s (alt {last:.2f}°)")
+    raise AssertionError(f"the mount was still moving after {timeout_s} s (alt {last[0]:.2f}°)")
