@@ -450,6 +450,14 @@ class SkyTrackerMount(Mount):
         except (ReplyTimeoutError, BadReplyError) as error:
             # A refused 'S' gets no reply; so does one whose 'A' was lost. 's' tells them apart.
             logger.info("no good acknowledgement of 'S' (%s): reading the factors back", error)
+            # The version is not known yet, so the resync had no sync point: a late 'A' could
+            # be read as the first byte of the factors. A whole reply timeout of quiet first.
+            try:
+                await line.link.drain_input(
+                    self.options.reply_timeout_s, 2 * self.options.reply_timeout_s
+                )
+            except LinkError as link_error:
+                raise NotConnectedError(f"the link {line.link.name} failed: {link_error}") from None
             stored = await self._read_agreed(line, ReadCalibration())
             assert isinstance(stored, CalibrationReply)
             wanted = encode_calfloat_pair(command.azimuth_factor, command.elevation_factor)
