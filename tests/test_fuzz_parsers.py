@@ -32,7 +32,7 @@ from tests.test_alpaca_http_layer import API, read_reply
 from tests.test_alpaca_support import serve, sim_mount
 from tests.test_web_support import served
 
-EXAMPLES = 200
+EXAMPLES = 150
 
 
 def fuzz_inputs(target: Target) -> st.SearchStrategy[bytes]:
