@@ -56,7 +56,7 @@ async def test_an_altaz_mount_at_its_horizon_may_not_move_down() -> None:
     async with synscan_rig(model=AZ_GTI, at=(10.1, 180.0)) as rig:
         await rig.mount.refresh()
         sent = len(rig.slews_received())
-        with pytest.raises(LimitError, match="may only move up"):
+        with pytest.raises(LimitError, match="would take it lower"):
             await rig.mount.move_axis(MountAxis.SECONDARY, -1.0)
         assert len(rig.slews_received()) == sent  # nothing reached the link
         await rig.mount.move_axis(MountAxis.SECONDARY, 1.0)  # up is allowed
@@ -100,3 +100,41 @@ async def test_panning_into_a_rising_horizon_profile_is_stopped_before_it() -> N
         assert az > 162.0  # it did pan
         assert alt >= limits.horizon_at(az) - TOLERANCE_DEG, (alt, az, limits.horizon_at(az))
         assert any("horizon of" in p for p in rig.mount.state.problems)
+
+
+@pytest.mark.parametrize(
+    ("axis", "az_deg"),
+    # Where each axis moves the altitude most: the polar axis low in the west (the hour angle),
+    # the declination axis low in the south (on the meridian the polar axis moves no altitude).
+    # In the east the tube is on the other side of the pier: both axes there too.
+    [
+        (MountAxis.PRIMARY, 250.0),
+        (MountAxis.SECONDARY, 185.0),
+        (MountAxis.PRIMARY, 110.0),
+        (MountAxis.SECONDARY, 110.0),
+    ],
+)
+async def test_an_equatorial_mount_at_its_horizon_may_only_move_up(
+    axis: MountAxis, az_deg: float
+) -> None:
+    # The guard tells which way each axis moves the altitude from the pier side, the hemisphere
+    # and the astrometry: exactly one direction is refused, and the other one rises. (Starting
+    # just below the horizon, a short move up leaves it at the horizon for the second try.)
+    async with synscan_rig(at=(9.9, az_deg)) as rig:
+        await rig.mount.refresh()
+        outcomes: dict[float, str] = {}
+        for rate in (1.0, -1.0):
+            sent = len(rig.slews_received())
+            try:
+                await rig.mount.move_axis(axis, rate)
+            except LimitError as error:
+                outcomes[rate] = str(error)
+                assert len(rig.slews_received()) == sent  # refused: nothing reached the link
+                continue
+            outcomes[rate] = "moved"
+            before = rig.true_alt()
+            await asyncio.sleep(0.3)
+            await rig.mount.move_axis(axis, 0.0)
+            assert rig.true_alt() > before + 0.05, rate  # the allowed direction is up
+        refused = [message for message in outcomes.values() if "would take it lower" in message]
+        assert len(refused) == 1, outcomes

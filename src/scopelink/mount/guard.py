@@ -28,6 +28,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import math
 import secrets
 from collections.abc import AsyncIterator, Iterator
 from contextlib import aclosing, asynccontextmanager, contextmanager
@@ -36,7 +37,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from scopelink.mount.errors import LimitError, MountError
-from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
+from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
 
 if TYPE_CHECKING:
     from scopelink.mount.base import Mount
@@ -134,27 +135,72 @@ class HorizonGuard:
 
     def check_move(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> None:
         """Refuse a rate motion that starts at or beyond a limit and heads further out, where
-        the direction is known: the altitude axis of an alt-az mount (positive is up)."""
-        if rate_deg_s == 0.0 or axis is not MountAxis.SECONDARY:
-            return
-        if self._mount.capabilities.alignment_mode is not AlignmentMode.ALT_AZ:
-            return
-        if state.alt_deg is None or state.az_deg is None:
+        the direction is known (see :meth:`altitude_direction`)."""
+        if rate_deg_s == 0.0 or state.alt_deg is None or state.az_deg is None:
             return
         limits = self._mount.limits
         margin = self.settings.margin_deg
         floor = limits.horizon_at(state.az_deg)
-        if rate_deg_s < 0.0 and state.alt_deg <= floor + margin:
+        at_floor = state.alt_deg <= floor + margin
+        at_top = state.alt_deg >= limits.max_altitude_deg - margin
+        if not (at_floor or at_top):
+            return
+        direction = self.altitude_direction(axis, rate_deg_s, state)
+        if direction is None:
+            return  # the guard judges the motion from its first readings instead
+        if direction < 0.0 and at_floor:
             raise LimitError(
                 f"the mount is at altitude {state.alt_deg:.2f}°, at the configured horizon of "
-                f"{floor:.2f}°: it may only move up from here (nothing was sent to the mount)"
+                f"{floor:.2f}°, and this motion would take it lower: nothing was sent to the "
+                "mount (move the other way)"
             )
-        if rate_deg_s > 0.0 and state.alt_deg >= limits.max_altitude_deg - margin:
+        if direction > 0.0 and at_top:
             raise LimitError(
                 f"the mount is at altitude {state.alt_deg:.2f}°, at the configured limit of "
-                f"{limits.max_altitude_deg:.2f}°: it may only move down from here (nothing was "
-                "sent to the mount)"
+                f"{limits.max_altitude_deg:.2f}°, and this motion would take it higher: nothing "
+                "was sent to the mount (move the other way)"
             )
+
+    def altitude_direction(
+        self, axis: MountAxis, rate_deg_s: float, state: MountState
+    ) -> float | None:
+        """Whether turning ``axis`` at ``rate_deg_s`` raises (+1) or lowers (-1) the tube now;
+        None where that cannot be told.
+
+        Alt-az: the secondary axis is the altitude (positive is up); the azimuth axis moves no
+        altitude. Equatorial: the primary axis forwards turns westwards (hour angle up) in the
+        north and eastwards in the south; the secondary forwards moves north in the north and
+        south in the south, the other way when a German mount is flipped (an unknown pier side
+        cannot be told). The altitude's change with hour angle and declination comes from the
+        reading's J2000 position through the same astrometry as everything else.
+        """
+        mode = self._mount.capabilities.alignment_mode
+        if mode is AlignmentMode.ALT_AZ:
+            if axis is MountAxis.SECONDARY:
+                return math.copysign(1.0, rate_deg_s)
+            return None
+        ra, dec, alt = state.ra_j2000_hours, state.dec_j2000_deg, state.alt_deg
+        if ra is None or dec is None or alt is None:
+            return None
+        hemisphere = 1.0 if self._mount.site.latitude_deg >= 0.0 else -1.0
+        step = 0.01  # degrees: far above rounding, far below curvature
+        if axis is MountAxis.PRIMARY:
+            # The hour angle grows as the right ascension under the tube falls.
+            moved, _ = self._mount.observed_altaz((ra - step / 15.0) % 24.0, dec)
+            sign = hemisphere
+        else:
+            normal = PierSide.EAST if hemisphere > 0.0 else PierSide.WEST
+            if mode is AlignmentMode.GERMAN_POLAR and state.pier_side is PierSide.UNKNOWN:
+                return None
+            flipped = mode is AlignmentMode.GERMAN_POLAR and state.pier_side is not normal
+            towards = step if dec + step <= 90.0 else -step
+            moved, _ = self._mount.observed_altaz(ra, dec + towards)
+            sign = hemisphere * (-1.0 if flipped else 1.0) * math.copysign(1.0, towards)
+        here_alt, _ = self._mount.observed_altaz(ra, dec)
+        change = (moved - here_alt) * sign * math.copysign(1.0, rate_deg_s)
+        if abs(change) < 1e-6:
+            return None
+        return math.copysign(1.0, change)
 
     def motion_commanded(self, axis: MountAxis, rate_deg_s: float) -> None:
         """``move_axis`` reached the device: remember the motion and its owner, and watch it."""
