@@ -113,9 +113,9 @@ SYNC_TOLERANCE_DEG = 0.05
 """A sync read back further than this from its target was not obeyed (the hand control ignores
 syncs beyond ~7° silently). Generous against drift between the ``s`` and the ``e`` read back."""
 
-STALE_TIME_S = 0.5
-"""A ``set_time`` exchange that took this long (a retry after a fault) is sent again with the
-time moved on by as much: the hand control's clock has whole seconds, and half of one is lost."""
+STALE_TIME = timedelta(seconds=0.5)
+"""A ``set_time`` exchange that took this long on the driver's clock (a retry after a fault) is
+sent again with the time moved on by as much: the hand control's clock has whole seconds."""
 
 _AXES = {MountAxis.PRIMARY: Axis.AZM_RA, MountAxis.SECONDARY: Axis.ALT_DEC}
 
@@ -691,13 +691,12 @@ class SynScanMount(Mount):
         return reply.to_datetime().astimezone(UTC)
 
     async def _set_time(self, utc: datetime) -> None:
-        loop = asyncio.get_running_loop()
-        started = loop.time()
+        started = self.now()
         await self._ask(self._set_time_command(utc), Ack)
-        late_s = loop.time() - started
-        if late_s >= STALE_TIME_S:
+        moved_on = self.now() - started
+        if moved_on >= STALE_TIME:
             # Re-sent after a fault: the hand control got a time that was old by then.
-            await self._ask(self._set_time_command(utc + timedelta(seconds=late_s)), Ack)
+            await self._ask(self._set_time_command(utc + moved_on), Ack)
 
     def _set_time_command(self, utc: datetime) -> SetTime:
         zone = timezone(timedelta(hours=self.utc_offset_hours))
