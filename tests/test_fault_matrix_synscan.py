@@ -669,6 +669,24 @@ async def test_the_poller_stops_a_motion_whose_stop_was_lost_as_soon_as_the_link
         assert r.mount.state.problems == ()
 
 
+async def test_a_rate_motion_that_ran_blind_through_an_outage_is_stopped_when_it_ends() -> None:
+    """Nobody sent a stop, but the position could not be read while an axis turned: the driver
+    stops the axis when the link returns (a goto would carry on: its target was checked)."""
+    async with memory_rig(timeout_s=SHORT_TIMEOUT_S) as r:
+        await start_primary(r)
+        r.emulator.faults.add(Fault(FaultKind.STALL, "e"))
+        with pytest.raises(DeviceError, match=r"no reply to 'get precise RA/Dec'"):
+            await r.mount.refresh()
+        state = r.mount.state
+        assert state.slewing
+        assert "stop of the primary axis not confirmed" in state.problems[0], state.problems
+        assert "the position cannot be read while it turns" in state.problems[0]
+        r.emulator.faults.resume()
+        assert not (await r.mount.refresh()).slewing
+        assert commanded_rate(r.sim, MountAxis.PRIMARY) == 0.0
+        await probe_the_truth(r)
+
+
 async def test_a_guide_pulse_whose_end_is_lost_is_ended_when_the_link_returns() -> None:
     async with memory_rig(timeout_s=SHORT_TIMEOUT_S) as r:
         await r.mount.pulse_guide(GuideDirection.NORTH, PULSE_MS)

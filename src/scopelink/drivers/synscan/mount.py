@@ -339,7 +339,8 @@ class SynScanMount(Mount):
             if not self._aligned:
                 self._aligned = (await self._ask(IsAligned(), Aligned, priority)).aligned
         except DeviceError as error:
-            self._report_problem(str(error))
+            if not self._stop_blind_motion(error):
+                self._report_problem(str(error))
             raise
         ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
         problems: tuple[str, ...] = (self._site_mismatch,) if self._site_mismatch else ()
@@ -377,6 +378,16 @@ class SynScanMount(Mount):
         )
         self._publish(state)
         return state
+
+    def _stop_blind_motion(self, error: DeviceError) -> bool:
+        """A poll failed (twice: the retry too) while an axis turns at a rate: nobody sees where
+        it goes, so its stop is owed, sent when the link returns. Gotos carry on (their target
+        was checked against the limits), as does tracking. True if a stop was owed."""
+        moving = {axis for axis, rate in self._axis_rates.items() if rate} | set(self._pulses)
+        if not moving:
+            return False
+        self._owe_stops(axes=moving, cause=f"the position cannot be read while it turns: {error}")
+        return True
 
     @property
     def _slewing(self) -> bool:
@@ -505,11 +516,14 @@ class SynScanMount(Mount):
         try:
             yield
         except DeviceError as error:
-            self._owed.owe(cancel_goto=cancel_goto, axes=axes or set(), cause=str(error))
-            logger.warning("%s: %s", self.wire.name, self._owed.describe())
-            problems = (self._owed.describe(),)
-            self._publish(dataclasses.replace(self.state, slewing=True, problems=problems))
+            self._owe_stops(cancel_goto=cancel_goto, axes=axes or set(), cause=str(error))
             raise
+
+    def _owe_stops(self, *, cancel_goto: bool = False, axes: set[MountAxis], cause: str) -> None:
+        self._owed.owe(cancel_goto=cancel_goto, axes=axes, cause=cause)
+        logger.warning("%s: %s", self.wire.name, self._owed.describe())
+        problems = (self._owed.describe(),)
+        self._publish(dataclasses.replace(self.state, slewing=True, problems=problems))
 
     async def _pay_owed_stops(self) -> None:
         """Send the owed stops, holding the wire, before the exchange that found them owed."""
