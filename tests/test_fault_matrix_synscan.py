@@ -572,6 +572,9 @@ async def check_failure(r: Rig, command: Command, column: Column, before: MountS
     if command.state_problem:
         assert state.problems, state
         assert f"within {TIMEOUT_S:g} s" in state.problems[0], state.problems
+        if command.key != "e":  # a motion command: its undoing stop is owed, and shown
+            assert "not confirmed" in state.problems[0], state.problems
+            assert state.slewing
     if column.kind is FaultKind.STALL:
         assert r.emulator.faults.stalled
     else:
