@@ -621,6 +621,32 @@ async def test_every_command_under_each_fault(columns: tuple[Column, ...]) -> No
     assert not failures, "\n".join(failures)
 
 
+CONNECT_KEYS = ["K", "V", "m", "P", "J", "w", "L", "e", "t", "p"]
+"""Every exchange of ``connect``: echo, identification, then the first full state read."""
+
+
+async def test_connect_recovers_from_a_lost_reply_at_every_step() -> None:
+    async def lose_one(key: str) -> None:
+        async with memory_rig(connect=False) as r:
+            fault = r.emulator.faults.add(Fault(FaultKind.DROP, key))
+            await r.mount.connect()
+            assert [record.fault for record in r.emulator.faults.fired] == [fault]
+            # The opening echo is checked once more by connect itself; any later reply is
+            # recovered by the wire: either way one more resynchronisation than the opening one.
+            assert r.mount.wire.statistics.resyncs == 2
+            assert r.mount.wire.statistics.failures == int(key != "K")
+            await verify_connected(r, None)
+            await probe_the_truth(r)
+
+    results = await asyncio.gather(*map(lose_one, CONNECT_KEYS), return_exceptions=True)
+    failures = [
+        f"drop on {key!r}: {result!r}"
+        for key, result in zip(CONNECT_KEYS, results, strict=True)
+        if isinstance(result, BaseException)
+    ]
+    assert not failures, "\n".join(failures)
+
+
 # --- real transports, and a link that breaks during motion ----------------------------------------
 
 
