@@ -4,8 +4,10 @@ When a motion command or a stop fails on a broken link (a timeout the retry did 
 hand control, a closed port), the driver cannot tell whether the hand control carried it out: a
 goto may be running, an axis may still turn at a rate the user meant to stop, a guide pulse may
 never end. The user was told the command failed, so the safe state to return to is a stopped
-mount. :class:`OwedStops` remembers what to send (``M`` for a goto, rate 0 per axis) until the
-driver has sent it successfully, before anything else, on the next exchange that gets through.
+mount. The same holds when the polls fail while an axis turns at a rate: the motion runs blind,
+and nobody could stop it in time. :class:`OwedStops` remembers what to send (``M`` for a goto,
+rate 0 per axis) until the driver has sent it successfully, before anything else, on the next
+exchange that gets through. Decisions: ``docs/reliability-faults-synscan.md``.
 """
 
 from __future__ import annotations
