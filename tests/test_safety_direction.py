@@ -17,7 +17,7 @@ SITES = {"north": Site(48.0, 11.0, pressure_hpa=0.0), "south": Site(-33.9, 18.4,
 
 @pytest.mark.parametrize("model", [EQ6, AZ_GTI], ids=lambda m: m.name)
 @pytest.mark.parametrize("hemisphere", sorted(SITES))
-@pytest.mark.parametrize("az_deg", [40.0, 110.0, 160.0, 200.0, 250.0, 320.0])
+@pytest.mark.parametrize("az_deg", [60.0, 160.0, 200.0, 300.0])
 @pytest.mark.parametrize("axis", list(MountAxis))
 async def test_the_told_direction_is_the_one_the_mount_moves(
     model: MountModel, hemisphere: str, az_deg: float, axis: MountAxis
