@@ -10,6 +10,7 @@ from pathlib import Path
 
 from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
 from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
+from scopelink.links import Link, open_link
 from scopelink.mount import Limits, MountAxis
 from scopelink.servers.faults import FaultInjector
 from scopelink.servers.skytracker import SkyTrackerEmulator
@@ -77,20 +78,30 @@ async def rig(
     limits: Limits | None = None,
     guide_speed_arcsec_s: int | None = None,
     clock_rate: float = CLOCK_RATE,
+    pace: bool = True,
 ) -> AsyncIterator[Rig]:
-    """Emulator + driver; the driver is disconnected and the emulator stopped afterwards."""
+    """Emulator + driver; the driver is disconnected and the emulator stopped afterwards.
+
+    ``pace=False`` drops the 9600-baud pacing both ways (replies and sends come at once): for
+    tests of the logic that run many emulators at once and need not the wire's timing.
+    """
     sim = sky_tracker_mount(clock_rate)
     async with SkyTrackerEmulator(
-        sim, data_dir, faults=faults, strict_line=strict_line
+        sim, data_dir, faults=faults, strict_line=strict_line, pace=pace
     ) as emulator:
         spec = await serve(emulator, transport)
+
+        async def unpaced() -> Link:
+            return await open_link(spec)
+
         driver = SkyTrackerMount(
-            spec,
+            spec if pace else unpaced,
             site=SITE,
             clock=sim.clock.now,
             options=options,
             limits=limits,
             guide_speed_arcsec_s=guide_speed_arcsec_s,
+            name=spec,
         )
         if connect:
             await driver.connect()
