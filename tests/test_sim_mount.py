@@ -470,3 +470,28 @@ async def test_a_chosen_park_position_is_where_park_goes() -> None:
     alt, az = mount.observed_at(mount.elapsed())
     assert alt == pytest.approx(30.0, abs=1e-6)
     assert az == pytest.approx(100.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("site", [NORTH, SOUTH], ids=["north", "south"])
+async def test_tracking_at_the_pole_turns_the_polar_axis_at_the_sidereal_rate(site: Site) -> None:
+    # At the pole the hour angle is undefined: following the sky point there exactly used to
+    # leave the polar axis spinning at thousands of degrees a second after a stop.
+    mount = await make_mount(EQ6, site)
+    await mount.set_tracking(TrackingMode.SIDEREAL)
+    mount.step(0.5)
+    await mount.abort()
+    await mount.abort()
+    mount.step(3600.0)
+    state = mount.snapshot()
+    assert state.problems == ()
+    assert not state.slewing
+    polar, declination = mount.axes
+    assert polar.rate_at(mount.elapsed()) == pytest.approx(
+        site_sign(site) * SIDEREAL_RATE_DEG_S, rel=1e-9
+    )
+    assert declination.rate_at(mount.elapsed()) == 0.0
+    assert state.alt_deg == pytest.approx(abs(site.latitude_deg), abs=1e-6)
+
+
+def site_sign(site: Site) -> float:
+    return 1.0 if site.latitude_deg >= 0.0 else -1.0

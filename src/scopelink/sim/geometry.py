@@ -90,6 +90,10 @@ class Geometry(ABC):
         """How far (degrees) the counters are inside the mechanical limits (< 0: beyond)."""
         return math.inf
 
+    def pole_distance_deg(self, primary: float, secondary: float) -> float:
+        """How far (degrees) the polar axis is from pointing the tube; ``inf`` for alt-az."""
+        return math.inf
+
     @abstractmethod
     def guide_axis(self, direction: GuideDirection, secondary: float) -> tuple[int, float]:
         """Axis index (0 primary, 1 secondary) and sign of the rate that moves ``direction``."""
@@ -113,6 +117,10 @@ class _Equatorial(Geometry):
     def to_axes(self, alt_deg: float, az_deg: float, side: PierSide) -> tuple[float, float]:
         ha, dec = altaz_to_hadec(alt_deg, az_deg, self.latitude_deg)
         return self.from_hadec(ha, dec, side)
+
+    def pole_distance_deg(self, primary: float, secondary: float) -> float:
+        _, dec = self.to_hadec(primary, secondary)
+        return 90.0 - abs(dec)
 
 
 class GermanEquatorialGeometry(_Equatorial):

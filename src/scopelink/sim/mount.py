@@ -36,13 +36,21 @@ from scopelink.sim.axis import Axis, AxisPlan, Trajectory
 from scopelink.sim.clock import SimClock
 from scopelink.sim.geometry import Geometry, geometry_for
 from scopelink.sim.models import EQ6, MountModel
-from scopelink.sim.tracking import SkyPath, SkyTarget, ra_drift_hours_per_s
+from scopelink.sim.tracking import (
+    PolarAxisPath,
+    SkyPath,
+    SkyTarget,
+    ra_drift_hours_per_s,
+    tracking_rate_deg_s,
+)
 
 __all__ = ["LimitStop", "SimulatedMount"]
 
 _FOREVER = math.inf
 _TRACKING_LOOKAHEAD_S = 86400.0
 """How far ahead tracking is checked against the horizon and the mechanical limits."""
+_POLE_TRACKING_DEG = 0.5
+"""Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
 _SEARCH_STEP_DEG = 2.0
 """Largest motion between two checks of the limits (a crossing is then found by bisection)."""
 _SEARCH_MAX_STEP_S = 900.0
@@ -421,7 +429,11 @@ class SimulatedMount(Mount):
             primary_reference=self.axes[0].unwrapped_position_at(t),
         )
 
-    def _path_from_here(self, t: float) -> SkyPath:
+    def _path_from_here(self, t: float) -> SkyPath | PolarAxisPath:
+        counters = self.counters_at(t)
+        if self.geometry.pole_distance_deg(*counters) < _POLE_TRACKING_DEG:
+            rate = self.geometry.hemisphere * tracking_rate_deg_s(self._tracking)
+            return PolarAxisPath(counters, t, rate)
         ra, dec = self.j2000_at(t)
         drift = ra_drift_hours_per_s(self._tracking)
         return self._path(SkyTarget(ra, dec, t, drift), t, self._side_at(t))

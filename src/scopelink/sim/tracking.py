@@ -18,17 +18,21 @@ from scopelink.mount import TrackingMode
 from scopelink.sim.geometry import Geometry
 from scopelink.sim.models import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, SOLAR_RATE_DEG_S
 
-__all__ = ["SkyPath", "SkyTarget", "ra_drift_hours_per_s"]
+__all__ = ["PolarAxisPath", "SkyPath", "SkyTarget", "ra_drift_hours_per_s", "tracking_rate_deg_s"]
 
 _CACHE_SIZE = 64
 
 
-def ra_drift_hours_per_s(mode: TrackingMode) -> float:
-    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate."""
-    rate = {TrackingMode.LUNAR: LUNAR_RATE_DEG_S, TrackingMode.SOLAR: SOLAR_RATE_DEG_S}.get(
+def tracking_rate_deg_s(mode: TrackingMode) -> float:
+    """How fast the polar axis turns in ``mode`` (sidereal unless lunar or solar)."""
+    return {TrackingMode.LUNAR: LUNAR_RATE_DEG_S, TrackingMode.SOLAR: SOLAR_RATE_DEG_S}.get(
         mode, SIDEREAL_RATE_DEG_S
     )
-    return (SIDEREAL_RATE_DEG_S - rate) / 15.0
+
+
+def ra_drift_hours_per_s(mode: TrackingMode) -> float:
+    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate."""
+    return (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) / 15.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,3 +109,24 @@ class SkyPath:
 
     def secondary(self, t: float) -> float:
         return self.axes_at(t)[1]
+
+
+class PolarAxisPath:
+    """Tracking with the tube at the celestial pole: the polar axis turns at ``rate_deg_s`` (signed
+    in counter degrees) and the declination axis holds, as a real equatorial mount tracks.
+
+    A :class:`SkyPath` cannot be used there: the hour angle is undefined at the pole, and the sky
+    point the tube sees circles the true pole (refraction lifts the view), passing through the
+    polar axis, so following it exactly would need an unbounded polar-axis rate.
+    """
+
+    def __init__(self, counters: tuple[float, float], at_s: float, rate_deg_s: float) -> None:
+        self.counters = counters
+        self.at_s = at_s
+        self.rate_deg_s = rate_deg_s
+
+    def primary(self, t: float) -> float:
+        return self.counters[0] + self.rate_deg_s * (t - self.at_s)
+
+    def secondary(self, t: float) -> float:
+        return self.counters[1]
