@@ -138,3 +138,13 @@ async def test_an_equatorial_mount_at_its_horizon_may_only_move_up(
             assert rig.true_alt() > before + 0.05, rate  # the allowed direction is up
         refused = [message for message in outcomes.values() if "would take it lower" in message]
         assert len(refused) == 1, outcomes
+
+
+async def test_tracking_through_the_zenith_is_left_alone_without_an_altitude_limit() -> None:
+    # At the default 90° nothing can pass the limit: a star culminating by the zenith is tracked.
+    async with synscan_rig(at=(89.8, 95.0), rate=300.0, tracking=True) as rig:
+        await asyncio.sleep(2.0)  # ten simulated minutes: up through 89.9° and down again
+        await rig.mount.refresh()
+        assert rig.mount.guard.stops == 0
+        assert rig.mount.state.tracking is TrackingMode.SIDEREAL
+        assert rig.max_alt_deg > 89.85

@@ -41,6 +41,7 @@ from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide
 
 if TYPE_CHECKING:
     from scopelink.mount.base import Mount
+    from scopelink.mount.limits import Limits
 
 __all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
 
@@ -142,7 +143,7 @@ class HorizonGuard:
         margin = self.settings.margin_deg
         floor = limits.horizon_at(state.az_deg)
         at_floor = state.alt_deg <= floor + margin
-        at_top = state.alt_deg >= limits.max_altitude_deg - margin
+        at_top = _has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
         if not (at_floor or at_top):
             return
         direction = self.altitude_direction(axis, rate_deg_s, state)
@@ -326,7 +327,9 @@ class HorizonGuard:
             return True
         limits = self._mount.limits
         near = self.settings.margin_deg + factor * self.settings.near_deg
-        return alt - limits.horizon_at(state.az_deg) < near or limits.max_altitude_deg - alt < near
+        if alt - limits.horizon_at(state.az_deg) < near:
+            return True
+        return _has_ceiling(limits) and limits.max_altitude_deg - alt < near
 
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
@@ -413,7 +416,7 @@ class HorizonGuard:
             )
         below_now = limits.max_altitude_deg - reading.alt_deg
         below_then = limits.max_altitude_deg - alt_then
-        if below_then < settings.margin_deg and below_then < below_now:
+        if _has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
             return (
                 f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
                 f"the configured limit of {limits.max_altitude_deg:.2f}°"
@@ -438,3 +441,9 @@ class HorizonGuard:
 
 def _wrap_signed(degrees: float) -> float:
     return (degrees + 180.0) % 360.0 - 180.0
+
+
+def _has_ceiling(limits: Limits) -> bool:
+    """Whether an altitude limit is set: at 90° (the default) nothing can pass it, and a star
+    culminating near the zenith must not have its tracking turned off."""
+    return limits.max_altitude_deg < 90.0
