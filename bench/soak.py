@@ -181,6 +181,8 @@ class Requests:
     count: int = 0
     errors: int = 0
     slowest_s: float = 0.0
+    slowest: str = ""
+    """Which request was the slowest, and when."""
     late: list[str] = field(default_factory=list)
 
 
@@ -248,7 +250,9 @@ class Night:
             record.late.append(f"{what} at {start:.1f} s: no answer within {bound_s:g} s")
             raise
         finally:
-            record.slowest_s = max(record.slowest_s, self.now() - start)
+            took = self.now() - start
+            if took > record.slowest_s:
+                record.slowest_s, record.slowest = took, f"{what} at {start:.1f} s"
 
     def answered_error(self, protocol: str, text: str) -> None:
         self.of(protocol).errors += 1
@@ -1107,6 +1111,9 @@ def judge(report: SoakReport) -> list[Check]:
     stream_gap = max(night.stream_gaps, default=0.0)
     rss_first, rss_last, fds_first, fds_last = _quarters(night.memory, warm_up_s=0.1 * end)
     rss_growth_mib = (statistics.median(rss_last) - statistics.median(rss_first)) / 1024
+    settled = [(t, rss) for t, rss, _ in night.memory if t >= 0.1 * end]
+    trend = statistics.linear_regression([t for t, _ in settled], [rss for _, rss in settled])
+    trend_mib_per_hour = trend.slope * 3600 / 1024  # per real hour: the load runs in real time
     fd_growth = max(fds_last) - max(fds_first)
     took, miss = night.final_landing
     # The horizon guard's notice is a problem shown on purpose, not a failure to recover
@@ -1167,7 +1174,7 @@ def judge(report: SoakReport) -> list[Check]:
             rss_growth_mib <= RSS_GROWTH_BOUND_MIB,
             f"RSS median first quarter {statistics.median(rss_first) / 1024:.1f} MiB, last "
             f"{statistics.median(rss_last) / 1024:.1f} MiB: {rss_growth_mib:+.2f} MiB "
-            f"<= {RSS_GROWTH_BOUND_MIB:g}",
+            f"<= {RSS_GROWTH_BOUND_MIB:g}; trend {trend_mib_per_hour:+.2f} MiB per hour",
         ),
         Check(
             "fds flat, back to baseline",
@@ -1192,11 +1199,11 @@ def print_report(report: SoakReport) -> None:
         f"seed {config.seed}"
     )
     print(f"serve before the clients: {_files_text(report.baseline_files)}")
-    print(f"{'protocol':<12}{'requests':>10}{'errors':>8}{'slowest s':>11}{'late':>6}")
+    print(f"{'protocol':<12}{'requests':>10}{'errors':>8}{'slowest s':>11}{'late':>6}  slowest")
     for name, record in sorted(night.requests.items()):
         print(
             f"{name:<12}{record.count:>10}{record.errors:>8}"
-            f"{record.slowest_s:>11.2f}{len(record.late):>6}"
+            f"{record.slowest_s:>11.2f}{len(record.late):>6}  {record.slowest}"
         )
     print(
         f"wire commands (emulator) {night.wire_commands}, "
