@@ -273,3 +273,22 @@ def test_the_blocking_facade_drives_a_mount_from_plain_code() -> None:
     assert not mount.state.connected
     with pytest.raises(RuntimeError, match="closed"):
         blocking.refresh()
+
+
+async def test_leaving_watching_mid_poll_lets_the_exchange_finish() -> None:
+    # Cancelling a poll mid-exchange would make the driver resynchronise before its next command
+    # (a guard watching only while a motion runs enters and leaves all the time).
+    from tests.test_driver_synscan_support import rig
+
+    async with rig("tcp") as bench:
+        mount = bench.mount
+        resyncs = mount.wire.statistics.resyncs  # connecting starts with one
+        failures = mount.wire.statistics.failures
+        for _ in range(10):
+            async with mount.watching():
+                await mount.wait_for(lambda state: True, timeout_s=5.0)
+                await asyncio.sleep(0.01)  # leave with the next poll in flight
+        await mount.refresh()
+        assert mount.wire.statistics.resyncs == resyncs
+        assert mount.wire.statistics.failures == failures
+        assert not is_polling(mount)

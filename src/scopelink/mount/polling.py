@@ -70,6 +70,7 @@ class StatePoller:
         self.retry_s = retry_s
         self._watchers = 0
         self._task: asyncio.Task[None] | None = None
+        self._refreshing = False
         self.polls = 0
         self.failures = 0
 
@@ -91,7 +92,9 @@ class StatePoller:
             yield
         finally:
             self._watchers -= 1
-            if self._watchers == 0:
+            # A poll in flight is left to finish (the loop then ends by itself): cancelling it
+            # mid-exchange would cost the driver a resynchronisation on its next command.
+            if self._watchers == 0 and not self._refreshing:
                 await self.stop()
 
     async def stop(self) -> None:
@@ -109,6 +112,7 @@ class StatePoller:
             if not self._is_connected():
                 await self._pause(self.retry_s)
                 continue
+            self._refreshing = True
             try:
                 await self._refresh()
             except asyncio.CancelledError:
@@ -120,11 +124,15 @@ class StatePoller:
                     logger.warning("%s", message)
                 last_error = message
                 self._report_problem(message)
-                await self._pause(self.retry_s)
+                if self._watchers > 0:
+                    await self._pause(self.retry_s)
                 continue
+            finally:
+                self._refreshing = False
             last_error = ""
             self.polls += 1
-            await asyncio.sleep(max(0.0, self.interval_s - (loop.time() - started)))
+            if self._watchers > 0:
+                await asyncio.sleep(max(0.0, self.interval_s - (loop.time() - started)))
 
     async def _pause(self, seconds: float) -> None:
         """Wait ``seconds``, or less if a new state (e.g. a reconnect) is published."""
