@@ -52,7 +52,9 @@ async def test_pulse_guides_are_timed_on_the_pc(transport: str) -> None:
                 (at, c) for at, c in arrivals if isinstance(c, VariableRateSlew | FixedRateSlew)
             ]
             assert [type(c) for _, c in rates] == [VariableRateSlew, FixedRateSlew]
-            assert rates[1][0] - rates[0][0] == pytest.approx(1.0, abs=0.08)
+            # Never early; late only by event-loop lateness (this process also runs the emulator
+            # and its simulator, and CI shares two cores).
+            assert 0.98 <= rates[1][0] - rates[0][0] <= 1.25
             assert isinstance(rates[0][1], VariableRateSlew)
             assert rates[0][1].axis is Axis.ALT_DEC
             assert rates[0][1].positive is (sign > 0)
