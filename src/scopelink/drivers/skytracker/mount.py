@@ -348,7 +348,8 @@ class SkyTrackerMount(Mount):
             reply = again
         raise BadReplyError(
             f"three different replies in a row to {command.describe()!r} on {line.link.name}: "
-            "the line garbles replies (check the cable, 9600 baud, the stop bits)"
+            "the line garbles replies, or they come late (check the cable, 9600 baud, the stop "
+            "bits)"
         )
 
     @staticmethod
@@ -466,11 +467,10 @@ class SkyTrackerMount(Mount):
                 return
             raise CalibrationRuleError(
                 f"the Sky Tracker did not acknowledge 'S' nor take it ({error}; it still holds "
-                f"factors "
-                f"{stored.azimuth_factor:g}, {stored.elevation_factor:g}): it takes calibration "
-                "only as the first command after it is switched on, and once, so something "
-                "talked to it since power-on (an earlier connection?), or 'S' was lost on the "
-                "line: switch it off and on and try again"
+                f"factors {stored.azimuth_factor:g}, {stored.elevation_factor:g}): it takes "
+                "calibration only as the first command after it is switched on, and once, so "
+                "something talked to it since power-on (an earlier connection?), or 'S' was lost "
+                "on the line: switch it off and on and try again"
             ) from None
         if not isinstance(reply, Acknowledge):
             raise DeviceError(f"unexpected reply to 'S': {reply}")
