@@ -24,10 +24,25 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from scopelink.cli.config import ConfigError, load_config
+from scopelink.links import memory_pair
 from scopelink.protocol import skytracker
-from scopelink.protocol.synscan import CommandParser
+from scopelink.protocol.synscan import (
+    Ack,
+    CommandParser,
+    DateTime,
+    Echo,
+    EchoReply,
+    Location,
+    SetLocation,
+    SetTime,
+    SynScanClientConnection,
+)
+from scopelink.protocol.synscan import AnyCommand as SynScanCommand
+from scopelink.servers.synscan.device import SynScanHandControl
+from scopelink.servers.synscan.server import SynScanServer
 from scopelink.web.params import BadRequestError, Body
 from tests.bench_support import run_quick_bench
+from tests.synscan_support import ask
 from tests.test_alpaca_http_layer import API, read_reply
 from tests.test_alpaca_support import serve, sim_mount
 from tests.test_web_support import served
@@ -255,3 +270,39 @@ def test_config_reader_names_the_file_for_every_bad_file(
         load_config(path)
     assert str(path) in str(raised.value)
     assert words in str(raised.value)
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize(
+    "command",
+    [
+        SetTime(DateTime(1, 2, 3, 103, 5, 2030, 10, True)),  # month 103
+        SetTime(DateTime(76, 127, 3, 4, 61, 2030, 10, False)),  # hour 76, minute 127, day 61
+        SetTime(DateTime(1, 2, 3, 4, 5, 2048, 44, True)),  # UTC+45: no such zone
+        SetLocation(Location(100, 9, 0, False, 169, 181, 248, False)),  # latitude 100°
+    ],
+    ids=["month", "hour-minute-day", "zone", "latitude"],
+)
+async def test_synscan_hand_control_refuses_impossible_time_and_place_and_keeps_answering(
+    command: SynScanCommand,
+) -> None:
+    # Fuzzing the hand control behind the parser: H and W bytes are passed through as sent
+    # (docs/protocol-notes-synscan.md), and an impossible date or latitude raised ValueError out
+    # of the device, ending the connection without a reply. The hand control acknowledges a
+    # refused command with '#' and changes nothing.
+    mount = sim_mount()
+    pc, device = memory_pair()
+    server = SynScanServer(SynScanHandControl(mount))
+    await mount.connect()
+    task = asyncio.create_task(server.serve(device))
+    try:
+        client = SynScanClientConnection()
+        site, offset = mount.site, server.hand_control.clock_offset
+        assert await ask(pc, client, command) == Ack()
+        assert await ask(pc, client, Echo(0x81)) == EchoReply(0x81)
+        assert mount.site == site
+        assert server.hand_control.clock_offset == offset
+    finally:
+        await pc.close()
+        await asyncio.wait_for(task, 5)
+        await mount.disconnect()

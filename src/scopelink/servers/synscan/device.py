@@ -16,6 +16,7 @@ from typing import Protocol, runtime_checkable
 from scopelink.astro import angular_separation_deg, observed_to_j2000
 from scopelink.mount import (
     AlignmentMode,
+    InvalidValueError,
     Mount,
     MountAxis,
     MountError,
@@ -192,16 +193,23 @@ class SynScanHandControl:
                 site = self.mount.site
                 return Location.from_degrees(site.latitude_deg, site.longitude_deg)
             case SetLocation(location):
-                site = replace(
-                    self.mount.site,
-                    latitude_deg=location.latitude,
-                    longitude_deg=(location.longitude + 180.0) % 360.0 - 180.0,
-                )
+                try:
+                    site = replace(
+                        self.mount.site,
+                        latitude_deg=location.latitude,
+                        longitude_deg=(location.longitude + 180.0) % 360.0 - 180.0,
+                    )
+                except ValueError as error:  # W bytes come as sent: latitude 100° reaches here
+                    raise InvalidValueError(f"{command.describe()}: {error}") from None
                 await self.mount.set_site(site)
             case GetTime():
                 return self._local_time()
             case SetTime(time):
-                self.clock_offset = time.to_datetime().astimezone(UTC) - self.mount.now()
+                try:
+                    local = time.to_datetime()
+                except ValueError as error:  # H bytes come as sent: month 0, hour 76, UTC+45...
+                    raise InvalidValueError(f"{command.describe()}: {error}") from None
+                self.clock_offset = local.astimezone(UTC) - self.mount.now()
                 self.utc_offset_hours, self.dst = time.utc_offset_hours, time.dst
             case GetVersion():
                 return self.config.firmware
