@@ -4,15 +4,16 @@ Run ``.venv/bin/python -m bench.soak`` (10 simulated hours at x100: 6 minutes) o
 ``--hours H --rate X --seed N``; ``--quick`` is the 1-hour x200 run the test suite makes. The stack
 is the one a user runs, each part in its own process:
 
-    scopelink emulate synscan --tcp --clock-rate X --fault ... (seeded, probabilistic, finite)
+    python -m bench.soak --emulator   the SynScan emulator at --clock-rate X, as 'scopelink
+                                      emulate synscan --tcp' runs it, faults switched on stdin
       <- scopelink serve --device synscan:tcp://...  (the process under test)
         <- this process: Alpaca, LX200, Stellarium, SynScan and dashboard WebSocket clients
 
 The emulated sky runs X times faster than real time; the driver, the servers and the clients run
 in real time, so a 180 degree slew at the EQ6's 3.4 deg/s lands in about half a real second at
-x100. Each fault rule fires a fixed number of times with a probability per wire command chosen to
-use them up around 40 % into the night; the rest of the night shows recovery. See
-``docs/reliability-soak.md`` for the checks and their bounds.
+x100. Seeded probabilistic faults of every kind, each fired a fixed number of times, and two
+outages (stall, halt) come in the first 70 % of the night; then every fault is cleared and the
+rest of the night shows recovery. See ``docs/reliability-soak.md`` for the checks and bounds.
 """
 
 from __future__ import annotations
@@ -100,6 +101,8 @@ FINAL_LANDING_BOUND_DEG = 1.0
 
 @dataclass(frozen=True)
 class SoakConfig:
+    """One night: its length, speed-up, seed, clients and faults."""
+
     hours: float = 10.0
     rate: float = 100.0
     seed: int = 1
@@ -116,11 +119,13 @@ class SoakConfig:
         "delay=6",
         "close",
     )
+    """How often each probabilistic fault rule fires at most."""
     fault_firings: int = 9
     """The expected firings of each rule while faults are on, were it not limited to
     ``faults_per_kind``: a little more, so that each is used up by the end of the fault phase."""
-    """How often each fault rule fires over the night."""
     wire_commands_per_s: float = 25.0
+    """SynScan commands per second assumed for the fault probabilities (~50/s reach the device
+    when all is well, far fewer while faults fire)."""
     faults: bool = True
     """False: the same night without faults (for comparison)."""
     faults_until: float = 0.7
@@ -132,7 +137,6 @@ class SoakConfig:
     scripted: tuple[tuple[float, str], ...] = ()
     """(fraction of the night, fault spec): rules added at set times (``once`` rules fire on the
     next command)."""
-    """The measured SynScan command rate with these clients (for the fault probabilities)."""
 
     @property
     def real_s(self) -> float:
@@ -140,7 +144,7 @@ class SoakConfig:
 
     def fault_specs(self) -> list[str]:
         """One rule per fault kind, each firing at most ``faults_per_kind`` times, with the chance
-        per wire command of ``fault_firings`` over the night."""
+        per wire command that gives ``fault_firings`` over the fault phase."""
         if not self.faults:
             return []
         phase_s = self.faults_until * self.real_s
@@ -190,6 +194,8 @@ class Requests:
 
 @dataclass
 class Night:
+    """Everything the night records, for the report and the checks."""
+
     started: float
     """When the clients started, on this process's loop clock."""
     started_wall: datetime = field(default_factory=lambda: datetime.now(UTC))
