@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import random
 import signal
 import sys
@@ -199,16 +200,23 @@ def main(argv: list[str] | None = None) -> int:
     if args.replay:
         return replay(args.replay, args.seed)
     targets = [target_named(name) for name in args.target] if args.target else list(TARGETS)
-    per_target = QUICK_INPUTS_PER_TARGET if args.quick else max(1, args.inputs // len(targets))
+    logging.disable(logging.WARNING)  # refusals are logged as warnings: expected, and many
+    shares = sum(target.share for target in targets)
+    counts = {
+        target.name: QUICK_INPUTS_PER_TARGET
+        if args.quick
+        else max(1, round(args.inputs * target.share / shares))
+        for target in targets
+    }
     signal.signal(signal.SIGALRM, _on_alarm)
-    print(f"fuzzing {len(targets)} parsers, {per_target} inputs each, seed {args.seed}")
+    print(f"fuzzing {len(targets)} targets, {sum(counts.values())} inputs, seed {args.seed}")
     print(
         f"{'target':<20}{'inputs':>10}{'seconds':>9}{'inputs/s':>10}{'slowest':>11}"
         f"{'re-run':>10}  problems"
     )
     results = []
     for target in targets:
-        result = run_target(target, TARGETS.index(target), per_target, args.seed)
+        result = run_target(target, TARGETS.index(target), counts[target.name], args.seed)
         results.append(result)
         slowest = f"{result.slowest_s * 1000:.2f} ms"
         rerun = f"{result.slowest_rerun_s * 1000:.2f} ms"

@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import os
 import random
+import re
 import tempfile
 import typing
 from collections.abc import Callable, Iterator, Sequence
@@ -30,6 +31,7 @@ from urllib.parse import parse_qsl
 
 from aiohttp import web
 
+from scopelink.astro import Site
 from scopelink.cli.config import ConfigError, load_config
 from scopelink.cli.errors import CommandError
 from scopelink.cli.targets import Coordinates, parse_target
@@ -41,6 +43,9 @@ from scopelink.protocol.skytracker import messages as tracker_messages
 from scopelink.servers.alpaca.errors import AlpacaError, BadRequest
 from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
 from scopelink.servers.alpaca.params import UINT32_MAX, Params, parse_transaction_id
+from scopelink.servers.lx200.device import LX200Handset
+from scopelink.servers.synscan.device import SynScanHandControl
+from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web.params import BadRequestError, read_body
 
 __all__ = ["TARGETS", "FuzzFailureError", "Target", "chunks"]
@@ -65,6 +70,8 @@ class Target:
     """Bytes that mean something to this parser (delimiters, command letters), inserted more
     often."""
     max_size: int = 256
+    share: float = 1.0
+    """This target's inputs relative to a parser's (devices answer in real time: fewer inputs)."""
 
 
 def chunks(data: bytes, rng: random.Random) -> Iterator[bytes]:
@@ -803,6 +810,79 @@ _CONFIG_SEEDS = (
 )
 
 
+# -------------------------------------------------------------------- devices behind the parsers
+
+
+@dataclass
+class _Devices:
+    """The servers' device logic in front of one simulated mount, kept for the whole run (so a
+    device target's input meets the state earlier inputs left, as a long session would)."""
+
+    mount: SimulatedMount
+    synscan: SynScanHandControl
+    lx200: LX200Handset
+
+
+_DEVICES: list[_Devices] = []
+_DEVICE_COMMANDS_PER_INPUT = 4
+"""A device answers in real time (a cancelled goto waits up to ~0.2 s for the axes to stop): four
+commands keep an input well inside the 1 s hang budget."""
+
+
+def _devices() -> _Devices:
+    if not _DEVICES:
+        site = Site(latitude_deg=50.0, longitude_deg=10.0, elevation_m=300.0)
+        mount = SimulatedMount(EQ6, site=site, clock=SimClock.accelerated(50.0))
+        _event_loop().run_until_complete(mount.connect())
+        _DEVICES.append(_Devices(mount, SynScanHandControl(mount), LX200Handset(mount)))
+    return _DEVICES[0]
+
+
+def check_synscan_device(data: bytes, rng: random.Random) -> None:
+    """The SynScan hand control behind the parser: every command gets a reply that fits it; a
+    refusal is '#', never an exception (MountError is the device's to turn into '#')."""
+    hand_control = _devices().synscan
+    connection = synscan.SynScanServerConnection()
+    connection.receive_data(data)
+    answered = 0
+    while (event := connection.next_event()) is not synscan.NEED_DATA:
+        if isinstance(event, _SYNSCAN_ERRORS):
+            continue
+        if answered == _DEVICE_COMMANDS_PER_INPUT:
+            break
+        answered += 1
+        reply = _event_loop().run_until_complete(asyncio.wait_for(hand_control.answer(event), 5))
+        expect(synscan.reply_fits(event, reply), f"{reply!r} does not answer {event!r}")
+        connection.send(reply)
+
+
+_LX200_REPLY = {
+    lx200.ReplyKind.NONE: re.compile(rb""),
+    lx200.ReplyKind.CHAR: re.compile(rb"[^#]"),
+    lx200.ReplyKind.TERMINATED: re.compile(rb"[^#]*#"),
+    lx200.ReplyKind.SLEW: re.compile(rb"0|[12][^#]*#"),
+    lx200.ReplyKind.DATE_SET: re.compile(rb"0|1[^#]*#[^#]*#"),
+}
+
+
+def check_lx200_device(data: bytes, rng: random.Random) -> None:
+    """The LX200 handset behind the parser: each reply has the shape its command's kind says
+    (what the client reads by), and nothing raises."""
+    session = _devices().lx200.session()
+    connection = lx200.LX200ServerConnection()
+    connection.receive_data(data + b"#")
+    answered = 0
+    while (event := connection.next_event()) is not lx200.NEED_DATA:
+        if isinstance(event, lx200.UnknownCommand | lx200.StrayBytes):
+            continue
+        if answered == _DEVICE_COMMANDS_PER_INPUT:
+            break
+        answered += 1
+        reply = _event_loop().run_until_complete(asyncio.wait_for(session.answer(event), 5))
+        shape = _LX200_REPLY[lx200.reply_kind(event)]
+        expect(shape.fullmatch(reply) is not None, f"{event!r} answered {reply!r}")
+
+
 # ------------------------------------------------------------------------------- CLI targets
 
 
@@ -915,6 +995,22 @@ TARGETS: tuple[Target, ...] = (
         check_trace_text,
         b"\\\n<->:xrn0 ",
         max_size=512,
+    ),
+    Target(
+        "synscan-device",
+        _synscan_server_seeds(),
+        check_synscan_device,
+        b"#PKTWHRrSsBbe",
+        max_size=64,
+        share=0.05,
+    ),
+    Target(
+        "lx200-device",
+        _LX200_COMMANDS,
+        check_lx200_device,
+        b":#\x06*:/+-.0123456789GSMRQ",
+        max_size=64,
+        share=0.05,
     ),
     Target(
         "cli-target",
