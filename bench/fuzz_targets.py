@@ -36,6 +36,7 @@ from scopelink.cli.config import ConfigError, load_config
 from scopelink.cli.errors import CommandError
 from scopelink.cli.targets import Coordinates, parse_target
 from scopelink.decode import Direction, Protocol, TraceInputError, annotate, parse_trace
+from scopelink.links import memory_pair
 from scopelink.mount import MountAxis, TrackingMode
 from scopelink.protocol import lx200, skytracker, stellarium, synscan
 from scopelink.protocol.skytracker import commander_messages
@@ -44,8 +45,11 @@ from scopelink.servers.alpaca.errors import AlpacaError, BadRequest
 from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
 from scopelink.servers.alpaca.params import UINT32_MAX, Params, parse_transaction_id
 from scopelink.servers.lx200.device import LX200Handset
+from scopelink.servers.skytracker.commander import SkyCommander
+from scopelink.servers.skytracker.emulator import commander_for
+from scopelink.servers.skytracker.tracker import SkyTracker
 from scopelink.servers.synscan.device import SynScanHandControl
-from scopelink.sim import EQ6, SimClock, SimulatedMount
+from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
 from scopelink.web.params import BadRequestError, read_body
 
 __all__ = ["TARGETS", "FuzzFailureError", "Target", "chunks"]
@@ -815,12 +819,14 @@ _CONFIG_SEEDS = (
 
 @dataclass
 class _Devices:
-    """The servers' device logic in front of one simulated mount, kept for the whole run (so a
+    """The servers' device logic in front of simulated mounts, kept for the whole run (so a
     device target's input meets the state earlier inputs left, as a long session would)."""
 
     mount: SimulatedMount
     synscan: SynScanHandControl
     lx200: LX200Handset
+    tracker: SkyTracker
+    commander: SkyCommander
 
 
 _DEVICES: list[_Devices] = []
@@ -834,7 +840,16 @@ def _devices() -> _Devices:
         site = Site(latitude_deg=50.0, longitude_deg=10.0, elevation_m=300.0)
         mount = SimulatedMount(EQ6, site=site, clock=SimClock.accelerated(50.0))
         _event_loop().run_until_complete(mount.connect())
-        _DEVICES.append(_Devices(mount, SynScanHandControl(mount), LX200Handset(mount)))
+        alt_az = SimulatedMount(SKY_TRACKER, site=site, clock=SimClock.accelerated(50.0))
+        _CONFIG_DIR.mkdir(exist_ok=True)
+        azimuth, altitude = alt_az.axes
+        bus, _ = memory_pair()
+        tracker = SkyTracker(
+            altitude=altitude, azimuth=azimuth, clock=alt_az.clock, bus=bus, data_dir=_CONFIG_DIR
+        )
+        commander = commander_for(alt_az, _CONFIG_DIR)
+        hand_control, handset = SynScanHandControl(mount), LX200Handset(mount)
+        _DEVICES.append(_Devices(mount, hand_control, handset, tracker, commander))
     return _DEVICES[0]
 
 
@@ -854,6 +869,33 @@ def check_synscan_device(data: bytes, rng: random.Random) -> None:
         reply = _event_loop().run_until_complete(asyncio.wait_for(hand_control.answer(event), 5))
         expect(synscan.reply_fits(event, reply), f"{reply!r} does not answer {event!r}")
         connection.send(reply)
+
+
+def check_skytracker_device(data: bytes, rng: random.Random) -> None:
+    """The Sky Tracker's firmware (``handle``) and the Sky Commander's (``respond``) behind their
+    parsers: each reply is exactly as long as the client will read for that command."""
+    devices = _devices()
+    tracker = skytracker.TrackerServer()
+    commander = skytracker.CommanderServer()
+    tracker.receive_data(data)
+    while (event := tracker.next_event()) is not skytracker.NEED_DATA:
+        if event is skytracker.PAUSED:
+            tracker.grant()  # the emulator relays to the Sky Commander; its replies checked below
+            continue
+        if isinstance(event, skytracker.RelayToCommander):
+            commander.receive_data(event.data)
+            while (relayed := commander.next_event()) is not skytracker.NEED_DATA:
+                _expect_reply_length(relayed, devices.commander.respond(relayed))
+            continue
+        if isinstance(event, skytracker.ReleaseBus | skytracker.RequestBus):
+            continue  # the bus is the emulator's (async) business, not the firmware's
+        _expect_reply_length(event, devices.tracker.handle(event))
+
+
+def _expect_reply_length(event: object, reply: bytes) -> None:
+    expected = event.reply.size if isinstance(event, skytracker.Command) and event.reply else 0
+    refused_calibration = isinstance(event, skytracker.SetCalibration) and not reply
+    expect(len(reply) == expected or refused_calibration, f"{event!r} answered {reply!r}")
 
 
 _LX200_REPLY = {
@@ -1003,6 +1045,14 @@ TARGETS: tuple[Target, ...] = (
         b"#PKTWHRrSsBbe",
         max_size=64,
         share=0.05,
+    ),
+    Target(
+        "skytracker-device",
+        (*(command.encode() for command in _TRACKER_COMMANDS), b"QL99 05.588 -05.391\rOR\rq"),
+        check_skytracker_device,
+        b"QqSKL\r",
+        max_size=64,
+        share=0.25,
     ),
     Target(
         "lx200-device",
