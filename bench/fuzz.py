@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import math
 import random
 import signal
 import sys
@@ -205,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
     counts = {
         target.name: QUICK_INPUTS_PER_TARGET
         if args.quick
-        else max(1, round(args.inputs * target.share / shares))
+        else max(1, math.ceil(args.inputs * target.share / shares))
         for target in targets
     }
     signal.signal(signal.SIGALRM, _on_alarm)
