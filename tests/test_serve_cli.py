@@ -33,8 +33,10 @@ from scopelink.protocol.synscan import (
     Version,
 )
 from scopelink.protocol.synscan.messages import GotoInProgress
+from scopelink.servers.faults import Fault, FaultInjector
 from scopelink.servers.skytracker import SkyTrackerEmulator
-from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
+from scopelink.servers.synscan import SynScanEmulator
+from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
 from tests.synscan_support import ask
 
 START_TIMEOUT_S = 30
@@ -307,3 +309,21 @@ def test_a_port_in_use_is_reported_with_a_hint(tmp_path: Path) -> None:
     assert result.stderr.startswith("scopelink serve:")
     assert "another program" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+async def test_serve_tries_a_device_that_fails_its_first_exchanges_again(tmp_path: Path) -> None:
+    # A hand control still booting (or a flaky link) loses the first replies: serve retries
+    # instead of leaving the telescope computer with nothing running.
+    sim = SimulatedMount(EQ6, site=SKY_SITE, clock=SimClock(start=datetime.now(UTC), rate=1.0))
+    faults = FaultInjector()
+    faults.add(Fault.parse("any:drop:times=4"))
+    async with SynScanEmulator(sim, faults=faults) as emulator:
+        host, port = await emulator.on_tcp("127.0.0.1", 0)
+        options = (*ALL_OFF[:-1], "--synscan-port=0", "--dashboard-port=-1")
+        device = ("--device", f"synscan:tcp://{host}:{port}", "--timeout", "0.3")
+        async with serving(tmp_path, *device, "--site", "48,11", *options) as printed:
+            assert "SynScan" in printed
+            assert len(faults.fired) == 4  # the first attempt failed on them
+            async with await open_tcp("127.0.0.1", listening(printed, "SynScan")) as link:
+                position = await ask(link, SynScanClientConnection(), GetRaDec(precise=True))
+                assert isinstance(position, Position)

@@ -142,7 +142,11 @@ async def open_mount(
         mount = create_mount(
             parsed, site=site, limits=limits, clock_rate=clock_rate, timeout_s=timeout_s
         )
-        await _connect(mount, parsed)
+        try:
+            await _connect(mount, parsed)
+        except DeviceError:
+            await _close_quietly(mount)  # a caller trying again must find the port free
+            raise
         return mount
     failures: list[str] = []
     for kind in ("synscan", "skytracker"):
@@ -155,9 +159,7 @@ async def open_mount(
         except DeviceError as error:
             _log.debug("autodetect: not %s: %s", kind, error)
             failures.append(f"{kind}: {error}")
-            # A failed probe may leave its link open; the next kind needs the port to itself.
-            with contextlib.suppress(MountError, LinkError):
-                await mount.disconnect()
+            await _close_quietly(mount)  # the next kind needs the port to itself
             continue
         return mount
     raise DeviceError(
@@ -171,6 +173,12 @@ _PORT_HINT: Final = (
     "'scopelink ports' lists the serial ports; check the path and your permissions "
     "(the dialout group on Linux)"
 )
+
+
+async def _close_quietly(mount: Mount) -> None:
+    """Close the link a failed connection attempt may have left open."""
+    with contextlib.suppress(MountError, LinkError):
+        await mount.disconnect()
 
 
 async def _connect(mount: Mount, spec: DeviceSpec) -> None:

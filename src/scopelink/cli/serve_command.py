@@ -288,8 +288,35 @@ def _describe(mount: Mount) -> str:
     return f"{identity.model}{firmware} on {identity.link or identity.protocol}"
 
 
+START_ATTEMPTS = 3
+"""How often serve tries to connect to its device before giving up."""
+START_RETRY_PAUSE_S = 2.0
+
+
+async def open_device_patiently(command: DeviceCommand) -> Mount:
+    """The connected device, tried again after a pause when it fails to answer: a hand control
+    still on its start-up screens, or a flaky link losing one of the first exchanges, should not
+    leave an unattended telescope computer with nothing running."""
+    for attempt in range(1, START_ATTEMPTS + 1):
+        try:
+            return await open_device(command)
+        except CommandError as error:
+            if attempt == START_ATTEMPTS:
+                raise
+            left = START_ATTEMPTS - attempt
+            _log.warning(
+                "%s; trying again in %.0f s (%d more %s)",
+                error,
+                START_RETRY_PAUSE_S,
+                left,
+                "try" if left == 1 else "tries",
+            )
+            await asyncio.sleep(START_RETRY_PAUSE_S)
+    raise AssertionError("unreachable")
+
+
 async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
-    mount = await open_device(command)
+    mount = await open_device_patiently(command)
     if _exposes_beyond_this_machine(plan.host):
         _log.warning("servers listen on %s: the mount can be driven from other machines", plan.host)
     try:
