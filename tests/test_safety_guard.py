@@ -148,3 +148,18 @@ async def test_tracking_through_the_zenith_is_left_alone_without_an_altitude_lim
         assert rig.mount.guard.stops == 0
         assert rig.mount.state.tracking is TrackingMode.SIDEREAL
         assert rig.max_alt_deg > 89.85
+
+
+async def test_keypad_speed_motions_are_guarded_too() -> None:
+    # The SynScan driver's keypad speeds (move_axis_fixed) go through the same guard.
+    async with synscan_rig(at=(13.0, 250.0)) as rig:
+        await rig.mount.move_axis_fixed(MountAxis.PRIMARY, 9)  # 800x sidereal, westwards
+        await wait_until_still(rig)
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+        assert rig.mount.guard.stops == 1
+    async with synscan_rig(model=AZ_GTI, at=(10.1, 180.0)) as rig:
+        await rig.mount.refresh()
+        sent = len(rig.slews_received())
+        with pytest.raises(LimitError, match="would take it lower"):
+            await rig.mount.move_axis_fixed(MountAxis.SECONDARY, 9, positive=False)
+        assert len(rig.slews_received()) == sent

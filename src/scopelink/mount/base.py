@@ -13,7 +13,7 @@ import asyncio
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import AsyncGenerator, Callable
+from collections.abc import AsyncGenerator, Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
@@ -326,12 +326,19 @@ class Mount(ABC):
             )
         if not (math.isfinite(rate_deg_s) and abs(rate_deg_s) <= limit):
             raise InvalidValueError(f"axis rate {rate_deg_s}°/s must lie within ±{limit}°/s")
+        await self._guarded_rate_motion(axis, rate_deg_s, lambda: self._move_axis(axis, rate_deg_s))
+
+    async def _guarded_rate_motion(
+        self, axis: MountAxis, rate_deg_s: float, start: Callable[[], Awaitable[None]]
+    ) -> None:
+        """Start a rate motion with ``start`` unless the horizon guard refuses it, and have the
+        guard watch it. Every way a driver offers to turn an axis at a rate goes through here."""
         if self._guard.enabled:
             try:
                 self._guard.check_move(axis, rate_deg_s, self.state)
             except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
                 self._guard.check_move(axis, rate_deg_s, await self.refresh())
-        await self._move_axis(axis, rate_deg_s)
+        await start()
         self._guard.motion_commanded(axis, rate_deg_s)
 
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:

@@ -575,14 +575,18 @@ class SynScanMount(Mount):
             await self.move_axis(axis, 0.0)
             return
         self._require_unparked()
-        self._cancel_pulse(axis)
-        with self._stops_owed_on_failure(axes={axis}):
-            await self._ask_passthrough(FixedRateSlew(_AXES[axis], positive, speed))
         multiple = (2, 8, 16, 32, 64, 128, 400, 600, 800)[speed - 1]
-        rate = multiple * SIDEREAL_RATE_DEG_S
-        self._axis_rates[axis] = rate if positive else -rate
-        self._goto_running = False
-        self._publish(dataclasses.replace(self.state, slewing=True))
+        rate = multiple * SIDEREAL_RATE_DEG_S if positive else -multiple * SIDEREAL_RATE_DEG_S
+
+        async def start() -> None:
+            self._cancel_pulse(axis)
+            with self._stops_owed_on_failure(axes={axis}):
+                await self._ask_passthrough(FixedRateSlew(_AXES[axis], positive, speed))
+            self._axis_rates[axis] = rate
+            self._goto_running = False
+            self._publish(dataclasses.replace(self.state, slewing=True))
+
+        await self._guarded_rate_motion(axis, rate, start)
 
     async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """A variable-rate slew at the guide rate on one axis, stopped by a PC timer."""
