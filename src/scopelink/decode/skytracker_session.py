@@ -36,6 +36,7 @@ class _Substream:
         self.data = bytearray()
         self.positions: list[int] = []
         self.annotated_until = 0
+        self._base = 0  # parser offset of data[0]: taken bytes are forgotten (live links)
 
     def append(self, data: bytes, positions: list[int]) -> None:
         self.data += data
@@ -44,7 +45,12 @@ class _Substream:
     def take(self, until: int) -> tuple[bytes, list[int]]:
         """The bytes from the last take up to ``until`` (a parser offset), and their places."""
         start, self.annotated_until = self.annotated_until, until
-        return bytes(self.data[start:until]), self.positions[start:until]
+        first, last = start - self._base, until - self._base
+        taken = bytes(self.data[first:last]), self.positions[first:last]
+        del self.data[:last]
+        del self.positions[:last]
+        self._base = until
+        return taken
 
 
 class SkyTrackerSession(Session):

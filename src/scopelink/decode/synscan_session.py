@@ -42,6 +42,7 @@ class SynScanSession(Session):
         super().__init__()
         self._parser = synscan.CommandParser()
         self._pc_positions: list[int] = []
+        self._pc_base = 0  # parser offset of _pc_positions[0]: annotated bytes are forgotten
         self._annotated_until = 0
         self._awaited: deque[_AwaitedReply] = deque()
 
@@ -58,12 +59,18 @@ class SynScanSession(Session):
             event = self._parser.next_frame()
             if event is synscan.NEED_DATA:
                 self._note_skipped_hashes(self._parser.offset)
+                # Everything before the parser's offset is annotated: a live link (the
+                # dashboard's traffic panel) must not keep a position per byte forever.
+                del self._pc_positions[: self._parser.offset - self._pc_base]
+                self._pc_base = self._parser.offset
                 return
             self._note_skipped_hashes(event.offset)
             match event:
                 case synscan.ParsedCommand(command, raw, start):
                     self._emit_pc(start, raw, Kind.COMMAND, command.describe(), message=command)
-                    self._awaited.append(_AwaitedReply(command, self._pc_positions[start]))
+                    self._awaited.append(
+                        _AwaitedReply(command, self._pc_positions[start - self._pc_base])
+                    )
                 case synscan.UnknownCommand(value, start):
                     self._emit_pc(
                         start,
@@ -96,7 +103,8 @@ class SynScanSession(Session):
         error_index: int | None = None,
         message: synscan.AnyCommand | None = None,
     ) -> None:
-        positions = self._pc_positions[start : start + len(raw)]
+        first = start - self._pc_base
+        positions = self._pc_positions[first : first + len(raw)]
         self._emit(
             positions,
             raw,

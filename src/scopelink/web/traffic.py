@@ -36,6 +36,9 @@ __all__ = [
 ]
 
 DEFAULT_CAPACITY = 200
+MAX_DECODED_LINKS = 64
+"""Links whose decoding state is kept; the least recently heard is forgotten beyond (every client
+connection of a server is a new link: a long-running serve must not keep them all)."""
 
 ProtocolChooser = Callable[[str], Protocol | None]
 """Which protocol a link (by its trace name) speaks; None: show its bytes undecoded."""
@@ -163,9 +166,12 @@ class TrafficMonitor(logging.Handler):
         sent_by_us = arrow == "-->"
         we_are_device = this_process_is_device(link)
         sender = Direction.DEVICE if sent_by_us == we_are_device else Direction.PC
-        decoder = self._decoders.get(link)
+        decoder = self._decoders.pop(link, None)
         if decoder is None:
-            decoder = self._decoders[link] = _LinkDecoder(self.protocol_for(link))
+            if len(self._decoders) >= MAX_DECODED_LINKS:
+                del self._decoders[next(iter(self._decoders))]  # the least recently used
+            decoder = _LinkDecoder(self.protocol_for(link))
+        self._decoders[link] = decoder  # the most recently used last
         try:
             annotations = decoder.feed(sender, data)
         except Exception:  # the decoder never raises by contract; keep the line if it does
