@@ -12,8 +12,9 @@ take effect, and stops it before the limit:
 - tracking that carries the mount out (a setting star) is turned off, as OnStep and the
   simulator do: a tracking mount that keeps going drives into the ground.
 
-A motion that starts at or beyond a limit and heads further out is refused where its direction is
-known (the altitude axis of an alt-az mount); elsewhere the guard stops it at the first readings.
+A motion that starts at or beyond a limit and heads further out is refused where its direction can
+be told (an alt-az mount's altitude axis; an equatorial mount's axes from hemisphere, pier side and
+astrometry); elsewhere the guard stops it at the first readings.
 Why the mount stopped is logged and shown in ``MountState.problems`` until the next motion command.
 
 The dead-man: front ends that hold a connection per client (LX200, the SynScan server,
