@@ -91,8 +91,11 @@ QUIET_WINDOW_MIN_S = 3.0
 """Shortest stretch without faults (after the settling time) that is judged."""
 STREAM_GAP_BOUND_S = 2.0
 """Stellarium positions come every 0.5 s whatever the wire does."""
-RSS_GROWTH_BOUND_MIB = 8.0
-"""Median RSS of the last quarter minus that of the first quarter (after warm-up)."""
+RSS_GROWTH_FLOOR_MIB = 1.0
+RSS_GROWTH_MIB_PER_HOUR = 2.0
+"""Median RSS of the last quarter of the night (after a 10 % warm-up) minus that of the first
+quarter may be at most the larger of 1 MiB (allocator noise) and 2 MiB per real hour between
+them. The leak the soak found (~13 MiB/h under this load) failed it in a 30-hour night."""
 FD_GROWTH_BOUND = 2
 """Most fds of the last quarter minus most of the first quarter (clients reconnect meanwhile)."""
 FINAL_LANDING_BOUND_DEG = 1.0
@@ -1130,6 +1133,8 @@ def judge(report: SoakReport) -> list[Check]:
     settled = [(t, rss) for t, rss, _ in night.memory if t >= 0.1 * end]
     trend = statistics.linear_regression([t for t, _ in settled], [rss for _, rss in settled])
     trend_mib_per_hour = trend.slope * 3600 / 1024  # per real hour: the load runs in real time
+    quarters_apart_h = 0.75 * (end - 0.1 * end) / 3600  # between the quarters' middles
+    rss_bound_mib = max(RSS_GROWTH_FLOOR_MIB, RSS_GROWTH_MIB_PER_HOUR * quarters_apart_h)
     fd_growth = max(fds_last) - max(fds_first)
     took, miss = night.final_landing
     # The horizon guard's notice is a problem shown on purpose, not a failure to recover
@@ -1186,10 +1191,10 @@ def judge(report: SoakReport) -> list[Check]:
         ),
         Check(
             "memory flat",
-            rss_growth_mib <= RSS_GROWTH_BOUND_MIB,
+            rss_growth_mib <= rss_bound_mib,
             f"RSS median first quarter {statistics.median(rss_first) / 1024:.1f} MiB, last "
             f"{statistics.median(rss_last) / 1024:.1f} MiB: {rss_growth_mib:+.2f} MiB "
-            f"<= {RSS_GROWTH_BOUND_MIB:g}; trend {trend_mib_per_hour:+.2f} MiB per hour",
+            f"<= {rss_bound_mib:.2f}; trend {trend_mib_per_hour:+.2f} MiB per hour",
         ),
         Check(
             "fds flat, back to baseline",
