@@ -7,6 +7,7 @@ import asyncio
 
 import pytest
 
+from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import LimitError, Limits, MountAxis, TrackingMode
 from scopelink.sim import AZ_GTI
 from tests.test_safety_support import (
@@ -153,11 +154,13 @@ async def test_tracking_through_the_zenith_is_left_alone_without_an_altitude_lim
 async def test_keypad_speed_motions_are_guarded_too() -> None:
     # The SynScan driver's keypad speeds (move_axis_fixed) go through the same guard.
     async with synscan_rig(at=(13.0, 250.0)) as rig:
+        assert isinstance(rig.mount, SynScanMount)
         await rig.mount.move_axis_fixed(MountAxis.PRIMARY, 9)  # 800x sidereal, westwards
         await wait_until_still(rig)
         assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
         assert rig.mount.guard.stops == 1
     async with synscan_rig(model=AZ_GTI, at=(10.1, 180.0)) as rig:
+        assert isinstance(rig.mount, SynScanMount)
         await rig.mount.refresh()
         sent = len(rig.slews_received())
         with pytest.raises(LimitError, match="would take it lower"):
