@@ -188,8 +188,9 @@ async def serving(policy: AccessPolicy, state_dir: Path) -> AsyncIterator[Rig]:
                 await alpaca.telescope.connect()
                 lx200 = await stack.enter_async_context(LX200Server(mount, access=policy))
                 _, lx200_port = await lx200.on_tcp("127.0.0.1", 0)
-                synscan = await stack.enter_async_context(SynScanEmulator(mount, wire=None))
-                synscan.access = synscan.server.access = AccessControl(policy, "SynScan")
+                synscan = await stack.enter_async_context(
+                    SynScanEmulator(mount, wire=None, access=policy)
+                )
                 _, synscan_port = await synscan.on_tcp("127.0.0.1", 0)
                 ports = {"alpaca": alpaca.port, "lx200": lx200_port, "synscan": synscan_port}
                 controls = {

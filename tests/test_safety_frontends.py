@@ -216,9 +216,8 @@ async def test_synscan_server_gotos_below_the_horizon_never_reach_the_device() -
 async def test_synscan_server_rate_slew_is_stopped_and_a_dropped_client_stops_it() -> None:
     async with (
         synscan_rig(at=WEST_LOW, rate=2.0) as rig,
-        SynScanEmulator(rig.mount, wire=None) as server,
+        SynScanEmulator(rig.mount, wire=None, dead_man=True) as server,
     ):
-        server.server.dead_man = True
         host, port = await server.on_tcp("127.0.0.1", 0)
         link = TcpLink(*await asyncio.open_connection(host, port), name="phone app")
         client = SynScanClientConnection()

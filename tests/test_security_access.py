@@ -377,8 +377,7 @@ async def test_lx200_commands_over_the_rate_wait_and_none_is_lost() -> None:
 
 async def test_read_only_synscan_acknowledges_gotos_without_moving() -> None:
     mount = simulated_mount()
-    async with SynScanEmulator(mount, wire=None) as emulator:
-        emulator.access = emulator.server.access = AccessControl(READ_ONLY, "SynScan")
+    async with SynScanEmulator(mount, wire=None, access=READ_ONLY) as emulator:
         host, port = await emulator.on_tcp("127.0.0.1", 0)
         link = await open_tcp(host, port)
         client = SynScanClientConnection()
@@ -394,8 +393,7 @@ async def test_read_only_synscan_acknowledges_gotos_without_moving() -> None:
 
 
 async def test_synscan_closes_strangers() -> None:
-    async with SynScanEmulator(simulated_mount(), wire=None) as emulator:
-        emulator.access = emulator.server.access = AccessControl(ELSEWHERE_ONLY, "SynScan")
+    async with SynScanEmulator(simulated_mount(), wire=None, access=ELSEWHERE_ONLY) as emulator:
         _, port = await emulator.on_tcp("127.0.0.1", 0)
         assert await closed_without_a_byte(port, b"e")
 

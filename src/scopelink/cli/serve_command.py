@@ -32,7 +32,7 @@ from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
 from scopelink.protocol.lx200 import SKYFI_PORT
-from scopelink.servers.access import DEFAULT_POLICY, AccessControl, AccessPolicy, parse_network
+from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy, parse_network
 from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
@@ -233,6 +233,8 @@ def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPo
         allow = tuple(parse_network(cidr) for cidr in args.allow) if args.allow else servers.allow
     except ValueError as error:
         raise CommandError(f"--allow: {error}") from None
+    rate = _or(args.rate_limit, servers.requests_per_second)
+    server_rate = _or(args.server_rate_limit, servers.server_requests_per_second)
     try:
         return AccessPolicy(
             read_only=servers.read_only if args.read_only is None else args.read_only,
@@ -241,12 +243,10 @@ def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPo
             max_connections_per_client=_or(
                 args.max_client_connections, servers.max_connections_per_client
             ),
-            requests_per_s=_or(args.rate_limit, servers.requests_per_second),
-            burst=max(1, round(2 * _or(args.rate_limit, servers.requests_per_second))),
-            server_requests_per_s=_or(args.server_rate_limit, servers.server_requests_per_second),
-            server_burst=max(
-                1, round(_or(args.server_rate_limit, servers.server_requests_per_second))
-            ),
+            requests_per_s=rate,
+            burst=max(1, round(2 * rate)),
+            server_requests_per_s=server_rate,
+            server_burst=max(1, round(server_rate)),
         )
     except ValueError as error:
         raise CommandError(str(error), "limits are whole numbers >= 1, the rate > 0") from None
@@ -389,9 +389,9 @@ async def _start_servers(
     if plan.synscan is not None or plan.synscan_pty is not None:
         config = SynScanConfig(model=synscan_model_code(mount))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
-        synscan = await stack.enter_async_context(SynScanEmulator(mount, config, wire=None))
-        synscan.server.dead_man = True  # a phone app that drops must not leave the mount slewing
-        synscan.access = synscan.server.access = AccessControl(policy, "SynScan")
+        # dead_man: a phone app that drops must not leave the mount slewing.
+        emulator = SynScanEmulator(mount, config, wire=None, access=policy, dead_man=True)
+        synscan = await stack.enter_async_context(emulator)
         if plan.synscan is not None:
             bound_host, port = await synscan.on_tcp(host, plan.synscan)
             decoded[port] = Protocol.SYNSCAN

@@ -54,14 +54,20 @@ class HostedDevice:
     says where clients connect. :meth:`close` (or leaving ``async with``) stops it.
     """
 
-    def __init__(self, handler: ConnectionHandler, *, wire: WireSpeed | None = None) -> None:
+    def __init__(
+        self,
+        handler: ConnectionHandler,
+        *,
+        wire: WireSpeed | None = None,
+        access: AccessControl | None = None,
+    ) -> None:
         self._handler = handler
         self._wire = wire
         self._tasks: list[asyncio.Task[None]] = []
         self._links: list[Link] = []
         self._tcp_server: TcpServer | None = None
-        self.access = AccessControl(name=type(self).__name__)
-        """Who may connect over TCP, how many, how fast (replace it to apply a policy)."""
+        self.access = access if access is not None else AccessControl(name=type(self).__name__)
+        """Who may connect over TCP, how many, how fast (no limits unless given)."""
         self.address = ""
         """The pty path, ``HOST:PORT``, or ``memory``, once started."""
 

@@ -61,8 +61,7 @@ class LX200Server(HostedDevice):
     ) -> None:
         self.handset = LX200Handset(mount, config)
         self.skyfi: SkyFiResponder | None = None
-        super().__init__(self.serve, wire=wire)
-        self.access = AccessControl(access, "LX200")
+        super().__init__(self.serve, wire=wire, access=AccessControl(access, "LX200"))
         self.handset.read_only = self.access.read_only
 
     @property

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Self
 
 from scopelink.mount import Mount
+from scopelink.servers.access import AccessControl, AccessPolicy
 from scopelink.servers.faults import FaultInjector
 from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
 from scopelink.servers.synscan.config import SynScanConfig
@@ -26,7 +27,9 @@ class SynScanEmulator(HostedDevice):
     """A SynScan hand control in front of ``mount`` (connected on entry if it is not yet).
 
     ``wire`` paces replies at a serial line's speed (9600 8N1 by default; None sends at once).
-    ``faults`` is the injector tests and the command line drive.
+    ``faults`` is the injector tests and the command line drive. ``access`` limits who connects
+    over TCP and how fast, and makes it read-only; ``dead_man`` stops a rate slew a client
+    started when its link goes (a bridge for phone apps; a hand control on a cable cannot notice).
     """
 
     def __init__(
@@ -36,10 +39,13 @@ class SynScanEmulator(HostedDevice):
         *,
         faults: FaultInjector | None = None,
         wire: WireSpeed | None = SERIAL_9600_8N1,
+        access: AccessPolicy | None = None,
+        dead_man: bool = False,
     ) -> None:
+        control = AccessControl(access, "SynScan")
         self.hand_control = SynScanHandControl(mount, config)
-        self.server = SynScanServer(self.hand_control, faults)
-        super().__init__(self.server.serve, wire=wire)
+        self.server = SynScanServer(self.hand_control, faults, access=control, dead_man=dead_man)
+        super().__init__(self.server.serve, wire=wire, access=control)
 
     @property
     def mount(self) -> Mount:

@@ -81,14 +81,21 @@ class SynScanServer:
     for their turn under its rate (admission itself is the hosting device's).
     """
 
-    def __init__(self, hand_control: SynScanHandControl, faults: FaultInjector | None = None):
+    def __init__(
+        self,
+        hand_control: SynScanHandControl,
+        faults: FaultInjector | None = None,
+        *,
+        access: AccessControl | None = None,
+        dead_man: bool = False,
+    ):
         self.hand_control = hand_control
         self.faults = faults or FaultInjector()
-        self.access = AccessControl(name="SynScan")
-
-    dead_man = False
-    """Stop a rate slew a client started when its link goes (``scopelink serve`` turns it on for
-    phone apps; off in the device emulator, since a hand control on a cable cannot notice)."""
+        self.access = access if access is not None else AccessControl(name="SynScan")
+        self.dead_man = dead_man
+        """Stop a rate slew a client started when its link goes (``scopelink serve`` turns it on
+        for phone apps; off in the device emulator, since a hand control on a cable cannot
+        notice)."""
 
     async def serve(self, link: Link) -> None:
         """Answer commands from ``link`` until it closes (or a ``close`` fault closes it)."""
