@@ -280,8 +280,7 @@ class Mount(ABC):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
-        self._guard.motions_stopped()  # a goto takes over from manual motion
-        self._guard.command_accepted()
+        self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
     async def goto_object(self, name: str) -> CatalogObject:
@@ -300,8 +299,7 @@ class Mount(ABC):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._goto_horizontal(alt_deg, az_deg)
-        self._guard.motions_stopped()
-        self._guard.command_accepted()
+        self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:

@@ -219,6 +219,11 @@ class HorizonGuard:
         """Every rate motion ended (abort, a goto taking over, park, disconnect)."""
         self._motions.clear()
 
+    def goto_started(self) -> None:
+        """A goto takes over from manual motion, and supersedes the last stop's notice."""
+        self.motions_stopped()
+        self.command_accepted()
+
     def command_accepted(self) -> None:
         """A new motion command (goto, tracking on) supersedes the last stop's notice."""
         self.notice = ""
