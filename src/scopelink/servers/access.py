@@ -47,6 +47,7 @@ __all__ = [
     "TokenBucket",
     "current_client",
     "parse_network",
+    "retry_after",
 ]
 
 logger = logging.getLogger(__name__)
@@ -59,6 +60,11 @@ class ReadOnlyError(MountError):
 
     def __init__(self, what: str = "this command") -> None:
         super().__init__(f"{what} refused: the server is read-only")
+
+
+def retry_after(wait_s: float) -> str:
+    """An HTTP ``Retry-After`` value for a wait: whole seconds, at least one."""
+    return str(max(1, math.ceil(wait_s)))
 
 
 def parse_network(text: str) -> IPNetwork:

@@ -11,7 +11,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import math
 from importlib import resources
 from pathlib import Path
 from types import TracebackType
@@ -23,7 +22,7 @@ from aiohttp.typedefs import Middleware
 
 from scopelink.decode import Protocol
 from scopelink.mount import Mount
-from scopelink.servers.access import AccessControl, AccessPolicy, Refusal
+from scopelink.servers.access import AccessControl, AccessPolicy, Refusal, retry_after
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
@@ -97,11 +96,10 @@ def _access_middleware(control: AccessControl) -> Middleware:
             )
         wait = control.request_wait(host)
         if wait is None:
-            retry = max(1, math.ceil(control.retry_after_s(host or "")))
             return web.json_response(
                 {"error": "too many requests: retry later", "kind": "TooManyRequests"},
                 status=429,
-                headers={"Retry-After": str(retry)},
+                headers={"Retry-After": retry_after(control.retry_after_s(host or ""))},
             )
         if wait:
             await asyncio.sleep(wait)

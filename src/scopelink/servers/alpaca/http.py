@@ -13,7 +13,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import math
 from collections import deque
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
@@ -22,7 +21,7 @@ from urllib.parse import parse_qsl, unquote
 
 import httptools
 
-from scopelink.servers.access import AccessControl, Client, Refusal
+from scopelink.servers.access import AccessControl, Client, Refusal, retry_after
 
 __all__ = ["HttpConnection", "HttpReply", "HttpRequest"]
 
@@ -68,8 +67,7 @@ _PHRASES = {200: "OK", 400: "Bad Request", 404: "Not Found", 405: "Method Not Al
 
 
 def _retry_after(status: int, message: str, wait_s: float) -> HttpReply:
-    seconds = max(1, math.ceil(wait_s))
-    return HttpReply(status, message.encode(), headers=(("Retry-After", str(seconds)),))
+    return HttpReply(status, message.encode(), headers=(("Retry-After", retry_after(wait_s)),))
 
 
 Handler = Callable[[HttpRequest], Awaitable[HttpReply]]
