@@ -94,6 +94,24 @@ def chunks(data: bytes, rng: random.Random) -> Iterator[bytes]:
         start = cut
 
 
+class _Parser(typing.Protocol):
+    def receive_data(self, data: bytes) -> None: ...
+
+    def next_event(self) -> object: ...
+
+
+def parsed_in_chunks(
+    parser: _Parser, stream: bytes, rng: random.Random, need_data: object
+) -> list[typing.Any]:
+    """Every event ``parser`` yields for ``stream`` fed in :func:`chunks`."""
+    events = []
+    for chunk in chunks(stream, rng):
+        parser.receive_data(chunk)
+        while (event := parser.next_event()) is not need_data:
+            events.append(event)
+    return events
+
+
 def _progress_guard(count: int, fed: int) -> None:
     # Each event consumes at least one byte; a few more (a pause, a release) are allowed for.
     expect(count <= fed + 4, f"{count} events from {fed} bytes: the parser does not advance")
@@ -156,11 +174,7 @@ def check_synscan_server(data: bytes, rng: random.Random) -> None:
     connection.discard_partial()
     valid = [rng.choice(_SYNSCAN_COMMANDS) for _ in range(rng.randint(1, 3))]
     stream = b"".join(synscan.encode_command(command) for command in valid)
-    events = []
-    for chunk in chunks(stream, rng):
-        connection.receive_data(chunk)
-        while (event := connection.next_event()) is not synscan.NEED_DATA:
-            events.append(event)
+    events = parsed_in_chunks(connection, stream, rng, synscan.NEED_DATA)
     expect(events == valid, f"valid commands after the pause came out as {events!r}")
 
 
@@ -198,21 +212,13 @@ def check_synscan_client(data: bytes, rng: random.Random) -> None:
         return
     echo = rng.choice(free)
     client.send(synscan.Echo(echo))
-    events = []
-    for chunk in chunks(late + bytes((echo, _HASH)), rng):
-        client.receive_data(chunk)
-        while (event := client.next_event()) is not synscan.NEED_DATA:
-            events.append(event)
+    events = parsed_in_chunks(client, late + bytes((echo, _HASH)), rng, synscan.NEED_DATA)
     stray = b"".join(e.data for e in events if isinstance(e, synscan.UnexpectedData))
     expect(events[-1:] == [synscan.EchoReply(echo)], f"resync echo not found: {events!r}")
     expect(stray == late, "late bytes not all drained as UnexpectedData")
     command, reply = rng.choice(_SYNSCAN_EXCHANGES)
     client.send(command)
-    events = []
-    for chunk in chunks(synscan.encode_reply(reply), rng):
-        client.receive_data(chunk)
-        while (event := client.next_event()) is not synscan.NEED_DATA:
-            events.append(event)
+    events = parsed_in_chunks(client, synscan.encode_reply(reply), rng, synscan.NEED_DATA)
     expect(events == [reply], f"valid reply after resync came out as {events!r}")
 
 
@@ -295,11 +301,7 @@ def check_skytracker_server(data: bytes, rng: random.Random) -> None:
     tracker.discard_partial()
     valid = [rng.choice(_TRACKER_COMMANDS) for _ in range(rng.randint(1, 3))]
     stream = b"".join(command.encode() for command in valid)
-    events = []
-    for chunk in chunks(stream, rng):
-        tracker.receive_data(chunk)
-        while (event := tracker.next_event()) is not skytracker.NEED_DATA:
-            events.append(event)
+    events = parsed_in_chunks(tracker, stream, rng, skytracker.NEED_DATA)
     expect(events == valid, f"valid commands after the pause came out as {events!r}")
 
 
@@ -357,11 +359,7 @@ def _expect_reply(
     reply: skytracker.Reply,
     rng: random.Random,
 ) -> None:
-    events = []
-    for chunk in chunks(reply.encode(), rng):
-        client.receive_data(chunk)
-        while (event := client.next_event()) is not skytracker.NEED_DATA:
-            events.append(event)
+    events = parsed_in_chunks(client, reply.encode(), rng, skytracker.NEED_DATA)
     expect(events == [reply], f"valid reply {reply!r} came out as {events!r}")
 
 
