@@ -18,7 +18,7 @@ from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclo
 from datetime import UTC, datetime
 
 from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
-from scopelink.astro.catalog import CatalogObject, lookup
+from scopelink.astro.catalog import CatalogObject, EphemerisRangeError, lookup
 from scopelink.mount.errors import (
     InvalidValueError,
     LimitError,
@@ -29,6 +29,7 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.sun import SunZone
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -45,6 +46,8 @@ __all__ = ["MAX_PULSE_GUIDE_MS", "Mount", "utc_now"]
 
 MAX_PULSE_GUIDE_MS = 60_000
 """Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
+_FRESH_S = 2.0
+"""A cached position younger than this (mount clock) is where a slew's path starts."""
 
 
 def utc_now() -> datetime:
@@ -279,6 +282,7 @@ class Mount(ABC):
         self._require_unparked()
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
+        await self._check_sun(alt, az)
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
@@ -298,6 +302,7 @@ class Mount(ABC):
         _check_alt_az(alt_deg, az_deg)
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
+        await self._check_sun(alt_deg, az_deg)
         await self._goto_horizontal(alt_deg, az_deg)
         self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
@@ -306,7 +311,42 @@ class Mount(ABC):
         """Tell the mount it is pointing at this J2000 position."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
         self._require_unparked()
+        alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+        await self._check_sun(alt, az, what="sync position", slew=False)
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+
+    def sun_zone(self) -> SunZone | None:
+        """The Sun avoidance zone now (None when ``limits.sun_avoidance_deg`` is 0)."""
+        radius = self._limits.sun_avoidance_deg
+        if radius <= 0.0:
+            return None
+        try:
+            return SunZone(radius, self._site, self.now(), self.capabilities.alignment_mode)
+        except EphemerisRangeError as error:
+            raise LimitError(
+                f"the Sun cannot be placed at {self.now():%Y-%m-%d %H:%M} UTC ({error}), so no "
+                "motion can be checked against it: nothing was sent to the mount (set the "
+                "mount's time)"
+            ) from None
+
+    async def _check_sun(
+        self, alt_deg: float, az_deg: float, *, what: str = "target", slew: bool = True
+    ) -> None:
+        """Refuse a target inside the Sun avoidance zone, or a slew there through it (judged
+        from the mount's position, read again unless the cache is fresh)."""
+        zone = self.sun_zone()
+        if zone is None:
+            return
+        zone.check_position(alt_deg, az_deg, what=what)
+        if not slew:
+            return
+        state = self.state
+        if not state.connected or (self.now() - state.read_at).total_seconds() > _FRESH_S:
+            state = await self.refresh()
+        start = None
+        if state.alt_deg is not None and state.az_deg is not None:
+            start = (state.alt_deg, state.az_deg)
+        zone.check_slew(start, state.pier_side, (alt_deg, az_deg), what=f"the slew to the {what}")
 
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""
@@ -365,6 +405,8 @@ class Mount(ABC):
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""
         self._require_connected()
+        park = self._park_position
+        await self._check_sun(park.alt_deg, park.az_deg, what="park position")
         await self._park()
         self._guard.motions_stopped()
 

@@ -1,0 +1,148 @@
+"""Sun avoidance on the Mount API (issue #11 part 3): the simulator on a fixed clock.
+
+At 2026-06-21 12:00 UTC from 51.5° N, 0° E the Sun stands at altitude 62.0°, azimuth 179.1°
+(DE421; checked below), so every case knows where the zone is.
+"""
+
+from __future__ import annotations
+
+import math
+from datetime import UTC, datetime
+
+import pytest
+
+from scopelink.astro import Site, angular_separation_deg, hadec_to_altaz
+from scopelink.mount import InvalidValueError, LimitError, Limits, MountAxis, ParkPosition
+from scopelink.mount.sun import SunZone
+from scopelink.mount.types import AlignmentMode
+from scopelink.sim import AZ_GTI, EQ6, MountModel, SimClock, SimulatedMount
+
+SITE = Site(51.5, 0.0)
+NOON = datetime(2026, 6, 21, 12, 0, tzinfo=UTC)
+SUN_ALT, SUN_AZ = 62.0, 179.1
+
+
+async def simulated(
+    model: MountModel = EQ6,
+    *,
+    radius: float = 15.0,
+    at: tuple[float, float] | None = None,
+    when: datetime = NOON,
+) -> SimulatedMount:
+    """A connected simulator at noon, tracking off, pointing at ``at`` (alt, az) if given."""
+    clock = SimClock.stepped(when)
+    mount = SimulatedMount(
+        model, site=SITE, clock=clock, limits=Limits(horizon_deg=0.0, sun_avoidance_deg=radius)
+    )
+    await mount.connect()
+    if at is not None:
+        with_zone_off = mount.limits
+        mount.limits = Limits(horizon_deg=0.0, sun_avoidance_deg=0.0)
+        await mount.goto_horizontal(*at)
+        clock.advance(60.0)  # a full-sky slew at 3.34°/s
+        mount.limits = with_zone_off
+    return mount
+
+
+def test_the_sun_is_where_the_tests_say() -> None:
+    zone = SunZone(15.0, SITE, NOON, AlignmentMode.ALT_AZ)
+    assert zone.alt_deg == pytest.approx(SUN_ALT, abs=0.1)
+    assert zone.az_deg == pytest.approx(SUN_AZ, abs=0.1)
+
+
+async def test_goto_sun_is_refused_and_nothing_moves() -> None:
+    """The reproduction: on the code before this change ``goto_object("Sun")`` slewed."""
+    mount = await simulated()
+    before = mount.state
+    with pytest.raises(LimitError, match=r"Sun avoidance zone \(limits.sun_avoidance_deg\)"):
+        await mount.goto_object("Sun")
+    mount.clock.advance(120.0)
+    after = await mount.refresh()
+    assert mount.target is None
+    assert (after.alt_deg, after.az_deg) == pytest.approx((before.alt_deg, before.az_deg))
+
+
+@pytest.mark.parametrize(("alt", "az"), [(60.0, 175.0), (50.0, 180.0), (70.0, 200.0)])
+async def test_horizontal_target_inside_the_zone_is_refused(alt: float, az: float) -> None:
+    mount = await simulated(AZ_GTI)
+    with pytest.raises(LimitError, match=r"from the Sun, inside the 15° Sun avoidance zone"):
+        await mount.goto_horizontal(alt, az)
+
+
+async def test_equatorial_target_just_outside_the_zone_is_accepted() -> None:
+    mount = await simulated(at=(30.0, 90.0))
+    # 16° above the Sun, reached from the east without passing it.
+    alt, az = 78.0, 179.1
+    assert angular_separation_deg(az, alt, SUN_AZ, SUN_ALT) > 15.5
+    await mount.goto_horizontal(alt, az)
+
+
+async def test_alt_az_slew_sweeping_through_the_sun_is_refused_with_a_waypoint() -> None:
+    """Both ends 30° from the Sun at its altitude: the short way round passes through it."""
+    mount = await simulated(AZ_GTI, at=(SUN_ALT, 140.0))
+    with pytest.raises(LimitError) as refused:
+        await mount.goto_horizontal(SUN_ALT, 220.0)
+    message = str(refused.value)
+    assert "would pass" in message
+    assert "from the Sun" in message
+    assert "first, then to the target" in message
+    numbers = message.split("(goto altitude ")[1].split("° azimuth ")
+    waypoint = (float(numbers[0]), float(numbers[1].split("°")[0]))
+    # The advice works: both legs are accepted.
+    await mount.goto_horizontal(*waypoint)
+    mount.clock.advance(60.0)
+    await mount.refresh()
+    await mount.goto_horizontal(SUN_ALT, 220.0)
+
+
+async def test_equatorial_slew_sweeping_through_the_sun_is_refused() -> None:
+    """EQ6 at 09:00 UTC (the Sun 3 h east of the meridian), at the Sun's declination from 5 h
+    east to 1 h east: no flip, the polar axis alone turns, through the Sun. Across the meridian
+    the flip takes the tube over the pole instead, clear of the Sun."""
+    morning = datetime(2026, 6, 21, 9, 0, tzinfo=UTC)
+    start = hadec_to_altaz(-5.0, 23.4, SITE.latitude_deg)
+    mount = await simulated(at=start, when=morning)
+    with pytest.raises(LimitError, match="would pass"):
+        await mount.goto_horizontal(*hadec_to_altaz(-1.0, 23.4, SITE.latitude_deg))
+    await mount.goto_horizontal(*hadec_to_altaz(3.0, 23.4, SITE.latitude_deg))
+
+
+async def test_the_zone_off_lets_the_sun_be_reached() -> None:
+    mount = await simulated(radius=0.0)
+    await mount.goto_object("Sun")
+    assert mount.target is not None
+    assert mount.target.name == "Sun"
+
+
+async def test_sync_inside_the_zone_is_refused() -> None:
+    mount = await simulated(at=(40.0, 120.0))
+    zone = SunZone(15.0, SITE, NOON, AlignmentMode.GERMAN_POLAR)
+    with pytest.raises(LimitError, match="sync position is"):
+        await mount.sync_equatorial(zone.ra_j2000_hours, zone.dec_j2000_deg)
+
+
+async def test_park_into_the_zone_is_refused() -> None:
+    mount = await simulated(AZ_GTI, at=(40.0, 120.0))
+    mount.park_position = ParkPosition(55.0, 185.0)
+    with pytest.raises(LimitError, match="park position is"):
+        await mount.park()
+    assert not mount.state.parked
+
+
+async def test_rate_motion_into_the_zone_is_stopped_outside_it() -> None:
+    """The simulator stops itself at the zone edge, as at the horizon."""
+    mount = await simulated(AZ_GTI, at=(SUN_ALT, 150.0))
+    await mount.move_axis(MountAxis.PRIMARY, 2.0)  # azimuth increasing: towards the Sun
+    mount.clock.advance(60.0)
+    state = await mount.refresh()
+    assert state.alt_deg is not None
+    assert state.az_deg is not None
+    distance = angular_separation_deg(state.az_deg, state.alt_deg, SUN_AZ, SUN_ALT)
+    assert 15.0 <= distance < 16.0
+    assert not state.slewing
+
+
+@pytest.mark.parametrize("radius", [-1.0, 45.5, math.nan, math.inf])
+def test_bad_radius_is_refused(radius: float) -> None:
+    with pytest.raises(InvalidValueError, match="Sun avoidance radius"):
+        Limits(sun_avoidance_deg=radius)
