@@ -12,7 +12,14 @@ from datetime import UTC, datetime
 import pytest
 
 from scopelink.astro import Site, angular_separation_deg, hadec_to_altaz
-from scopelink.mount import InvalidValueError, LimitError, Limits, MountAxis, ParkPosition
+from scopelink.mount import (
+    InvalidValueError,
+    LimitError,
+    Limits,
+    MountAxis,
+    ParkPosition,
+    TrackingMode,
+)
 from scopelink.mount.sun import SunZone
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim import AZ_GTI, EQ6, MountModel, SimClock, SimulatedMount
@@ -131,14 +138,16 @@ async def test_park_into_the_zone_is_refused() -> None:
 
 async def test_rate_motion_into_the_zone_is_stopped_outside_it() -> None:
     """The simulator stops itself at the zone edge, as at the horizon."""
-    mount = await simulated(AZ_GTI, at=(SUN_ALT, 150.0))
+    mount = await simulated(AZ_GTI, at=(SUN_ALT, 120.0))
     await mount.move_axis(MountAxis.PRIMARY, 2.0)  # azimuth increasing: towards the Sun
     mount.clock.advance(60.0)
     state = await mount.refresh()
     assert state.alt_deg is not None
     assert state.az_deg is not None
-    distance = angular_separation_deg(state.az_deg, state.alt_deg, SUN_AZ, SUN_ALT)
-    assert 15.0 <= distance < 16.0
+    # (The Sun has moved on by a few tenths since the stop, away from the tube.)
+    zone = SunZone(15.0, SITE, mount.now(), AlignmentMode.ALT_AZ)
+    assert 15.0 <= zone.distance_deg(state.alt_deg, state.az_deg) < 15.5
+    assert "Sun avoidance zone" in state.problems[0]
     assert not state.slewing
 
 
@@ -146,3 +155,25 @@ async def test_rate_motion_into_the_zone_is_stopped_outside_it() -> None:
 def test_bad_radius_is_refused(radius: float) -> None:
     with pytest.raises(InvalidValueError, match="Sun avoidance radius"):
         Limits(sun_avoidance_deg=radius)
+
+
+async def test_tracking_into_the_zone_is_turned_off_outside_it() -> None:
+    """Midnight Sun at 80° N: sidereal tracking of a point 15.4° east of the Sun, which creeps
+    eastwards 1° a day, is turned off when the Sun's zone reaches it (the horizon never does)."""
+    arctic = Site(80.0, 0.0)
+    clock = SimClock.stepped(NOON)
+    mount = SimulatedMount(
+        EQ6, site=arctic, clock=clock, limits=Limits(horizon_deg=0.0, sun_avoidance_deg=15.0)
+    )
+    await mount.connect()
+    zone = SunZone(15.0, arctic, NOON, AlignmentMode.GERMAN_POLAR)
+    ra = (zone.ra_j2000_hours + 15.4 / 15.0 / math.cos(math.radians(zone.dec_j2000_deg))) % 24.0
+    await mount.goto_equatorial(ra, zone.dec_j2000_deg)
+    clock.advance(600.0)
+    assert (await mount.refresh()).tracking is TrackingMode.SIDEREAL
+    clock.advance(2 * 86400.0)
+    state = await mount.refresh()
+    assert state.tracking is TrackingMode.OFF
+    assert "Sun avoidance zone" in state.problems[0]
+    assert state.alt_deg is not None
+    assert state.az_deg is not None
