@@ -21,7 +21,14 @@ from scopelink.cli.errors import CommandError
 from scopelink.cli.options import parse_site, positive_rate
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
-from scopelink.mount import LimitError, Mount, MountError, NotSupportedError, ParkedError
+from scopelink.mount import (
+    LimitError,
+    Mount,
+    MountError,
+    NotSupportedError,
+    ParkedError,
+    SunAvoidanceError,
+)
 
 __all__ = [
     "DeviceCommand",
@@ -35,6 +42,7 @@ __all__ = [
 _log = logging.getLogger(__name__)
 
 _HINTS: dict[type[MountError], str] = {
+    SunAvoidanceError: "the zone around the Sun is limits.sun_avoidance_deg in the config file",
     LimitError: "the horizon and limits are set in the config file ([horizon], [limits])",
     ParkedError: "run 'scopelink unpark' first",
     NotSupportedError: "'scopelink info' shows what this mount can do",

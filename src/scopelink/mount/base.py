@@ -25,6 +25,7 @@ from scopelink.mount.errors import (
     NotConnectedError,
     NotSupportedError,
     ParkedError,
+    SunAvoidanceError,
 )
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
@@ -323,7 +324,7 @@ class Mount(ABC):
         try:
             return SunZone(radius, self._site, self.now(), self.capabilities.alignment_mode)
         except EphemerisRangeError as error:
-            raise LimitError(
+            raise SunAvoidanceError(
                 f"the Sun cannot be placed at {self.now():%Y-%m-%d %H:%M} UTC ({error}), so no "
                 "motion can be checked against it: nothing was sent to the mount (set the "
                 "mount's time)"

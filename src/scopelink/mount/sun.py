@@ -39,7 +39,7 @@ from scopelink.astro import (
     j2000_to_observed,
 )
 from scopelink.astro.catalog.solar_system import SolarSystemBody
-from scopelink.mount.errors import LimitError
+from scopelink.mount.errors import SunAvoidanceError
 from scopelink.mount.types import AlignmentMode
 
 __all__ = [
@@ -118,12 +118,12 @@ class SunZone:
     # --- checks that raise --------------------------------------------------------------------
 
     def check_position(self, alt_deg: float, az_deg: float, *, what: str = "target") -> None:
-        """Raise :class:`LimitError` when (``alt_deg``, ``az_deg``) lies inside the zone."""
+        """Raise :class:`SunAvoidanceError` when (``alt_deg``, ``az_deg``) lies inside the zone."""
         if not self.active:
             return
         distance = self.distance_deg(alt_deg, az_deg)
         if distance < self.radius_deg:
-            raise LimitError(
+            raise SunAvoidanceError(
                 f"{what} is {distance:.1f}° from the Sun, inside the {self.radius_deg:g}° Sun "
                 f"avoidance zone ({SETTING}): nothing was sent to the mount"
             )
@@ -136,8 +136,8 @@ class SunZone:
         *,
         what: str = "the slew",
     ) -> None:
-        """Raise :class:`LimitError` when the slew from ``start`` to ``end`` (observed altitude,
-        azimuth) would pass through the zone. An unknown start checks the end point only."""
+        """Raise :class:`SunAvoidanceError` when the slew from ``start`` to ``end`` (observed
+        altitude, azimuth) would pass through the zone. An unknown start checks the end only."""
         if not self.active or start is None:
             return
         closest = self._closest_on_path(start, start_side, end)
@@ -150,7 +150,7 @@ class SunZone:
                 f"goto altitude {waypoint.alt_deg:.0f}° azimuth {waypoint.az_deg:.0f}° first, "
                 "then to the target"
             )
-        raise LimitError(
+        raise SunAvoidanceError(
             f"{what} from altitude {start[0]:.1f}° azimuth {start[1] % 360.0:.1f}° to altitude "
             f"{end[0]:.1f}° azimuth {end[1] % 360.0:.1f}° would pass {closest:.1f}° from the Sun, "
             f"inside the {self.radius_deg:g}° Sun avoidance zone ({SETTING}): nothing was sent "
