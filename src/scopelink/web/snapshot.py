@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from scopelink.astro.catalog import EphemerisRangeError
 from scopelink.mount import Limits, Mount, MountState, SlewTarget
+from scopelink.mount.sun import SunZone
 
-__all__ = ["describe_mount", "horizon_outline", "state_json"]
+__all__ = ["describe_mount", "horizon_outline", "state_json", "sun_json"]
 
 _OUTLINE_STEP_DEG = 2
 
@@ -56,11 +58,28 @@ def state_json(mount: Mount, state: MountState) -> dict[str, object]:
         "target_altaz": None
         if target_altaz is None
         else {"alt": round(target_altaz[0], 4), "az": round(target_altaz[1], 4)},
+        "sun": sun_json(mount),
         "health": {
             "polls": poller.polls,
             "failures": poller.failures,
             "watchers": poller.watchers,
         },
+    }
+
+
+def sun_json(mount: Mount) -> dict[str, object] | None:
+    """Where the Sun is now and the radius of the zone around it (0: off), for the chart and the
+    warning; None when the mount's clock is outside the ephemeris."""
+    radius = mount.limits.sun_avoidance_deg
+    try:
+        zone = SunZone(radius, mount.site, mount.now(), mount.capabilities.alignment_mode)
+    except EphemerisRangeError:
+        return None
+    return {
+        "alt": round(zone.alt_deg, 3),
+        "az": round(zone.az_deg, 3),
+        "radius_deg": radius,
+        "up": zone.alt_deg > 0.0,
     }
 
 
@@ -105,6 +124,7 @@ def describe_mount(mount: Mount) -> dict[str, object]:
         "limits": {
             "horizon_deg": limits.horizon_deg,
             "max_altitude_deg": limits.max_altitude_deg,
+            "sun_avoidance_deg": limits.sun_avoidance_deg,
             "horizon": horizon_outline(limits),
         },
     }
