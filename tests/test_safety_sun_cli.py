@@ -70,6 +70,7 @@ def test_docs_and_example_agree_with_the_default(tmp_path: Path) -> None:
     path = tmp_path / "example.toml"
     path.write_text(EXAMPLE_CONFIG, encoding="utf-8")
     assert load_config(path).limits.sun_avoidance_deg == SUN_AVOIDANCE_DEG
+    assert re.search(rf"sun_avoidance_deg = {SUN_AVOIDANCE_DEG:g}\b", EXAMPLE_CONFIG)
     cli = (DOCS / "cli.md").read_text(encoding="utf-8")
     assert re.search(rf"sun_avoidance_deg = {SUN_AVOIDANCE_DEG:g}\b", cli)
     safety = (DOCS / "reliability-safety.md").read_text(encoding="utf-8")

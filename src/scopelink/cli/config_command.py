@@ -28,7 +28,7 @@ profile = [[0, 15], [90, 25], [200, 12]]   # optional [azimuth, altitude] points
 
 [limits]
 max_altitude = 88                   # keeps alt-az mounts out of the zenith
-sun_avoidance_deg = 15              # no goto or motion within this of the Sun (0: off)
+# sun_avoidance_deg = 15            # no goto or motion within this of the Sun (0: off)
 
 [servers]                           # what 'scopelink serve' listens on; false turns one off
 host = "127.0.0.1"

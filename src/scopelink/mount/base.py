@@ -18,19 +18,18 @@ from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclo
 from datetime import UTC, datetime
 
 from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
-from scopelink.astro.catalog import CatalogObject, EphemerisRangeError, lookup
+from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.mount.errors import (
     InvalidValueError,
     LimitError,
     NotConnectedError,
     NotSupportedError,
     ParkedError,
-    SunAvoidanceError,
 )
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
-from scopelink.mount.sun import SunZone
+from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -47,8 +46,6 @@ __all__ = ["MAX_PULSE_GUIDE_MS", "Mount", "utc_now"]
 
 MAX_PULSE_GUIDE_MS = 60_000
 """Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
-_FRESH_S = 2.0
-"""A cached position younger than this (mount clock) is where a slew's path starts."""
 
 
 def utc_now() -> datetime:
@@ -318,36 +315,23 @@ class Mount(ABC):
 
     def sun_zone(self) -> SunZone | None:
         """The Sun avoidance zone now (None when ``limits.sun_avoidance_deg`` is 0)."""
-        radius = self._limits.sun_avoidance_deg
-        if radius <= 0.0:
-            return None
-        try:
-            return SunZone(radius, self._site, self.now(), self.capabilities.alignment_mode)
-        except EphemerisRangeError as error:
-            raise SunAvoidanceError(
-                f"the Sun cannot be placed at {self.now():%Y-%m-%d %H:%M} UTC ({error}), so no "
-                "motion can be checked against it: nothing was sent to the mount (set the "
-                "mount's time)"
-            ) from None
+        mode = self.capabilities.alignment_mode
+        return sun_zone(self._limits.sun_avoidance_deg, self._site, self.now(), mode)
 
     async def _check_sun(
         self, alt_deg: float, az_deg: float, *, what: str = "target", slew: bool = True
     ) -> None:
-        """Refuse a target inside the Sun avoidance zone, or a slew there through it (judged
-        from the mount's position, read again unless the cache is fresh)."""
+        """Refuse a target inside the Sun avoidance zone, or a slew through it from where the
+        mount points (read again unless the cache is fresh)."""
         zone = self.sun_zone()
         if zone is None:
             return
         zone.check_position(alt_deg, az_deg, what=what)
-        if not slew:
-            return
         state = self.state
-        if not state.connected or (self.now() - state.read_at).total_seconds() > _FRESH_S:
+        if slew and (not state.connected or (self.now() - state.read_at).total_seconds() > 2.0):
             state = await self.refresh()
-        start = None
-        if state.alt_deg is not None and state.az_deg is not None:
-            start = (state.alt_deg, state.az_deg)
-        zone.check_slew(start, state.pier_side, (alt_deg, az_deg), what=f"the slew to the {what}")
+        if slew:
+            zone.check_slew_from(state, (alt_deg, az_deg), what=f"the slew to the {what}")
 
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""

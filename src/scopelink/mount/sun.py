@@ -38,14 +38,15 @@ from scopelink.astro import (
     destination_side_of_pier,
     j2000_to_observed,
 )
-from scopelink.astro.catalog.solar_system import SolarSystemBody
+from scopelink.astro.catalog.solar_system import EphemerisRangeError, SolarSystemBody
 from scopelink.mount.errors import SunAvoidanceError
-from scopelink.mount.types import AlignmentMode
+from scopelink.mount.types import AlignmentMode, MountState
 
 __all__ = [
     "SETTING",
     "SunZone",
     "sun_j2000",
+    "sun_zone",
 ]
 
 SETTING = "limits.sun_avoidance_deg"
@@ -74,6 +75,20 @@ def sun_j2000(t: datetime, site: Site) -> tuple[float, float]:
     every reading of a guard can afford it.
     """
     return _sun_j2000_cached(site, math.floor(t.timestamp() / 60.0))
+
+
+def sun_zone(radius_deg: float, site: Site, t: datetime, mode: AlignmentMode) -> SunZone | None:
+    """The zone at ``t`` (None when ``radius_deg`` is 0); :class:`SunAvoidanceError` when the
+    Sun cannot be placed (a clock outside the ephemeris): then nothing can be judged safe."""
+    if radius_deg <= 0.0:
+        return None
+    try:
+        return SunZone(radius_deg, site, t, mode)
+    except EphemerisRangeError as error:
+        raise SunAvoidanceError(
+            f"the Sun cannot be placed at {t:%Y-%m-%d %H:%M} UTC ({error}), so no motion can be "
+            "checked against it: nothing was sent to the mount (set the mount's time)"
+        ) from None
 
 
 @dataclass(frozen=True, slots=True)
@@ -156,6 +171,15 @@ class SunZone:
             f"inside the {self.radius_deg:g}° Sun avoidance zone ({SETTING}): nothing was sent "
             f"to the mount ({advice})"
         )
+
+    def check_slew_from(
+        self, state: MountState, end: tuple[float, float], *, what: str = "the slew"
+    ) -> None:
+        """:meth:`check_slew` from where ``state`` says the mount points."""
+        start = None
+        if state.alt_deg is not None and state.az_deg is not None:
+            start = (state.alt_deg, state.az_deg)
+        self.check_slew(start, state.pier_side, end, what=what)
 
     # --- the path model -----------------------------------------------------------------------
 

@@ -31,7 +31,8 @@ from scopelink.mount import (
     MountState,
     TrackingMode,
 )
-from scopelink.mount.sun import SunZone
+from scopelink.mount.errors import SunAvoidanceError
+from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis, AxisPlan, Trajectory
 from scopelink.sim.clock import SimClock
@@ -377,12 +378,18 @@ class SimulatedMount(Mount):
     # --- internals ------------------------------------------------------------------------------
 
     def sun_zone_at(self, t: float) -> SunZone | None:
-        """The Sun avoidance zone at elapsed time ``t`` (None when it is off)."""
-        radius = self._limits.sun_avoidance_deg
-        if radius <= 0.0:
+        """The Sun avoidance zone at elapsed time ``t`` (None when it is off, or when the clock
+        is outside the ephemeris: the Mount API then refuses every goto until the time is set,
+        and the physics must not fail every command meanwhile)."""
+        try:
+            return sun_zone(
+                self._limits.sun_avoidance_deg,
+                self._site,
+                self.clock.datetime_at(t),
+                self.model.alignment_mode,
+            )
+        except SunAvoidanceError:
             return None
-        when = self.clock.datetime_at(t)
-        return SunZone(radius, self._site, when, self.model.alignment_mode)
 
     def _make_geometry(self, site: Site) -> Geometry:
         return geometry_for(
