@@ -191,3 +191,45 @@ async def test_a_clock_outside_the_ephemeris_refuses_gotos_but_leaves_the_mount_
     await mount.abort()
     await mount.set_time(datetime(2026, 12, 21, 0, 0, tzinfo=UTC))
     await mount.goto_horizontal(40.0, 90.0)
+
+
+@pytest.mark.parametrize(
+    ("model", "start", "end"),
+    [
+        (AZ_GTI, (62.0, 120.0), (50.0, 250.0)),  # the short way round, past the Sun
+        (AZ_GTI, (20.0, 300.0), (70.0, 100.0)),  # through north
+        (EQ6, (30.0, 110.0), (40.0, 150.0)),  # east of the meridian: no flip
+        (EQ6, (30.0, 110.0), (35.0, 250.0)),  # east to west: a flip over the pole
+        (EQ6, (50.0, 250.0), (20.0, 200.0)),  # west of the meridian
+    ],
+)
+async def test_the_path_model_is_the_path_the_simulator_takes(
+    model: MountModel, start: tuple[float, float], end: tuple[float, float]
+) -> None:
+    """The closest approach to the Sun the model predicts equals the simulator's true slew
+    (sampled every 0.05 s) within 0.3°, and is never farther (the model may check more paths)."""
+    mount = await simulated(model, radius=0.0, at=start)
+    state = await mount.refresh()
+    assert state.alt_deg is not None
+    assert state.az_deg is not None
+    zone = SunZone(15.0, SITE, mount.now(), model.alignment_mode)
+    predicted = zone._closest_on_path((state.alt_deg, state.az_deg), state.pier_side, end)
+    await mount.goto_horizontal(*end)
+    true_closest = math.inf
+    for _ in range(2400):  # 120 s: longer than any slew
+        mount.clock.advance(0.05)
+        alt, az = mount.observed_at(mount.elapsed())
+        true_closest = min(true_closest, zone.distance_deg(alt, az))
+    assert predicted <= true_closest + 0.3
+    assert predicted == pytest.approx(true_closest, abs=0.3)
+
+
+def test_the_zone_follows_the_sun_across_the_sky() -> None:
+    """``distance_deg(later_s=...)`` (the guard's look-ahead and the simulator's physics) agrees
+    with the Sun placed afresh an hour later."""
+    zone = SunZone(15.0, SITE, NOON, AlignmentMode.ALT_AZ)
+    later = SunZone(15.0, SITE, NOON.replace(hour=13), AlignmentMode.ALT_AZ)
+    for alt, az in [(40.0, 200.0), (60.0, 230.0), (20.0, 120.0)]:
+        assert zone.distance_deg(alt, az, later_s=3600.0) == pytest.approx(
+            later.distance_deg(alt, az), abs=0.05
+        )

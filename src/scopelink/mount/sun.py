@@ -57,8 +57,9 @@ _PATH_STEP_DEG = 0.5
 _NEAR_MERIDIAN_HOURS = 1.0
 """Within this of the meridian a German mount may end a goto on either side of the pier."""
 _SUN = SolarSystemBody("sun")
-_SOLAR_DAY_RATE = 15.0 / 3600.0 * 0.99727
-"""How fast the Sun's hour angle grows (degrees per second: a solar day is 24 h)."""
+_SUN_HOUR_ANGLE_RATE = 15.0 / 3600.0
+"""How fast the Sun's hour angle grows (degrees per second: a solar day is 24 h; the stars',
+one sidereal day of 23 h 56 min, is 0.3 % faster, which is the Sun's 1° a day eastwards)."""
 
 
 @lru_cache(maxsize=256)
@@ -119,7 +120,7 @@ class SunZone:
         if later_s == 0.0:
             return float(angular_separation_deg(az_deg, alt_deg, self.az_deg, self.alt_deg))
         ha, dec = altaz_to_hadec(alt_deg, az_deg, self.site.latitude_deg)
-        sun_ha = self._ha_hours * 15.0 + _SOLAR_DAY_RATE * later_s
+        sun_ha = self._ha_hours * 15.0 + _SUN_HOUR_ANGLE_RATE * later_s
         return float(angular_separation_deg(ha * 15.0, dec, sun_ha, self._dec_deg))
 
     def distance_j2000_deg(self, ra_hours: float, dec_deg: float) -> float:
