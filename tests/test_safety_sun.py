@@ -233,3 +233,21 @@ def test_the_zone_follows_the_sun_across_the_sky() -> None:
         assert zone.distance_deg(alt, az, later_s=3600.0) == pytest.approx(
             later.distance_deg(alt, az), abs=0.05
         )
+
+
+async def test_a_mount_the_sun_rose_onto_may_leave_but_not_go_deeper() -> None:
+    """An alt-az mount left 10° from the Sun (the zone was off): a goto away and park are
+    accepted; a goto nearer the Sun, or one whose path passes nearer, is refused."""
+    mount = await simulated(AZ_GTI, at=(SUN_ALT, 160.0))
+    state = await mount.refresh()
+    assert state.alt_deg is not None
+    assert state.az_deg is not None
+    zone = SunZone(15.0, SITE, mount.now(), AlignmentMode.ALT_AZ)
+    assert zone.distance_deg(state.alt_deg, state.az_deg) < 12.0
+    with pytest.raises(LimitError, match="would pass"):
+        await mount.goto_horizontal(SUN_ALT, 230.0)  # through the Sun to the other side
+    await mount.goto_horizontal(40.0, 100.0)  # away
+    mount.clock.advance(60.0)
+    await mount.refresh()
+    mount.park_position = ParkPosition(20.0, 0.0)
+    await mount.park()

@@ -54,6 +54,8 @@ SETTING = "limits.sun_avoidance_deg"
 
 _PATH_STEP_DEG = 0.5
 """Largest axis motion between two checked points of a slew path."""
+_LEAVING_TOLERANCE_DEG = 0.01
+"""How much closer than its start a slew from inside the zone may sample (rounding)."""
 _NEAR_MERIDIAN_HOURS = 1.0
 """Within this of the meridian a German mount may end a goto on either side of the pier."""
 _SUN = SolarSystemBody("sun")
@@ -153,11 +155,13 @@ class SunZone:
         what: str = "the slew",
     ) -> None:
         """Raise :class:`SunAvoidanceError` when the slew from ``start`` to ``end`` (observed
-        altitude, azimuth) would pass through the zone. An unknown start checks the end only."""
+        altitude, azimuth) would pass through the zone (from a start inside it: nearer the Sun
+        than the start). An unknown start checks the end only."""
         if not self.active or start is None:
             return
         closest = self._closest_on_path(start, start_side, end)
-        if closest >= self.radius_deg:
+        # A mount already inside (the Sun rose onto it) may leave: only deeper is refused.
+        if closest >= min(self.radius_deg, self.distance_deg(*start) - _LEAVING_TOLERANCE_DEG):
             return
         advice = "goto a position away from the Sun first"
         waypoint = self._waypoint(start, start_side, end)
