@@ -445,7 +445,10 @@ class HorizonGuard:
             return None
         now = zone.distance_deg(reading.alt_deg, reading.az_deg)
         then = zone.distance_deg(alt_then, az_then, later_s=ahead_s)
-        if then < zone.radius_deg + self.settings.margin_deg and then < now:
+        # Tracking closes in at most 0.5°/h (a thin Moon): the margin is for rate motions only,
+        # so a target a goto was allowed to (at the zone's edge) stays tracked.
+        edge = zone.radius_deg + (self.settings.margin_deg if self._motions else 0.0)
+        if then < edge and then < now:
             return (
                 f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
                 f"{reading.az_deg % 360.0:.1f}°), {now:.1f}° from the Sun: it was heading into "
