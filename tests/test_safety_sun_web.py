@@ -7,12 +7,13 @@ The simulated mount's clock starts at 2026-06-21 12:00 UTC at 45° N 7° E: the 
 
 from __future__ import annotations
 
+import re
 from datetime import UTC, datetime
 
 import pytest
 from playwright.async_api import Browser, Page, expect
 
-from scopelink.mount import Limits
+from scopelink.mount import Limits, TrackingMode
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from tests.test_web_browser import TIMEOUT_MS, browser, open_page, screenshot
 from tests.test_web_support import SITE, served
@@ -86,3 +87,24 @@ async def test_zone_off_is_said_in_red(browser: Browser) -> None:
         assert green < 120
         assert blue < 120
         await screenshot(page, "sun-03-off")
+
+
+async def test_a_still_mount_in_the_suns_path_is_warned_about(browser: Browser) -> None:
+    """A mount standing still 24° west of the Sun, on its path: the Sun reaches it in about 39
+    minutes, and the page says so in red (nothing moves the mount by itself)."""
+    clock = SimClock(start=NOON, rate=500.0)
+    mount = SimulatedMount(EQ6, site=SITE, clock=clock, limits=Limits(sun_avoidance_deg=0.0))
+    await mount.connect()
+    await mount.goto_horizontal(55.0, 240.0)
+    await mount.wait_for_slew(timeout_s=10.0)
+    await mount.abort()
+    await mount.set_tracking(TrackingMode.OFF)
+    clock.set_rate(1.0)
+    mount.limits = Limits(sun_avoidance_deg=15.0)
+    async with served(mount, connect=False) as s, open_page(browser, s) as page:
+        warning = page.locator("#sun-warning")
+        await expect(warning).to_contain_text(
+            re.compile(r"The Sun will reach where the mount points in 3\d min"), timeout=TIMEOUT_MS
+        )
+        await expect(warning).to_have_class("off")
+        await screenshot(page, "sun-04-in-its-path")

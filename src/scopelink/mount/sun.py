@@ -125,6 +125,16 @@ class SunZone:
         sun_ha = self._ha_hours * 15.0 + _SUN_HOUR_ANGLE_RATE * later_s
         return float(angular_separation_deg(ha * 15.0, dec, sun_ha, self._dec_deg))
 
+    def minutes_until_reached(self, alt_deg: float, az_deg: float, within_min: int) -> int | None:
+        """The first whole minute (1..``within_min``) at which the zone covers a fixed observed
+        position (a mount standing still), or None."""
+        ha, dec = altaz_to_hadec(alt_deg, az_deg, self.site.latitude_deg)
+        minutes = np.arange(1, within_min + 1)
+        sun_ha = self._ha_hours * 15.0 + _SUN_HOUR_ANGLE_RATE * 60.0 * minutes
+        distances = angular_separation_deg(ha * 15.0, dec, sun_ha, self._dec_deg)
+        inside = np.flatnonzero(np.asarray(distances) < self.radius_deg)
+        return int(minutes[inside[0]]) if inside.size else None
+
     def distance_j2000_deg(self, ra_hours: float, dec_deg: float) -> float:
         """Degrees between a J2000 position and the Sun (what tracking keeps constant)."""
         return float(

@@ -251,12 +251,15 @@ function renderSunWarning() {
   let text = "";
   if (sun && !(sun.radius_deg > 0)) {
     text = "Sun avoidance is OFF (limits.sun_avoidance_deg = 0): nothing stops this mount pointing at the Sun";
+  } else if (sun && sun.reaches_mount_in_min != null) {
+    text = `The Sun will reach where the mount points in ${sun.reaches_mount_in_min} min: ` +
+      "move or park it away from the Sun's path.";
   } else if (sun && sun.up) {
     text = `The Sun is up (altitude ${sun.alt.toFixed(0)}°, azimuth ${sun.az.toFixed(0)}°): ` +
       `gotos within ${sun.radius_deg}° of it are refused. Never look through a telescope near the Sun.`;
   }
   setText("sun-warning", text);
-  el.classList.toggle("off", Boolean(sun) && !(sun.radius_deg > 0));
+  el.classList.toggle("off", Boolean(sun) && (!(sun.radius_deg > 0) || sun.reaches_mount_in_min != null));
   el.hidden = !text;
 }
 
