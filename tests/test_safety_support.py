@@ -37,7 +37,7 @@ SITE = Site(latitude_deg=48.0, longitude_deg=11.0, pressure_hpa=0.0)
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)
 HORIZON_DEG = 10.0
 """scopelink's configured horizon in these tests (the device's own is -10°)."""
-DEVICE_LIMITS = Limits(horizon_deg=-10.0, max_altitude_deg=90.0)
+DEVICE_LIMITS = Limits(horizon_deg=-10.0, max_altitude_deg=90.0, sun_avoidance_deg=0.0)
 TOLERANCE_DEG = 0.5
 """How far below scopelink's horizon the true altitude may dip during a guarded rate motion:
 the guard aims to stop 0.2° above it; the rest absorbs a poll delayed by a loaded CPU."""

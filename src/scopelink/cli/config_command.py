@@ -28,6 +28,7 @@ profile = [[0, 15], [90, 25], [200, 12]]   # optional [azimuth, altitude] points
 
 [limits]
 max_altitude = 88                   # keeps alt-az mounts out of the zenith
+# sun_avoidance_deg = 15            # no goto or motion within this of the Sun (0: off)
 
 [servers]                           # what 'scopelink serve' listens on; false turns one off
 host = "127.0.0.1"
@@ -159,6 +160,7 @@ def show(config: Config) -> str:
         "",
         "[limits]",
         f"max_altitude = {limits.max_altitude_deg}",
+        f"sun_avoidance_deg = {limits.sun_avoidance_deg}",
         "",
         "[servers]",
         f"host = {_toml_value(servers.host)}",

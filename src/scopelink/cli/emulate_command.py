@@ -24,6 +24,7 @@ from scopelink.cli.options import (
     until_stopped,
 )
 from scopelink.links import LinkError, precise_event_loop
+from scopelink.mount import Limits
 from scopelink.protocol.synscan import Version, VersionDialect
 from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
 from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
@@ -132,9 +133,12 @@ async def _create_synscan(args: argparse.Namespace, options: EmulatorOptions) ->
         latency_s=args.latency,
         quirks=quirks,
     )
-    mount = SimulatedMount(preset, site=options.site, clock=options.clock)
+    mount = SimulatedMount(preset, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS)
     return SynScanEmulator(mount, config, faults=options.faults, wire=options.wire)
 
+
+_DEVICE_LIMITS = Limits(sun_avoidance_deg=0.0)
+"""An emulated device knows nothing of the Sun, as the real one: scopelink's side guards it."""
 
 # --- Sky Tracker and Sky Commander ---------------------------------------------------------------
 
@@ -164,7 +168,9 @@ def _add_sky_tracker_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 async def _create_sky_tracker(args: argparse.Namespace, options: EmulatorOptions) -> HostedDevice:
-    mount = SimulatedMount(SKY_TRACKER, site=options.site, clock=options.clock)
+    mount = SimulatedMount(
+        SKY_TRACKER, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS
+    )
     return SkyTrackerEmulator(
         mount,
         args.data_dir or _default_data_dir(),
@@ -175,7 +181,9 @@ async def _create_sky_tracker(args: argparse.Namespace, options: EmulatorOptions
 
 
 async def _create_sky_commander(args: argparse.Namespace, options: EmulatorOptions) -> HostedDevice:
-    mount = SimulatedMount(SKY_TRACKER, site=options.site, clock=options.clock)
+    mount = SimulatedMount(
+        SKY_TRACKER, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS
+    )
     return SkyCommanderEmulator(
         mount,
         args.data_dir or _default_data_dir(),

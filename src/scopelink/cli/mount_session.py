@@ -13,6 +13,8 @@ import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
+from rich.console import Console
+
 from scopelink.astro import Site
 from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
@@ -21,7 +23,15 @@ from scopelink.cli.errors import CommandError
 from scopelink.cli.options import parse_site, positive_rate
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
-from scopelink.mount import LimitError, Mount, MountError, NotSupportedError, ParkedError
+from scopelink.mount import (
+    LimitError,
+    Limits,
+    Mount,
+    MountError,
+    NotSupportedError,
+    ParkedError,
+    SunAvoidanceError,
+)
 
 __all__ = [
     "DeviceCommand",
@@ -35,6 +45,7 @@ __all__ = [
 _log = logging.getLogger(__name__)
 
 _HINTS: dict[type[MountError], str] = {
+    SunAvoidanceError: "the zone around the Sun is limits.sun_avoidance_deg in the config file",
     LimitError: "the horizon and limits are set in the config file ([horizon], [limits])",
     ParkedError: "run 'scopelink unpark' first",
     NotSupportedError: "'scopelink info' shows what this mount can do",
@@ -147,7 +158,7 @@ def run_on_mount(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int
 async def open_device(command: DeviceCommand) -> Mount:
     """The connected mount ``command`` names, or a :class:`CommandError` with a hint."""
     try:
-        return await open_mount(
+        mount = await open_mount(
             command.device,
             command.site,
             command.config.limits,
@@ -156,6 +167,18 @@ async def open_device(command: DeviceCommand) -> Mount:
         )
     except DeviceError as error:
         raise CommandError(str(error), error.hint) from None
+    warn_if_sun_unguarded(mount.limits)
+    return mount
+
+
+def warn_if_sun_unguarded(limits: Limits) -> None:
+    """Say in red on stderr that nothing keeps the mount off the Sun, when that is so."""
+    if limits.sun_avoidance_deg > 0.0:
+        return
+    Console(stderr=True, highlight=False).print(
+        "[bold red]warning: Sun avoidance is OFF (limits.sun_avoidance_deg = 0): nothing stops "
+        "this mount pointing at the Sun[/]"
+    )
 
 
 async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:

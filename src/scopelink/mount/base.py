@@ -29,6 +29,7 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -279,6 +280,7 @@ class Mount(ABC):
         self._require_unparked()
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
+        await self._check_sun(alt, az)
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
@@ -298,6 +300,7 @@ class Mount(ABC):
         _check_alt_az(alt_deg, az_deg)
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
+        await self._check_sun(alt_deg, az_deg)
         await self._goto_horizontal(alt_deg, az_deg)
         self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
@@ -306,7 +309,29 @@ class Mount(ABC):
         """Tell the mount it is pointing at this J2000 position."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
         self._require_unparked()
+        alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+        await self._check_sun(alt, az, what="sync position", slew=False)
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+
+    def sun_zone(self) -> SunZone | None:
+        """The Sun avoidance zone now (None when ``limits.sun_avoidance_deg`` is 0)."""
+        mode = self.capabilities.alignment_mode
+        return sun_zone(self._limits.sun_avoidance_deg, self._site, self.now(), mode)
+
+    async def _check_sun(
+        self, alt_deg: float, az_deg: float, *, what: str = "target", slew: bool = True
+    ) -> None:
+        """Refuse a target inside the Sun avoidance zone, or a slew through it from where the
+        mount points (read again unless the cache is fresh)."""
+        zone = self.sun_zone()
+        if zone is None:
+            return
+        zone.check_position(alt_deg, az_deg, what=what)
+        state = self.state
+        if slew and (not state.connected or (self.now() - state.read_at).total_seconds() > 2.0):
+            state = await self.refresh()
+        if slew:
+            zone.check_slew_from(state, (alt_deg, az_deg), what=f"the slew to the {what}")
 
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""
@@ -365,6 +390,8 @@ class Mount(ABC):
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""
         self._require_connected()
+        park = self._park_position
+        await self._check_sun(park.alt_deg, park.az_deg, what="park position")
         await self._park()
         self._guard.motions_stopped()
 

@@ -17,6 +17,11 @@ class LimitError(MountError):
     """The request would move the mount below the horizon or past a limit; nothing was sent."""
 
 
+class SunAvoidanceError(LimitError):
+    """The request would point the mount into (or sweep it through) the zone around the Sun
+    (``limits.sun_avoidance_deg``); nothing was sent."""
+
+
 class ParkedError(MountError):
     """The mount is parked; unpark it first."""
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from scopelink.mount.errors import LimitError, MountError
+from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
 
 if TYPE_CHECKING:
@@ -333,6 +334,8 @@ class HorizonGuard:
             return True
         limits = self._mount.limits
         near = self.settings.margin_deg + factor * self.settings.near_deg
+        if self._near_sun(state, near):
+            return True
         if alt - limits.horizon_at(state.az_deg) < near:
             return True
         return _has_ceiling(limits) and limits.max_altitude_deg - alt < near
@@ -427,7 +430,44 @@ class HorizonGuard:
                 f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
                 f"the configured limit of {limits.max_altitude_deg:.2f}°"
             )
+        return self._sun_danger(reading, alt_then, az_then, ahead_s, what)
+
+    def _sun_danger(
+        self, reading: _Reading, alt_then: float, az_then: float, ahead_s: float, what: str
+    ) -> str | None:
+        """Why a motion heading into the Sun avoidance zone must stop now (``_danger``'s
+        prediction, judged against where the Sun will be then), or None."""
+        try:
+            zone = self._mount.sun_zone()
+        except LimitError as error:  # the Sun cannot be placed: nothing can be judged safe
+            return f"{what} was stopped: {error}"
+        if zone is None:
+            return None
+        now = zone.distance_deg(reading.alt_deg, reading.az_deg)
+        then = zone.distance_deg(alt_then, az_then, later_s=ahead_s)
+        # Tracking closes in at most 0.5°/h (a thin Moon): the margin is for rate motions only,
+        # so a target a goto was allowed to (at the zone's edge) stays tracked.
+        edge = zone.radius_deg + (self.settings.margin_deg if self._motions else 0.0)
+        if then < edge and then < now:
+            return (
+                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
+                f"{reading.az_deg % 360.0:.1f}°), {now:.1f}° from the Sun: it was heading into "
+                f"the {zone.radius_deg:g}° Sun avoidance zone ({SUN_SETTING})"
+            )
         return None
+
+    def _near_sun(self, state: MountState, near_deg: float) -> bool:
+        """Whether the tracked position is within ``near_deg`` of the Sun avoidance zone."""
+        if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
+            return False
+        try:
+            zone = self._mount.sun_zone()
+        except LimitError:
+            return True
+        if zone is None:
+            return False
+        distance = zone.distance_j2000_deg(state.ra_j2000_hours, state.dec_j2000_deg)
+        return distance < zone.radius_deg + near_deg
 
     async def _stop(self, state: MountState, reason: str) -> None:
         mount = self._mount

@@ -8,7 +8,12 @@ from dataclasses import dataclass, field
 
 from scopelink.mount.errors import InvalidValueError, LimitError
 
-__all__ = ["Limits"]
+__all__ = ["MAX_SUN_AVOIDANCE_DEG", "SUN_AVOIDANCE_DEG", "Limits"]
+
+SUN_AVOIDANCE_DEG = 15.0
+"""Default radius of the Sun avoidance zone (degrees)."""
+MAX_SUN_AVOIDANCE_DEG = 45.0
+"""Largest radius accepted: a bigger zone would close a quarter of the sky."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -18,12 +23,14 @@ class Limits:
     ``horizon_deg`` is the lowest altitude allowed everywhere; ``horizon_profile`` optionally
     raises it by azimuth (pairs of azimuth and altitude, linearly interpolated, wrapping through
     north) for trees and houses. ``max_altitude_deg`` keeps alt-az mounts out of the zenith, where
-    the azimuth speed diverges.
+    the azimuth speed diverges. ``sun_avoidance_deg`` is the radius of the zone around the Sun
+    that no goto, park, sync or motion may enter (0 turns it off; :mod:`scopelink.mount.sun`).
     """
 
     horizon_deg: float = 0.0
     max_altitude_deg: float = 90.0
     horizon_profile: tuple[tuple[float, float], ...] = field(default=())
+    sun_avoidance_deg: float = SUN_AVOIDANCE_DEG
 
     def __post_init__(self) -> None:
         if not -10.0 <= self.horizon_deg <= 89.0:
@@ -32,6 +39,14 @@ class Limits:
             raise InvalidValueError(
                 f"maximum altitude {self.max_altitude_deg}° must lie above the horizon "
                 f"({self.horizon_deg}°) and at most 90°"
+            )
+        if not (
+            math.isfinite(self.sun_avoidance_deg)
+            and 0.0 <= self.sun_avoidance_deg <= MAX_SUN_AVOIDANCE_DEG
+        ):
+            raise InvalidValueError(
+                f"Sun avoidance radius {self.sun_avoidance_deg}° must lie between 0° (off) and "
+                f"{MAX_SUN_AVOIDANCE_DEG:g}°"
             )
         for az, alt in self.horizon_profile:
             if not (0.0 <= az < 360.0 and -10.0 <= alt <= 89.0):

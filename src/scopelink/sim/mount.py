@@ -31,6 +31,8 @@ from scopelink.mount import (
     MountState,
     TrackingMode,
 )
+from scopelink.mount.errors import SunAvoidanceError
+from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis, AxisPlan, Trajectory
 from scopelink.sim.clock import SimClock
@@ -126,6 +128,7 @@ class SimulatedMount(Mount):
         self._command_at = 0.0
         """Elapsed time at which the command being carried out began."""
         self._limit_stop: LimitStop | None = None
+        self._sun_search: tuple[SunZone | None, float] = (None, 0.0)
         self._capabilities = self._make_capabilities()
 
     # --- identity -------------------------------------------------------------------------------
@@ -374,6 +377,20 @@ class SimulatedMount(Mount):
 
     # --- internals ------------------------------------------------------------------------------
 
+    def sun_zone_at(self, t: float) -> SunZone | None:
+        """The Sun avoidance zone at elapsed time ``t`` (None when it is off, or when the clock
+        is outside the ephemeris: the Mount API then refuses every goto until the time is set,
+        and the physics must not fail every command meanwhile)."""
+        try:
+            return sun_zone(
+                self._limits.sun_avoidance_deg,
+                self._site,
+                self.clock.datetime_at(t),
+                self.model.alignment_mode,
+            )
+        except SunAvoidanceError:
+            return None
+
     def _make_geometry(self, site: Site) -> Geometry:
         return geometry_for(
             self.model.alignment_mode,
@@ -559,7 +576,15 @@ class SimulatedMount(Mount):
             alt - self._limits.horizon_at(az),
             self._limits.max_altitude_deg - alt,
             self.geometry.axis_margin_deg(physical[0], physical[1]),
+            self._sun_margin(alt, az, t),
         )
+
+    def _sun_margin(self, alt: float, az: float, t: float) -> float:
+        """How far (degrees) the tube at ``t`` is outside the Sun avoidance zone."""
+        zone, since = self._sun_search
+        if zone is None:
+            return math.inf
+        return zone.distance_deg(alt, az, later_s=t - since) - zone.radius_deg
 
     def _search_step(self, t: float) -> float:
         step = _SEARCH_MAX_STEP_S
@@ -588,6 +613,7 @@ class SimulatedMount(Mount):
     def _enforce_limits(self, start: float) -> None:
         """Stop continuous motion from ``start`` on where it would cross a limit."""
         self._limit_stop = None
+        self._sun_search = (self.sun_zone_at(start), start)
         floor = min(0.0, self._margin_at(start)) - 1e-9
         end = self._search_end(start)
         previous = t = start
@@ -610,7 +636,8 @@ class SimulatedMount(Mount):
         self._limit_stop = LimitStop(
             low,
             f"motion stopped at a limit (altitude {alt:.2f}°, azimuth {az:.1f}°): the horizon, "
-            "the altitude limit or the meridian limit; move away or goto elsewhere",
+            "the altitude limit, the meridian limit or the Sun avoidance zone; move away or goto "
+            "elsewhere",
             replaced,
             moving_until,
         )

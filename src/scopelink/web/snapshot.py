@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-from scopelink.mount import Limits, Mount, MountState, SlewTarget
+from scopelink.astro.catalog import EphemerisRangeError
+from scopelink.mount import Limits, Mount, MountState, SlewTarget, TrackingMode
+from scopelink.mount.sun import SunZone
 
-__all__ = ["describe_mount", "horizon_outline", "state_json"]
+__all__ = ["describe_mount", "horizon_outline", "state_json", "sun_json"]
 
 _OUTLINE_STEP_DEG = 2
+_SUN_WARNING_MIN = 60
+"""How far ahead the dashboard warns that the Sun will reach a mount standing still."""
 
 
 def _round(value: float | None, digits: int) -> float | None:
@@ -56,12 +60,47 @@ def state_json(mount: Mount, state: MountState) -> dict[str, object]:
         "target_altaz": None
         if target_altaz is None
         else {"alt": round(target_altaz[0], 4), "az": round(target_altaz[1], 4)},
+        "sun": sun_json(mount, state),
         "health": {
             "polls": poller.polls,
             "failures": poller.failures,
             "watchers": poller.watchers,
         },
     }
+
+
+def sun_json(mount: Mount, state: MountState | None = None) -> dict[str, object] | None:
+    """Where the Sun is now, the radius of the zone around it (0: off), and in how many minutes
+    the Sun will reach where a mount standing still points (None: not within the hour), for the
+    chart and the warnings; None when the mount's clock is outside the ephemeris."""
+    radius = mount.limits.sun_avoidance_deg
+    try:
+        zone = SunZone(radius, mount.site, mount.now(), mount.capabilities.alignment_mode)
+    except EphemerisRangeError:
+        return None
+    return {
+        "alt": round(zone.alt_deg, 3),
+        "az": round(zone.az_deg, 3),
+        "radius_deg": radius,
+        "up": zone.alt_deg > 0.0,
+        "reaches_mount_in_min": _sun_reaches_in_min(zone, state),
+    }
+
+
+def _sun_reaches_in_min(zone: SunZone, state: MountState | None) -> int | None:
+    """Minutes until the Sun's zone reaches a mount that stands still (tracking off) outside
+    it, if within the hour: nothing moves it away by itself (docs/reliability-safety.md)."""
+    if (
+        not zone.active
+        or state is None
+        or state.alt_deg is None
+        or state.az_deg is None
+        or state.slewing
+        or state.tracking is not TrackingMode.OFF
+        or zone.distance_deg(state.alt_deg, state.az_deg) < zone.radius_deg
+    ):
+        return None
+    return zone.minutes_until_reached(state.alt_deg, state.az_deg, _SUN_WARNING_MIN)
 
 
 def horizon_outline(limits: Limits) -> list[list[float]]:
@@ -105,6 +144,7 @@ def describe_mount(mount: Mount) -> dict[str, object]:
         "limits": {
             "horizon_deg": limits.horizon_deg,
             "max_altitude_deg": limits.max_altitude_deg,
+            "sun_avoidance_deg": limits.sun_avoidance_deg,
             "horizon": horizon_outline(limits),
         },
     }

@@ -26,6 +26,7 @@ from scopelink.mount import (
     MountError,
     MountState,
     NotSupportedError,
+    SunAvoidanceError,
     TrackingMode,
 )
 from scopelink.protocol.lx200 import (
@@ -285,6 +286,9 @@ class LX200Session:
             return slew_reply(SlewRefusal.OTHER, "No target: send :Sr and :Sd first")
         try:
             await self.mount.goto_equatorial(*target)
+        except SunAvoidanceError as exc:
+            logger.warning("goto refused: %s", exc)
+            return slew_reply(SlewRefusal.OTHER, "Too close to the Sun")
         except LimitError as exc:
             logger.warning("goto refused: %s", exc)
             below = "below" in str(exc)

@@ -22,6 +22,7 @@ from scopelink.mount import (
     MountError,
     MountState,
     PierSide,
+    SunAvoidanceError,
     TrackingMode,
 )
 from scopelink.protocol.synscan import (
@@ -153,6 +154,9 @@ class SynScanHandControl:
         """
         try:
             return await self._answer(command)
+        except SunAvoidanceError as error:  # shown at the default log level: it matters by day
+            logger.warning("%s refused: %s", command.describe(), error)
+            return Ack()
         except MountError as error:
             logger.info("%s refused: %s", command.describe(), error)
             return Ack()

@@ -166,6 +166,8 @@ function drawChart() {
     }
   }
 
+  drawSunZone(ctx, c);
+
   // Altitude circles every 30°, the horizon, azimuth spokes every 45°.
   ctx.strokeStyle = c.grid; ctx.lineWidth = 1;
   for (const alt of [30, 60]) {
@@ -222,6 +224,43 @@ function drawChart() {
     ctx.moveTo(x, y - 15); ctx.lineTo(x, y - 5); ctx.moveTo(x, y + 5); ctx.lineTo(x, y + 15);
     ctx.stroke();
   }
+}
+
+// The Sun avoidance zone: the small circle `radius_deg` around the Sun, filled like the limits.
+function drawSunZone(ctx, c) {
+  const sun = view.state && view.state.sun;
+  if (!sun || !(sun.radius_deg > 0)) return;
+  const rad = Math.PI / 180;
+  const d = sun.radius_deg * rad, alt0 = sun.alt * rad, az0 = sun.az * rad;
+  ctx.fillStyle = c.limit; ctx.strokeStyle = c.limitEdge; ctx.lineWidth = 1.2;
+  ctx.beginPath();
+  for (let bearing = 0; bearing <= 360; bearing += 5) {
+    const b = bearing * rad;
+    const alt = Math.asin(Math.sin(alt0) * Math.cos(d) + Math.cos(alt0) * Math.sin(d) * Math.cos(b));
+    const az = az0 + Math.atan2(Math.sin(b) * Math.sin(d) * Math.cos(alt0),
+      Math.cos(d) - Math.sin(alt0) * Math.sin(alt));
+    const [x, y] = chart.project(Math.max(alt / rad, LOWEST_ALT), az / rad);
+    if (bearing === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+  }
+  ctx.closePath(); ctx.fill(); ctx.stroke();
+}
+
+function renderSunWarning() {
+  const s = view.state, el = $("sun-warning");
+  const sun = s && s.sun;
+  let text = "";
+  if (sun && !(sun.radius_deg > 0)) {
+    text = "Sun avoidance is OFF (limits.sun_avoidance_deg = 0): nothing stops this mount pointing at the Sun";
+  } else if (sun && sun.reaches_mount_in_min != null) {
+    text = `The Sun will reach where the mount points in ${sun.reaches_mount_in_min} min: ` +
+      "move or park it away from the Sun's path.";
+  } else if (sun && sun.up) {
+    text = `The Sun is up (altitude ${sun.alt.toFixed(0)}°, azimuth ${sun.az.toFixed(0)}°): ` +
+      `gotos within ${sun.radius_deg}° of it are refused. Never look through a telescope near the Sun.`;
+  }
+  setText("sun-warning", text);
+  el.classList.toggle("off", Boolean(sun) && (!(sun.radius_deg > 0) || sun.reaches_mount_in_min != null));
+  el.hidden = !text;
 }
 
 function selectedPosition() {
@@ -301,6 +340,7 @@ function renderState() {
   setText("hl-problems", s.problems.length ? s.problems.join("; ") : "none");
   problems.classList.toggle("bad", s.problems.length > 0);
   $("status").dataset.slewing = String(s.slewing);
+  renderSunWarning();
 }
 
 function targetText(t) {

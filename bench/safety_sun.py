@@ -1,0 +1,157 @@
+"""How far outside the Sun avoidance zone the guard stops a rate motion, and what the checks cost.
+
+The SynScan driver (zone 15°) talks over TCP to the SynScan emulator (replies paced at 9600 baud),
+whose simulated AZ-GTi has no Sun avoidance of its own; the clock starts at 2026-06-21 12:00 UTC at
+51.5° N 0° E (the Sun at altitude 62.0°, azimuth 179.1°). Each run turns the azimuth axis towards
+the Sun along its altitude and records the true distance to the Sun every 2 ms until the mount
+rests: the clearance is the least distance minus the radius (positive = never inside).
+
+Then the CPU cost of the checks a goto runs (the zone at the current time, the target, the slew
+path) and of one guard judgement.
+
+    .venv/bin/python -m bench.safety_sun            # rates 0.5 .. 3.34 °/s, then the costs
+    .venv/bin/python -m bench.safety_sun --quick    # one rate (the smoke test)
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import math
+import time
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from scopelink.astro import PierSide, Site
+from scopelink.drivers.synscan import SynScanMount
+from scopelink.mount import Limits, MountAxis
+from scopelink.mount.sun import SunZone
+from scopelink.mount.types import AlignmentMode
+from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
+from scopelink.sim import AZ_GTI, SimClock, SimulatedMount
+
+SITE = Site(latitude_deg=51.5, longitude_deg=0.0, pressure_hpa=0.0)
+NOON = datetime(2026, 6, 21, 12, 0, tzinfo=UTC)
+RADIUS_DEG = 15.0
+SUN_ALT_DEG = 62.0
+RATES_DEG_S = (0.5, 1.0, 2.0, 3.34)
+
+
+@dataclass(frozen=True, slots=True)
+class Result:
+    rate_deg_s: float
+    start_distance_deg: float
+    closest_deg: float
+    stops: int
+
+    @property
+    def clearance_deg(self) -> float:
+        return self.closest_deg - RADIUS_DEG
+
+
+def _azimuth_at_distance(distance_deg: float) -> float:
+    """The azimuth east of the Sun, at its altitude, that is ``distance_deg`` from it."""
+    zone = SunZone(RADIUS_DEG, SITE, NOON, AlignmentMode.ALT_AZ)
+    low, high = zone.az_deg - 179.0, zone.az_deg
+    for _ in range(50):
+        middle = 0.5 * (low + high)
+        if zone.distance_deg(zone.alt_deg, middle) > distance_deg:
+            low = middle
+        else:
+            high = middle
+    return low % 360.0
+
+
+async def run_once(rate_deg_s: float, lead_deg: float = 3.0) -> Result:
+    start_distance = RADIUS_DEG + lead_deg + rate_deg_s * 1.5
+    clock = SimClock.accelerated(500.0, NOON)
+    sim = SimulatedMount(
+        AZ_GTI, site=SITE, clock=clock, limits=Limits(horizon_deg=-10.0, sun_avoidance_deg=0.0)
+    )
+    await sim.connect()
+    await sim.goto_horizontal(SUN_ALT_DEG, _azimuth_at_distance(start_distance))
+    await sim.wait_for_slew(timeout_s=30.0)
+    await sim.abort()
+    clock.set_rate(1.0)
+    closest = math.inf
+    async with SynScanEmulator(sim, SynScanConfig(model=165)) as device:
+        host, port = await device.on_tcp("127.0.0.1", 0)
+        mount = SynScanMount(
+            f"tcp://{host}:{port}",
+            site=SITE,
+            clock=sim.now,
+            limits=Limits(horizon_deg=0.0, sun_avoidance_deg=RADIUS_DEG),
+        )
+        await mount.connect()
+        try:
+            await mount.move_axis(MountAxis.PRIMARY, rate_deg_s)
+            last_az, still = math.nan, 0
+            deadline = time.monotonic() + 60.0
+            while still < 10 and time.monotonic() < deadline:
+                await asyncio.sleep(0.002)
+                alt, az = sim.observed_at(sim.elapsed())
+                zone = SunZone(RADIUS_DEG, SITE, sim.now(), AlignmentMode.ALT_AZ)
+                closest = min(closest, zone.distance_deg(alt, az))
+                still = still + 1 if abs(az - last_az) < 1e-4 else 0
+                last_az = az
+            stops = mount.guard.stops
+        finally:
+            with contextlib.suppress(Exception):
+                await mount.abort()
+            await mount.disconnect()
+    return Result(rate_deg_s, start_distance, closest, stops)
+
+
+def check_costs(repeats: int = 200) -> dict[str, float]:
+    """Mean milliseconds of a goto's Sun checks and of one guard judgement."""
+    zone = SunZone(RADIUS_DEG, SITE, NOON, AlignmentMode.GERMAN_POLAR)
+    costs: dict[str, float] = {}
+    started = time.perf_counter()
+    for _ in range(repeats):
+        SunZone(RADIUS_DEG, SITE, NOON, AlignmentMode.GERMAN_POLAR)
+    costs["zone now (Sun's observed position, cached ephemeris)"] = (
+        time.perf_counter() - started
+    ) / repeats
+    started = time.perf_counter()
+    for _ in range(repeats):
+        zone.check_slew((30.0, 90.0), PierSide.WEST, (30.0, 300.0))
+    costs["slew path, 210° of azimuth on an EQ6 (a meridian flip)"] = (
+        time.perf_counter() - started
+    ) / repeats
+    started = time.perf_counter()
+    for _ in range(repeats):
+        zone.distance_deg(40.0, 120.0)
+        zone.distance_deg(40.1, 120.1, later_s=0.3)
+    costs["one guard judgement (two distances)"] = (time.perf_counter() - started) / repeats
+    return {what: 1000.0 * seconds for what, seconds in costs.items()}
+
+
+async def _main(rates: tuple[float, ...]) -> list[Result]:
+    return [await run_once(rate) for rate in rates]
+
+
+def main(argv: list[str] | None = None) -> list[Result]:
+    parser = argparse.ArgumentParser(prog="python -m bench.safety_sun", description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="one rate (2°/s), no cost figures")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.ERROR)
+    rates = (2.0,) if args.quick else RATES_DEG_S
+    results = asyncio.run(_main(rates))
+    print("| rate °/s | start distance° | closest° | clearance° | guard stops |")
+    print("| ---: | ---: | ---: | ---: | ---: |")
+    for r in results:
+        print(
+            f"| {r.rate_deg_s:.2f} | {r.start_distance_deg:.2f} | {r.closest_deg:.2f} | "
+            f"{r.clearance_deg:+.2f} | {r.stops} |"
+        )
+    if not args.quick:
+        print()
+        for what, ms in check_costs().items():
+            print(f"{what}: {ms:.3f} ms")
+    return results
+
+
+if __name__ == "__main__":
+    main()
