@@ -29,7 +29,10 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.setters import check_park_position, check_time
+from scopelink.mount.syncs import SyncFrame, check_sync, sync_distance_deg
 from scopelink.mount.types import (
+    AlignmentMode,
     Capabilities,
     GuideDirection,
     Identity,
@@ -108,6 +111,9 @@ class Mount(ABC):
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings())
+        self._sync_frame = SyncFrame()
+        self._parking = False
+        """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -150,6 +156,7 @@ class Mount(ABC):
 
     @park_position.setter
     def park_position(self, position: ParkPosition) -> None:
+        check_park_position(position, self._limits)
         self._park_position = position
         self._park_position_chosen = True
 
@@ -179,6 +186,10 @@ class Mount(ABC):
         return self._guard.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
+        if state.parked and state.slewing:  # parked only once arrived and stopped
+            state = dataclasses.replace(state, parked=False)
+        if not state.connected:
+            self._parking = False  # a device that reconnects says itself whether it is parked
         state = self._guard.annotate(state)
         self._broadcast.publish(state)
         self._guard.observe(state)
@@ -266,6 +277,16 @@ class Mount(ABC):
         self._require_connected()
         if self.state.parked:
             raise ParkedError("the mount is parked: unpark it before moving it")
+        if self._parking:
+            raise ParkedError(
+                "the mount is on its way to the park position: wait until it is parked and "
+                "unpark it, or abort to cancel the park"
+            )
+
+    @property
+    def parking(self) -> bool:
+        """Whether the park slew is under way (commanded, not arrived, not cancelled)."""
+        return self._parking and not self.state.parked
 
     # --- checked motion: validate, check limits, then delegate ---------------------------------
 
@@ -303,16 +324,52 @@ class Mount(ABC):
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        """Tell the mount it is pointing at this J2000 position."""
+        """Tell the mount it is pointing at this J2000 position, unless that is farther than
+        ``limits.max_sync_deg`` from its reading or from its un-synced frame (see
+        :mod:`scopelink.mount.syncs`); refused during a slew (the step would be unknown)."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
         self._require_unparked()
+        state = await self.current_state()
+        if state.slewing:
+            raise LimitError(
+                "the mount is slewing, so a sync would correct it by an unknown amount: nothing "
+                "was sent to the mount (wait for the slew to end)"
+            )
+        distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
+        frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
+        check_sync(self._limits, distance, frame.reach_deg)
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+        self._sync_frame = frame
+
+    @property
+    def sync_frame(self) -> SyncFrame:
+        """The net correction syncs through this object have made (axis degrees)."""
+        return self._sync_frame
+
+    def _sync_frame_after(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, state: MountState
+    ) -> SyncFrame:
+        """The frame's net correction after a sync to this position from ``state``: the step on
+        each axis added to the earlier ones (a mount that knows its counters says exactly)."""
+        if self.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
+            alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+            if state.alt_deg is not None and state.az_deg is not None:
+                return self._sync_frame.plus(az - state.az_deg, alt - state.alt_deg)
+        assert state.ra_j2000_hours is not None  # sync_distance_deg checked both
+        assert state.dec_j2000_deg is not None
+        return self._sync_frame.plus(
+            (ra_j2000_hours - state.ra_j2000_hours) * 15.0, dec_j2000_deg - state.dec_j2000_deg
+        )
 
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""
         self._require_connected()
+        cancels_park = self.parking
         await self._abort()
         self._guard.motions_stopped()
+        if cancels_park:  # stopped short of the park position: not parked
+            self._parking = False
+            await self._unpark()
 
     async def move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Turn one axis at a signed rate (degrees per second); 0 stops it."""
@@ -331,11 +388,11 @@ class Mount(ABC):
     ) -> None:
         """Start a rate motion with ``start`` unless the horizon guard refuses it, and have the
         guard watch it. Every way a driver offers to turn an axis at a rate goes through here."""
-        if self._guard.enabled:
-            try:
-                self._guard.check_move(axis, rate_deg_s, self.state)
-            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
-                self._guard.check_move(axis, rate_deg_s, await self.refresh())
+        # Even a mount that stops itself at the limits refuses a motion heading further out.
+        try:
+            self._guard.check_move(axis, rate_deg_s, self.state)
+        except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
+            self._guard.check_move(axis, rate_deg_s, await self.refresh())
         await start()
         self._guard.motion_commanded(axis, rate_deg_s)
 
@@ -365,22 +422,28 @@ class Mount(ABC):
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""
         self._require_connected()
+        if self._park_position_chosen:  # the limits may have changed since it was chosen
+            check_park_position(self._park_position, self._limits)
         await self._park()
+        self._parking = True
         self._guard.motions_stopped()
 
     async def unpark(self) -> None:
         self._require_connected()
         await self._unpark()
+        self._parking = False
 
     async def set_site(self, site: Site) -> None:
         """Use ``site`` from now on, and tell the device where supported."""
+        if not isinstance(site, Site):
+            raise InvalidValueError(f"a site is a scopelink Site, not {site!r}")
         await self._set_site(site)
         self._site = site
 
     async def set_time(self, utc: datetime) -> None:
-        """Tell the device the time (an aware datetime)."""
-        if utc.tzinfo is None:
-            raise InvalidValueError("the time must carry a time zone (use UTC)")
+        """Tell the device the time (an aware datetime between 2001 and 2099: see
+        :mod:`scopelink.mount.setters`)."""
+        check_time(utc)
         self._require_connected()
         await self._set_time(utc)
 
