@@ -326,15 +326,25 @@ class Mount(ABC):
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Tell the mount it is pointing at this J2000 position, unless that is farther than
         ``limits.max_sync_deg`` from its reading or from its un-synced frame (see
-        :mod:`scopelink.mount.syncs`)."""
+        :mod:`scopelink.mount.syncs`); refused while the mount slews."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
         self._require_unparked()
         state = await self.current_state()
+        self._check_sync_now(state)
         distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
         frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
         check_sync(self._limits, distance, frame.reach_deg)
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._sync_frame = frame
+
+    def _check_sync_now(self, state: MountState) -> None:
+        """Refuse a sync while the mount slews: the step it makes would be unknown (the
+        reading lags the axes), and unknown steps could add up past ``max_sync_deg``."""
+        if state.slewing:
+            raise LimitError(
+                "the mount is slewing, so a sync would correct it by an unknown amount: nothing "
+                "was sent to the mount (wait for the slew to end)"
+            )
 
     @property
     def sync_frame(self) -> SyncFrame:
