@@ -371,7 +371,7 @@ class SynScanMount(Mount):
             pier_side=self._pier_side,
             slewing=self._slewing,
             tracking=mode,
-            parked=self._parked,
+            parked=self._parked and not self._slewing,  # parked once the park goto has landed
             aligned=self._aligned,
             pulse_guiding=bool(self._pulses),
             problems=problems,
@@ -680,7 +680,7 @@ class SynScanMount(Mount):
                 await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
         self._parked = True
         self._goto_started((park.alt_deg, park.az_deg))
-        self._publish(dataclasses.replace(self.state, parked=True, tracking=TrackingMode.OFF))
+        self._publish(dataclasses.replace(self.state, parked=False, tracking=TrackingMode.OFF))
 
     async def _unpark(self) -> None:
         self._parked = False
