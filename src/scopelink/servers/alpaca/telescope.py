@@ -429,8 +429,8 @@ class TelescopeDevice:
 
     async def _put_utc_date(self, params: Params) -> None:
         when = parse_utc(params.text("UTCDate"))
-        if not self.mount.capabilities.can_set_time:
-            raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount keeps no time")
+        # The Mount API refuses a time no mount can keep (0x401) before a mount that keeps no
+        # time says so (0x400): the same value gets the same answer on every mount.
         await self._call(self.mount.set_time(when))
 
     async def _set_site(self, **change: float) -> None:
