@@ -127,7 +127,7 @@ async def assert_usable(session: aiohttp.ClientSession, after: str) -> None:
 async def test_impossible_setter_values_are_refused_and_the_mount_stays_usable(
     kind: str, tmp_path: Path
 ) -> None:
-    refused = {ErrorNumber.INVALID_VALUE, ErrorNumber.NOT_IMPLEMENTED}
+    refused: set[int] = {ErrorNumber.INVALID_VALUE, ErrorNumber.NOT_IMPLEMENTED}
     async with alpaca(kind, tmp_path) as session:
         for member, name, value in BAD_VALUES:
             await put(session, member, name, value, expect=refused)
@@ -140,9 +140,7 @@ async def test_impossible_setter_values_are_refused_and_the_mount_stays_usable(
 async def test_utcdate_9999_answers_0x401_and_later_calls_still_answer(tmp_path: Path) -> None:
     """The issue's case: it answered 0, then every call 0x500 until a sane date was put."""
     async with alpaca("sim-eq6", tmp_path) as session:
-        body = await put(
-            session, "utcdate", "UTCDate", "9999-12-31T23:59:59Z", expect={0x401}
-        )
+        body = await put(session, "utcdate", "UTCDate", "9999-12-31T23:59:59Z", expect={0x401})
         assert "2099" in body["ErrorMessage"]
         await assert_usable(session, "UTCDate=9999-12-31T23:59:59Z")
 
