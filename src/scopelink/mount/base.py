@@ -30,7 +30,12 @@ from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
 from scopelink.mount.setters import check_park_position, check_time
-from scopelink.mount.syncs import SyncFrame, check_sync, sync_distance_deg
+from scopelink.mount.syncs import (
+    SyncFrame,
+    check_sync,
+    refuse_sync_while_slewing,
+    sync_distance_deg,
+)
 from scopelink.mount.types import (
     AlignmentMode,
     Capabilities,
@@ -338,13 +343,8 @@ class Mount(ABC):
         self._sync_frame = frame
 
     def _check_sync_now(self, state: MountState) -> None:
-        """Refuse a sync while the mount slews: the step it makes would be unknown (the
-        reading lags the axes), and unknown steps could add up past ``max_sync_deg``."""
-        if state.slewing:
-            raise LimitError(
-                "the mount is slewing, so a sync would correct it by an unknown amount: nothing "
-                "was sent to the mount (wait for the slew to end)"
-            )
+        """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""
+        refuse_sync_while_slewing(state)
 
     @property
     def sync_frame(self) -> SyncFrame:
@@ -354,17 +354,12 @@ class Mount(ABC):
     def _sync_frame_after(
         self, ra_j2000_hours: float, dec_j2000_deg: float, state: MountState
     ) -> SyncFrame:
-        """The frame's net correction after a sync to this position from ``state``: the step on
-        each axis added to the earlier ones (a mount that knows its counters says exactly)."""
+        """The net correction after a sync to this position from ``state`` (the simulator,
+        which knows its counters, says exactly)."""
+        altaz = None
         if self.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
-            alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
-            if state.alt_deg is not None and state.az_deg is not None:
-                return self._sync_frame.plus(az - state.az_deg, alt - state.alt_deg)
-        assert state.ra_j2000_hours is not None  # sync_distance_deg checked both
-        assert state.dec_j2000_deg is not None
-        return self._sync_frame.plus(
-            (ra_j2000_hours - state.ra_j2000_hours) * 15.0, dec_j2000_deg - state.dec_j2000_deg
-        )
+            altaz = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+        return self._sync_frame.after_sync(ra_j2000_hours, dec_j2000_deg, state, altaz)
 
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""

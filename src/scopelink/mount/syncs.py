@@ -30,7 +30,7 @@ from scopelink.mount.errors import LimitError
 from scopelink.mount.limits import Limits
 from scopelink.mount.types import MountState
 
-__all__ = ["SyncFrame", "check_sync", "sync_distance_deg"]
+__all__ = ["SyncFrame", "check_sync", "refuse_sync_while_slewing", "sync_distance_deg"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +48,37 @@ class SyncFrame:
     def plus(self, primary_deg: float, secondary_deg: float) -> SyncFrame:
         return SyncFrame(
             _wrap_signed(self.primary_deg + primary_deg), self.secondary_deg + secondary_deg
+        )
+
+    def after_sync(
+        self,
+        ra_j2000_hours: float,
+        dec_j2000_deg: float,
+        state: MountState,
+        target_altaz: tuple[float, float] | None,
+    ) -> SyncFrame:
+        """This frame plus the step a sync from the reading ``state`` to the target makes on each
+        axis: azimuth and altitude when ``target_altaz`` (the target's observed altitude and
+        azimuth, for an alt-az mount) is given, else hour angle and declination."""
+        if target_altaz is not None and state.alt_deg is not None and state.az_deg is not None:
+            alt, az = target_altaz
+            return self.plus(az - state.az_deg, alt - state.alt_deg)
+        sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)  # raises without a reading
+        assert state.ra_j2000_hours is not None
+        assert state.dec_j2000_deg is not None
+        return self.plus(
+            (ra_j2000_hours - state.ra_j2000_hours) * 15.0, dec_j2000_deg - state.dec_j2000_deg
+        )
+
+
+def refuse_sync_while_slewing(state: MountState) -> None:
+    """Raise :class:`LimitError` while ``state`` says the mount slews: the reading lags the
+    axes, so the step a sync would make is unknown, and unknown steps could add up past
+    ``max_sync_deg``."""
+    if state.slewing:
+        raise LimitError(
+            "the mount is slewing, so a sync would correct it by an unknown amount: nothing "
+            "was sent to the mount (wait for the slew to end)"
         )
 
 
