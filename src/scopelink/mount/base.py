@@ -117,6 +117,8 @@ class Mount(ABC):
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings())
         self._sync_frame = SyncFrame()
+        self._sync_lock = asyncio.Lock()
+        """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
 
@@ -333,14 +335,15 @@ class Mount(ABC):
         ``limits.max_sync_deg`` from its reading or from its un-synced frame (see
         :mod:`scopelink.mount.syncs`); refused while the mount slews."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
-        self._require_unparked()
-        state = await self.current_state()
-        self._check_sync_now(state)
-        distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
-        frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
-        check_sync(self._limits, distance, frame.reach_deg)
-        await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
-        self._sync_frame = frame
+        async with self._sync_lock:
+            self._require_unparked()
+            state = await self.current_state()
+            self._check_sync_now(state)
+            distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
+            frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
+            check_sync(self._limits, distance, frame.reach_deg)
+            await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+            self._sync_frame = frame
 
     def _check_sync_now(self, state: MountState) -> None:
         """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""
