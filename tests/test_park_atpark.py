@@ -10,7 +10,10 @@ import pytest
 from alpaca.exceptions import ParkedException
 from alpaca.telescope import TelescopeAxes
 
-from scopelink.mount import MountAxis, NotSupportedError, ParkedError, ParkPosition
+from scopelink.drivers.synscan import SynScanMount
+from scopelink.mount import Limits, MountAxis, NotSupportedError, ParkedError, ParkPosition
+from scopelink.servers.synscan import SynScanEmulator
+from scopelink.sim import EQ6, SimClock, SimulatedMount
 from tests.test_alpaca_support import (
     WATCHABLE_SPEED_UP,
     blocking,
@@ -20,6 +23,7 @@ from tests.test_alpaca_support import (
     wait_until,
 )
 from tests.test_driver_skytracker_support import rig as skytracker_rig
+from tests.test_driver_synscan_support import MADRID, START
 from tests.test_driver_synscan_support import rig as synscan_rig
 from tests.test_web_support import served
 
@@ -121,6 +125,31 @@ async def test_synscan_driver_abort_cancels_the_park(transport: str) -> None:
         assert not state.parked
         assert not state.slewing
         await r.mount.move_axis(MountAxis.PRIMARY, 0.0)  # not refused: unparked
+
+
+async def test_synscan_driver_not_parked_when_the_park_goto_ends_elsewhere() -> None:
+    """The hand control ignores the park goto (here: its own horizon is above the park
+    position): the goto 'ends' at once, away from the park position, so the mount is not
+    parked, says why, and still refuses motion until unparked or aborted."""
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(START), limits=Limits(40.0))
+    async with SynScanEmulator(sim) as emulator:
+        host, port = await emulator.on_tcp("127.0.0.1", 0)
+        mount = SynScanMount(f"tcp://{host}:{port}", site=MADRID, clock=sim.now)
+        await mount.connect()
+        try:
+            mount.park_position = ParkPosition(alt_deg=30.0, az_deg=200.0)
+            await mount.park()
+            sim.step(120.0)
+            state = await mount.refresh()
+            assert not state.slewing
+            assert not state.parked
+            assert any("not parked" in problem for problem in state.problems)
+            with pytest.raises(ParkedError):
+                await mount.move_axis(MountAxis.PRIMARY, 1.0)
+            await mount.abort()
+            await mount.move_axis(MountAxis.PRIMARY, 0.0)
+        finally:
+            await mount.disconnect()
 
 
 async def test_the_sky_tracker_cannot_park_and_never_reads_parked(tmp_path: Path) -> None:
