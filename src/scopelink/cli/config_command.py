@@ -28,7 +28,6 @@ profile = [[0, 15], [90, 25], [200, 12]]   # optional [azimuth, altitude] points
 
 [limits]
 max_altitude = 88                   # keeps alt-az mounts out of the zenith
-max_sync_deg = 10                   # farthest a sync may correct the pointing (default 10)
 
 [servers]                           # what 'scopelink serve' listens on; false turns one off
 host = "127.0.0.1"
