@@ -18,8 +18,11 @@ from typing import Any
 import aiohttp
 import pytest
 
+from scopelink.drivers.synscan.mount import PARK_TOLERANCE_DEG
 from scopelink.mount import InvalidValueError, LimitError, Mount, ParkPosition
+from scopelink.mount.setters import EARLIEST_UTC, LATEST_UTC
 from scopelink.servers.alpaca import AlpacaServer, ErrorNumber
+from scopelink.servers.alpaca.telescope import MAX_SETTLE_TIME_S
 from scopelink.sim import AZ_GTI, EQ6
 from tests.test_alpaca_support import sim_mount
 from tests.test_driver_skytracker_support import rig as skytracker_rig
@@ -188,3 +191,15 @@ def test_the_park_position_setter_checks_ranges_and_limits() -> None:
         mount.park_position = ParkPosition(-5.0, 0.0)
     mount.park_position = ParkPosition(30.0, 90.0)
     assert mount.park_position == ParkPosition(30.0, 90.0)
+
+
+def test_the_docs_give_the_ranges_the_code_uses() -> None:
+    docs = Path(__file__).parent.parent / "docs"
+    safety = (docs / "reliability-safety.md").read_text(encoding="utf-8")
+    alpaca_md = (docs / "alpaca.md").read_text(encoding="utf-8")
+    span = f"{EARLIEST_UTC:%Y-%m-%d} to {LATEST_UTC:%Y-%m-%dT%H:%M:%S} UTC"
+    assert span in safety
+    assert f"{EARLIEST_UTC:%Y-%m-%d}..{LATEST_UTC:%Y-%m-%d} UTC" in alpaca_md
+    assert f"| SlewSettleTime | conn. | 0..{MAX_SETTLE_TIME_S} s |" in alpaca_md
+    assert f"| Alpaca `SlewSettleTime` | 0..{MAX_SETTLE_TIME_S} s |" in safety
+    assert f"`PARK_TOLERANCE_DEG` ({PARK_TOLERANCE_DEG:g}°)" in safety
