@@ -44,12 +44,13 @@ from scopelink.protocol.skytracker import messages as tracker_messages
 from scopelink.servers.alpaca.errors import AlpacaError, BadRequest
 from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
 from scopelink.servers.alpaca.params import UINT32_MAX, Params, parse_transaction_id
+from scopelink.servers.alpaca.telescope import TelescopeDevice
 from scopelink.servers.lx200.device import LX200Handset
 from scopelink.servers.skytracker.commander import SkyCommander
 from scopelink.servers.skytracker.emulator import commander_for
 from scopelink.servers.skytracker.tracker import SkyTracker
 from scopelink.servers.synscan.device import SynScanHandControl
-from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
+from scopelink.sim import AZ_GTI, EQ6, SKY_TRACKER, SimClock, SimulatedMount
 from scopelink.web.params import BadRequestError, read_body
 
 __all__ = ["TARGETS", "FuzzFailureError", "Target", "chunks"]
@@ -923,6 +924,78 @@ def check_lx200_device(data: bytes, rng: random.Random) -> None:
         expect(shape.fullmatch(reply) is not None, f"{event!r} answered {reply!r}")
 
 
+# ------------------------------------------------------------------------- Alpaca setters
+
+
+_SETTERS = {
+    "utcdate": "UTCDate",
+    "sitelatitude": "SiteLatitude",
+    "sitelongitude": "SiteLongitude",
+    "siteelevation": "SiteElevation",
+    "trackingrate": "TrackingRate",
+    "slewsettletime": "SlewSettleTime",
+    "targetrightascension": "TargetRightAscension",
+    "targetdeclination": "TargetDeclination",
+    "guideraterightascension": "GuideRateRightAscension",
+    "guideratedeclination": "GuideRateDeclination",
+    "rightascensionrate": "RightAscensionRate",
+    "declinationrate": "DeclinationRate",
+    "tracking": "Tracking",
+    "setpark": "ClientID",
+}
+"""Every ITelescopeV4 setter (member -> its parameter); SetPark takes the current position."""
+_USABLE_READS = ("altitude", "rightascension", "siderealtime", "utcdate", "devicestate", "atpark")
+_SETTER_DEVICES: list[tuple[TelescopeDevice, SimulatedMount]] = []
+
+
+def _setter_devices() -> list[tuple[TelescopeDevice, SimulatedMount]]:
+    """An equatorial and an alt-az simulated mount behind the Alpaca device, kept for the whole
+    run: whatever one input set, the next meets (as one long session would)."""
+    if not _SETTER_DEVICES:
+        site = Site(latitude_deg=50.0, longitude_deg=10.0, elevation_m=300.0)
+        for model in (EQ6, AZ_GTI):
+            mount = SimulatedMount(model, site=site, clock=SimClock.stepped())
+            device = TelescopeDevice(mount)
+            _event_loop().run_until_complete(device.connect())
+            _SETTER_DEVICES.append((device, mount))
+    return _SETTER_DEVICES
+
+
+def _answer(handler: Callable[[Params], object], params: Params) -> int:
+    """The ErrorNumber a handler's call would be answered with (0 for success)."""
+    try:
+        result = handler(params)
+        if asyncio.iscoroutine(result):
+            _event_loop().run_until_complete(result)
+    except AlpacaError as error:
+        return int(error.number)
+    except BadRequest:
+        return 400  # HTTP 400: the request itself is malformed
+    return 0
+
+
+def check_alpaca_setters(data: bytes, rng: random.Random) -> None:
+    """Each setter's PUT, with any value: a refusal is 0x400/0x401/0x402/0x408/0x40B with a
+    reason, never 0x500 nor an exception; and whatever was accepted, every read still answers."""
+    text = data.decode("utf-8", "replace")
+    pairs = parse_qsl(text, keep_blank_values=True)
+    for device, mount in _setter_devices():
+        for name, value in pairs[:4]:
+            # A name that is no setter's gives its value to a setter picked at random.
+            setter = name.lower() if name.lower() in _SETTERS else rng.choice(list(_SETTERS))
+            put = device.members[setter].put
+            assert put is not None
+            params = Params.from_pairs([(_SETTERS[setter], value)], exact=rng.random() < 0.5)
+            number = _answer(put, params)
+            expect(number != 0x500, f"{setter}={value!r} answered 0x500")
+        mount.step(1.0)  # time moves on, as it does at night (a date at the end of time fails)
+        for read in _USABLE_READS:
+            getter = device.members[read].get
+            assert getter is not None
+            number = _answer(getter, Params.from_pairs([], exact=False))
+            expect(number == 0, f"after {text!r}, {read} answered {number:#x}")
+
+
 # ------------------------------------------------------------------------------- CLI targets
 
 
@@ -1073,6 +1146,22 @@ TARGETS: tuple[Target, ...] = (
         b" :.+-hmsd0123456789'\"",
     ),
     Target("config", _CONFIG_SEEDS, check_config, b'[]{}=."\n#0123456789-', max_size=6000),
+    Target(
+        "alpaca-setters",
+        (
+            b"UTCDate=2026-11-24T21:30:00.1234567Z",
+            b"UTCDate=2099-12-31T23:59:59%2B05:00",
+            b"SiteLatitude=-33.9&SiteLongitude=18.4&SiteElevation=10",
+            b"TrackingRate=2&Tracking=true",
+            b"SlewSettleTime=5",
+            b"TargetRightAscension=23.99&TargetDeclination=-90",
+            b"GuideRateRightAscension=0.002&RightAscensionRate=0",
+            b"SetPark=1",
+        ),
+        check_alpaca_setters,
+        b"=&%+.:-TZeE0123456789",
+        share=0.25,
+    ),
 )
 
 

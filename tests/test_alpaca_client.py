@@ -214,7 +214,11 @@ async def test_sync_moves_the_reported_position(tmp_path: Path) -> None:
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
-        await blocking(lambda: setattr(telescope, "Tracking", True))
+        # Away from the pole: there a sync turns the RA axis far (refused, issue #11).
+        ra_j2000, dec_j2000 = radec_at(mount, 40.0, 200.0)
+        ra, dec = j2000_to_apparent(ra_j2000, dec_j2000, mount.now())
+        await blocking(lambda: telescope.SlewToCoordinatesAsync(ra, dec))
+        await wait_until(lambda: not telescope.Slewing, SLEW_TIMEOUT_S, "the slew's end")
         ra, dec = await blocking(lambda: (telescope.RightAscension, telescope.Declination))
         new_dec = dec - 1.0
         await blocking(lambda: telescope.SyncToCoordinates(ra, new_dec))
@@ -227,13 +231,16 @@ async def test_sync_to_alt_az_and_to_target(tmp_path: Path) -> None:
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
         await _connect(telescope)
+        # Away from the pole: there a sync turns the RA axis far (refused, issue #11).
+        await blocking(lambda: telescope.SlewToAltAzAsync(200.0, 40.0))
+        await wait_until(lambda: not telescope.Slewing, SLEW_TIMEOUT_S, "the slew's end")
         await blocking(lambda: setattr(telescope, "Tracking", True))
         with pytest.raises(InvalidOperationException):  # ASCOM: needs tracking off
-            await blocking(lambda: telescope.SyncToAltAz(10.0, 48.0))
+            await blocking(lambda: telescope.SyncToAltAz(201.0, 41.0))
         await blocking(lambda: setattr(telescope, "Tracking", False))
-        await blocking(lambda: telescope.SyncToAltAz(10.0, 48.0))
-        assert mount.state.alt_deg == pytest.approx(48.0, abs=0.01)
-        assert mount.state.az_deg == pytest.approx(10.0, abs=0.01)
+        await blocking(lambda: telescope.SyncToAltAz(201.0, 41.0))
+        assert mount.state.alt_deg == pytest.approx(41.0, abs=0.01)
+        assert mount.state.az_deg == pytest.approx(201.0, abs=0.01)
 
         def sync_to_target() -> tuple[float, float]:
             telescope.Tracking = True

@@ -182,8 +182,11 @@ async def test_sync_realigns_the_sky_commander(tmp_path: Path, transport: str) -
 async def test_sync_during_goto_is_refused_clearly(tmp_path: Path, transport: str) -> None:
     async with rig(tmp_path, transport) as r:
         await r.driver.goto_equatorial(*sky_at(r.sim, 60.0, 200.0))
+        here = r.driver.state  # a sync within limits.max_sync_deg: the GOTO refuses it
+        assert here.ra_j2000_hours is not None
+        assert here.dec_j2000_deg is not None
         with pytest.raises(SlewInProgressError, match="GOTO"):
-            await r.driver.sync_equatorial(1.0, 10.0)
+            await r.driver.sync_equatorial(here.ra_j2000_hours, here.dec_j2000_deg)
         with pytest.raises(SlewInProgressError):
             await r.driver.move_axis(MountAxis.PRIMARY, 1.0)
         with pytest.raises(SlewInProgressError):

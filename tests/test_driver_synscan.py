@@ -121,6 +121,8 @@ async def test_sync_is_verified_by_reading_back(transport: str) -> None:
         await r.mount.sync_equatorial(7.55, 35.3)
         state = r.mount.state
         assert state.ra_j2000_hours == pytest.approx(7.55, abs=1e-5)
+        # Past limits.max_sync_deg only to see the hand control's own silent refusal.
+        r.mount.limits = Limits(max_sync_deg=180.0)
         with pytest.raises(DeviceError, match=r"sync ignored by the hand control \(more than ~7°"):
             await r.mount.sync_equatorial(12.0, 0.0)
         assert_position_matches(await r.mount.refresh(), r.sim.snapshot())
@@ -205,7 +207,7 @@ async def test_park_and_unpark(transport: str) -> None:
         await r.mount.set_tracking(TrackingMode.SIDEREAL)
         r.mount.park_position = ParkPosition(alt_deg=30.0, az_deg=200.0)
         await r.mount.park()
-        assert r.mount.state.parked
+        assert not r.mount.state.parked  # parked once arrived (issue #11 part 4)
         assert r.mount.state.slewing
         with pytest.raises(ParkedError):
             await r.mount.goto_equatorial(7.5, 35.0)
@@ -219,8 +221,11 @@ async def test_park_and_unpark(transport: str) -> None:
         assert not (await r.mount.refresh()).parked
         await r.mount.goto_equatorial(7.5, 35.0)
 
-        r.mount.park_position = ParkPosition(alt_deg=-5.0, az_deg=0.0)
-        with pytest.raises(LimitError, match="park position"):
+        with pytest.raises(LimitError, match="park position"):  # refused when set
+            r.mount.park_position = ParkPosition(alt_deg=-5.0, az_deg=0.0)
+        r.mount.park_position = ParkPosition(alt_deg=5.0, az_deg=0.0)
+        r.mount.limits = Limits(horizon_deg=10.0)
+        with pytest.raises(LimitError, match="park position"):  # and when parking
             await r.mount.park()
 
 
@@ -232,8 +237,11 @@ async def test_an_unaligned_hand_control_refuses_gotos_but_tracks_and_slews(
         assert not r.mount.state.aligned
         with pytest.raises(NotAlignedError, match="not aligned"):
             await r.mount.goto_equatorial(7.5, 35.0)
+        here = await r.mount.refresh()  # within limits.max_sync_deg: the alignment refuses it
+        assert here.ra_j2000_hours is not None
+        assert here.dec_j2000_deg is not None
         with pytest.raises(NotAlignedError):
-            await r.mount.sync_equatorial(7.5, 35.0)
+            await r.mount.sync_equatorial(here.ra_j2000_hours, here.dec_j2000_deg)
         await r.mount.set_tracking(TrackingMode.SIDEREAL)
         await r.mount.move_axis(MountAxis.PRIMARY, 1.0)
         await r.mount.move_axis(MountAxis.PRIMARY, 0.0)

@@ -39,6 +39,7 @@ from scopelink.links import Link
 from scopelink.mount import (
     DeviceError,
     GuideDirection,
+    Limits,
     MountAxis,
     MountState,
     ParkPosition,
@@ -139,7 +140,11 @@ COLUMNS = [
 async def memory_rig(*, connect: bool = True, timeout_s: float = TIMEOUT_S) -> AsyncIterator[Rig]:
     """The driver on a paced memory link to the emulator; the factory opens a new link each
     time, so a ``close`` fault is followed by a transparent reopen (as with a TCP bridge)."""
-    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(START))
+    # The emulated hand control obeys any sync: near the pole, where this rig points, a 0.5°
+    # step turns the RA axis far, which the simulator's own limits.max_sync_deg would refuse.
+    sim = SimulatedMount(
+        EQ6, site=MADRID, clock=SimClock.stepped(START), limits=Limits(max_sync_deg=180.0)
+    )
     async with SynScanEmulator(sim, faults=FaultInjector()) as emulator:
 
         async def open_memory() -> Link:
@@ -322,9 +327,10 @@ async def park(r: Rig) -> None:
 
 
 async def verify_parked(r: Rig, _result: object) -> None:
-    assert r.mount.state.parked
+    assert r.mount.parking  # on its way: parked once it has arrived (issue #11 part 4)
     r.sim.step(300.0)
     state = await r.mount.refresh()
+    assert state.parked
     assert state.alt_deg == pytest.approx(PARK.alt_deg, abs=0.01)
     assert state.az_deg == pytest.approx(PARK.az_deg, abs=0.01)
     assert state.tracking is TrackingMode.OFF

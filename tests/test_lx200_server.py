@@ -204,6 +204,9 @@ async def test_parked_mount_refuses_with_2() -> None:
 )
 async def test_sync_in_both_reply_styles(style: SyncReply, reply: bytes) -> None:
     mount = simulated_mount(rate=1.0)
+    await mount.connect()  # away from the pole first: a sync there turns the RA axis far
+    await mount.goto_horizontal(40.0, 200.0)
+    mount.clock.advance(120.0)
     async with serving(mount, LX200Config(sync_reply=style)) as (_, client):
         here = jnow_of(mount)
         synced = (here[0], here[1] - 1.0)

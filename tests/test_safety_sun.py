@@ -181,14 +181,16 @@ async def test_tracking_into_the_zone_is_turned_off_outside_it() -> None:
 
 @pytest.mark.filterwarnings("ignore:ERFA function")  # "dubious year": 2300 is the point
 async def test_a_clock_outside_the_ephemeris_refuses_gotos_but_leaves_the_mount_usable() -> None:
-    """No Sun can be placed in 2300: gotos are refused with the reason, the simulator keeps
-    working, and setting a sane time makes gotos work again."""
-    mount = await simulated(at=(30.0, 90.0))
-    await mount.set_time(datetime(2300, 1, 1, tzinfo=UTC))
+    """No Sun can be placed in 2300 (a clock that ran there: ``set_time`` itself refuses such a
+    date): gotos are refused with the reason, the simulator keeps working, and setting a sane time
+    makes gotos work again."""
+    mount = await simulated(at=(30.0, 90.0), when=datetime(2300, 1, 1, tzinfo=UTC))
     with pytest.raises(LimitError, match="the Sun cannot be placed at 2300-01-01"):
         await mount.goto_horizontal(40.0, 90.0)
     await mount.move_axis(MountAxis.SECONDARY, 1.0)
     await mount.abort()
+    with pytest.raises(InvalidValueError, match="outside what a mount can keep"):
+        await mount.set_time(datetime(2300, 1, 1, tzinfo=UTC))
     await mount.set_time(datetime(2026, 12, 21, 0, 0, tzinfo=UTC))
     await mount.goto_horizontal(40.0, 90.0)
 

@@ -226,9 +226,12 @@ async def test_park_and_unpark() -> None:
     await mount.goto_equatorial(*target_at_hour_angle(NORTH, 2.0, 30.0))
     await land(mount)
     await mount.park()
-    assert mount.state.parked
-    state = await land(mount)
+    assert not mount.state.parked  # parked once it has arrived (issue #11 part 4)
+    assert mount.state.slewing
+    await land(mount)
+    state = mount.step(0.01)  # just past the landing (land() may stop a rounding error short)
     assert state.parked
+    assert not state.slewing
     assert state.tracking is TrackingMode.OFF
     assert mount.counters_at(mount.elapsed()) == pytest.approx(mount.park_counters)
     with pytest.raises(ParkedError):

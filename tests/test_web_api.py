@@ -241,6 +241,10 @@ async def test_tracking_park_and_unpark() -> None:
 
 async def test_sync_by_name_and_by_coordinates() -> None:
     async with served() as s:
+        # Point near it first: a sync farther than limits.max_sync_deg is refused (issue #11).
+        status, body = await s.post("/api/goto", {"name": HIGH_UP})
+        assert status == 200, body
+        await s.mount.wait_for_slew(timeout_s=30.0)
         status, body = await s.post("/api/sync", {"name": HIGH_UP})
         assert status == 200, body
         state = await s.mount.refresh()

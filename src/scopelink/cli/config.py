@@ -20,7 +20,7 @@ import platformdirs
 
 from scopelink.astro import Site
 from scopelink.mount import InvalidValueError, Limits
-from scopelink.mount.limits import SUN_AVOIDANCE_DEG
+from scopelink.mount.limits import DEFAULT_MAX_SYNC_DEG, SUN_AVOIDANCE_DEG
 from scopelink.servers.access import DEFAULT_POLICY, IPNetwork, parse_network
 
 __all__ = [
@@ -121,7 +121,7 @@ def parse_config(text: str, path: Path) -> Config:
 _TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers")
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
-_LIMITS_KEYS: Final = ("max_altitude", "sun_avoidance_deg")
+_LIMITS_KEYS: Final = ("max_altitude", "sun_avoidance_deg", "max_sync_deg")
 _ACCESS_KEYS: Final = (
     "read_only",
     "allow",
@@ -223,6 +223,7 @@ class _Reader:
         altitude = self.number(horizon, "altitude", "horizon")
         max_altitude = self.number(limits, "max_altitude", "limits")
         sun = self.number(limits, "sun_avoidance_deg", "limits")
+        max_sync = self.number(limits, "max_sync_deg", "limits")
         profile = self.profile(horizon.get("profile", []))
         try:
             return Limits(
@@ -230,10 +231,12 @@ class _Reader:
                 max_altitude_deg=max_altitude if max_altitude is not None else 90.0,
                 horizon_profile=profile,
                 sun_avoidance_deg=sun if sun is not None else SUN_AVOIDANCE_DEG,
+                max_sync_deg=max_sync if max_sync is not None else DEFAULT_MAX_SYNC_DEG,
             )
         except InvalidValueError as error:
             key = "limits.max_altitude" if "maximum" in str(error) else "horizon"
             key = "limits.sun_avoidance_deg" if "Sun" in str(error) else key
+            key = "limits.max_sync_deg" if "max_sync_deg" in str(error) else key
             raise self.error(key, str(error)) from None
 
     def profile(self, value: object) -> tuple[tuple[float, float], ...]:

@@ -161,6 +161,7 @@ def show(config: Config) -> str:
         "[limits]",
         f"max_altitude = {limits.max_altitude_deg}",
         f"sun_avoidance_deg = {limits.sun_avoidance_deg}",
+        f"max_sync_deg = {limits.max_sync_deg}",
         "",
         "[servers]",
         f"host = {_toml_value(servers.host)}",

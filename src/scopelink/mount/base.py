@@ -29,8 +29,16 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
+from scopelink.mount.syncs import (
+    SyncFrame,
+    check_sync,
+    refuse_sync_while_slewing,
+    sync_distance_deg,
+)
 from scopelink.mount.types import (
+    AlignmentMode,
     Capabilities,
     GuideDirection,
     Identity,
@@ -109,6 +117,11 @@ class Mount(ABC):
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings())
+        self._sync_frame = SyncFrame()
+        self._sync_lock = asyncio.Lock()
+        """One sync at a time, so the recorded frame follows the order the device got them in."""
+        self._parking = False
+        """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -151,6 +164,7 @@ class Mount(ABC):
 
     @park_position.setter
     def park_position(self, position: ParkPosition) -> None:
+        check_park_position(position, self._limits)
         self._park_position = position
         self._park_position_chosen = True
 
@@ -180,6 +194,10 @@ class Mount(ABC):
         return self._guard.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
+        if state.parked and state.slewing:  # parked only once arrived and stopped
+            state = dataclasses.replace(state, parked=False)
+        if not state.connected:
+            self._parking = False  # a device that reconnects says itself whether it is parked
         state = self._guard.annotate(state)
         self._broadcast.publish(state)
         self._guard.observe(state)
@@ -267,6 +285,16 @@ class Mount(ABC):
         self._require_connected()
         if self.state.parked:
             raise ParkedError("the mount is parked: unpark it before moving it")
+        if self._parking:
+            raise ParkedError(
+                "the mount is on its way to the park position: wait until it is parked and "
+                "unpark it, or abort to cancel the park"
+            )
+
+    @property
+    def parking(self) -> bool:
+        """Whether the park slew is under way (commanded, not arrived, not cancelled)."""
+        return self._parking and not self.state.parked
 
     # --- checked motion: validate, check limits, then delegate ---------------------------------
 
@@ -306,12 +334,40 @@ class Mount(ABC):
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        """Tell the mount it is pointing at this J2000 position."""
+        """Tell the mount it is pointing at this J2000 position, unless that is farther than
+        ``limits.max_sync_deg`` from its reading or from its un-synced frame (see
+        :mod:`scopelink.mount.syncs`); refused while the mount slews."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
-        self._require_unparked()
-        alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
-        await self._check_sun(alt, az, what="sync position", slew=False)
-        await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+        async with self._sync_lock:
+            self._require_unparked()
+            state = await self.current_state()
+            self._check_sync_now(state)
+            alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+            await self._check_sun(alt, az, what="sync position", slew=False)
+            distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
+            frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
+            check_sync(self._limits, distance, frame.reach_deg)
+            await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+            self._sync_frame = frame
+
+    def _check_sync_now(self, state: MountState) -> None:
+        """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""
+        refuse_sync_while_slewing(state)
+
+    @property
+    def sync_frame(self) -> SyncFrame:
+        """The net correction syncs through this object have made (axis degrees)."""
+        return self._sync_frame
+
+    def _sync_frame_after(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, state: MountState
+    ) -> SyncFrame:
+        """The net correction after a sync to this position from ``state`` (the simulator,
+        which knows its counters, says exactly)."""
+        altaz = None
+        if self.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
+            altaz = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+        return self._sync_frame.after_sync(ra_j2000_hours, dec_j2000_deg, state, altaz)
 
     def sun_zone(self) -> SunZone | None:
         """The Sun avoidance zone now (None when ``limits.sun_avoidance_deg`` is 0)."""
@@ -336,8 +392,12 @@ class Mount(ABC):
     async def abort(self) -> None:
         """Stop every motion now (tracking keeps its setting where the protocol allows)."""
         self._require_connected()
+        cancels_park = self.parking
         await self._abort()
         self._guard.motions_stopped()
+        if cancels_park:  # stopped short of the park position: not parked
+            self._parking = False
+            await self._unpark()
 
     async def move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Turn one axis at a signed rate (degrees per second); 0 stops it."""
@@ -356,11 +416,11 @@ class Mount(ABC):
     ) -> None:
         """Start a rate motion with ``start`` unless the horizon guard refuses it, and have the
         guard watch it. Every way a driver offers to turn an axis at a rate goes through here."""
-        if self._guard.enabled:
-            try:
-                self._guard.check_move(axis, rate_deg_s, self.state)
-            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
-                self._guard.check_move(axis, rate_deg_s, await self.refresh())
+        # Even a mount that stops itself at the limits refuses a motion heading further out.
+        try:
+            self._guard.check_move(axis, rate_deg_s, self.state)
+        except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
+            self._guard.check_move(axis, rate_deg_s, await self.refresh())
         await start()
         self._guard.motion_commanded(axis, rate_deg_s)
 
@@ -392,22 +452,28 @@ class Mount(ABC):
         self._require_connected()
         park = self._park_position
         await self._check_sun(park.alt_deg, park.az_deg, what="park position")
+        if self._park_position_chosen:  # the limits may have changed since it was chosen
+            check_park_position(self._park_position, self._limits)
         await self._park()
+        self._parking = True
         self._guard.motions_stopped()
 
     async def unpark(self) -> None:
         self._require_connected()
         await self._unpark()
+        self._parking = False
 
     async def set_site(self, site: Site) -> None:
         """Use ``site`` from now on, and tell the device where supported."""
+        if not isinstance(site, Site):
+            raise InvalidValueError(f"a site is a scopelink Site, not {site!r}")
         await self._set_site(site)
         self._site = site
 
     async def set_time(self, utc: datetime) -> None:
-        """Tell the device the time (an aware datetime)."""
-        if utc.tzinfo is None:
-            raise InvalidValueError("the time must carry a time zone (use UTC)")
+        """Tell the device the time (an aware datetime between 2001 and 2099: see
+        :mod:`scopelink.mount.setters`)."""
+        check_time(utc)
         self._require_connected()
         await self._set_time(utc)
 

@@ -8,12 +8,15 @@ from dataclasses import dataclass, field
 
 from scopelink.mount.errors import InvalidValueError, LimitError
 
-__all__ = ["MAX_SUN_AVOIDANCE_DEG", "SUN_AVOIDANCE_DEG", "Limits"]
+__all__ = ["DEFAULT_MAX_SYNC_DEG", "MAX_SUN_AVOIDANCE_DEG", "SUN_AVOIDANCE_DEG", "Limits"]
 
 SUN_AVOIDANCE_DEG = 15.0
 """Default radius of the Sun avoidance zone (degrees)."""
 MAX_SUN_AVOIDANCE_DEG = 45.0
 """Largest radius accepted: a bigger zone would close a quarter of the sky."""
+DEFAULT_MAX_SYNC_DEG = 10.0
+"""How far a sync may correct the pointing (``limits.max_sync_deg``): the reach of a
+plate-solve correction; farther is a wrong object or a typo, and would move every limit."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -25,12 +28,15 @@ class Limits:
     north) for trees and houses. ``max_altitude_deg`` keeps alt-az mounts out of the zenith, where
     the azimuth speed diverges. ``sun_avoidance_deg`` is the radius of the zone around the Sun
     that no goto, park, sync or motion may enter (0 turns it off; :mod:`scopelink.mount.sun`).
+    ``max_sync_deg`` bounds how far syncs may move the frame the limits are judged in (see
+    :mod:`scopelink.mount.syncs`).
     """
 
     horizon_deg: float = 0.0
     max_altitude_deg: float = 90.0
     horizon_profile: tuple[tuple[float, float], ...] = field(default=())
     sun_avoidance_deg: float = SUN_AVOIDANCE_DEG
+    max_sync_deg: float = DEFAULT_MAX_SYNC_DEG
 
     def __post_init__(self) -> None:
         if not -10.0 <= self.horizon_deg <= 89.0:
@@ -51,6 +57,10 @@ class Limits:
         for az, alt in self.horizon_profile:
             if not (0.0 <= az < 360.0 and -10.0 <= alt <= 89.0):
                 raise InvalidValueError(f"horizon profile point ({az}°, {alt}°) is out of range")
+        if not (math.isfinite(self.max_sync_deg) and 0.0 < self.max_sync_deg <= 180.0):
+            raise InvalidValueError(
+                f"the sync reach (max_sync_deg) {self.max_sync_deg}° must lie in (0°, 180°]"
+            )
         azimuths = [az for az, _ in self.horizon_profile]
         if azimuths != sorted(set(azimuths)):
             raise InvalidValueError("horizon profile azimuths must be increasing and distinct")

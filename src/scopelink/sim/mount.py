@@ -33,6 +33,7 @@ from scopelink.mount import (
 )
 from scopelink.mount.errors import SunAvoidanceError
 from scopelink.mount.sun import SunZone, sun_zone
+from scopelink.mount.syncs import SyncFrame
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis, AxisPlan, Trajectory
 from scopelink.sim.clock import SimClock
@@ -119,6 +120,8 @@ class SimulatedMount(Mount):
         self._aligned = aligned
         self._connected = False
         self._parked = False
+        self._park_landing = _FOREVER
+        """Elapsed time the park slew lands: parked from then on, not before."""
         self._tracking = TrackingMode.OFF
         self._goto_until = -_FOREVER
         self._landing = [-_FOREVER, -_FOREVER]
@@ -211,7 +214,7 @@ class SimulatedMount(Mount):
             pier_side=self.geometry.pier_side(primary, secondary),
             slewing=t < self._goto_until or moving,
             tracking=TrackingMode.OFF if stopped else self._tracking,
-            parked=self._parked,
+            parked=self._parked and t >= self._park_landing,
             aligned=self._aligned,
             pulse_guiding=any(t < until for until in self._pulse_until),
             problems=problems,
@@ -287,6 +290,21 @@ class SimulatedMount(Mount):
         self._retarget_at.add(t)
         self._finish(limits_from=t)
 
+    def _sync_frame_after(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, state: MountState
+    ) -> SyncFrame:
+        """Exact: every counter redefinition so far plus the one this sync would make."""
+        t = self.elapsed()
+        alt, az = j2000_to_observed(
+            ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
+        )
+        counters = self.geometry.to_axes(alt, az, self._side_at(t))
+        offsets = [
+            axis.counter_offset_deg + _wrap_signed(counter - axis.unwrapped_position_at(t))
+            for axis, counter in zip(self.axes, counters, strict=True)
+        ]
+        return SyncFrame(_wrap_signed(offsets[0]), offsets[1])
+
     async def _abort(self) -> None:
         t = self._begin(replan=True)
         self._stop_motion(t)
@@ -330,10 +348,12 @@ class SimulatedMount(Mount):
             counters = self.geometry.to_axes(where.alt_deg, where.az_deg, side)
         self._slew_both_to(counters, t)
         self._parked = True
+        self._park_landing = self._goto_until
         self._finish(limits_from=self._goto_until)
 
     async def _unpark(self) -> None:
         self._parked = False
+        self._park_landing = _FOREVER
         self.snapshot()
 
     async def _set_site(self, site: Site) -> None:
@@ -547,6 +567,9 @@ class SimulatedMount(Mount):
             self._moving_until = list(stop.moving_until)
             self._limit_stop = None
         if replan:
+            if now < self._park_landing:  # a park slew cut short (abort, disconnect) is no park
+                self._parked = False
+                self._park_landing = _FOREVER
             self._retarget_at.clear()
             self._landing = [-_FOREVER, -_FOREVER]
             self._goto_until = -_FOREVER
@@ -562,22 +585,28 @@ class SimulatedMount(Mount):
         Braking from a tracking rate moves < 1e-5°, so the coarse search counts only kinematic
         motion (one sky evaluation per step); ``exact`` adds the tracking rate too.
         """
-        physical = []
+        counters = []
         for axis in self.axes:
             if exact:
-                rest = axis.rest_position_if_stopped_at(t)
+                counters.append(axis.rest_position_if_stopped_at(t))
             else:
                 _, rate = axis.kinematic_at(t)
                 braking = rate * abs(rate) / (2.0 * axis.acceleration_deg_s2)
-                rest = axis.unwrapped_position_at(t) + braking
-            physical.append(rest - axis.counter_offset_deg)
-        alt, az = self.geometry.to_observed(physical[0], physical[1])
-        return min(
-            alt - self._limits.horizon_at(az),
-            self._limits.max_altitude_deg - alt,
-            self.geometry.axis_margin_deg(physical[0], physical[1]),
-            self._sun_margin(alt, az, t),
-        )
+                counters.append(axis.unwrapped_position_at(t) + braking)
+        physical = [c - a.counter_offset_deg for c, a in zip(counters, self.axes, strict=True)]
+        margin = self.geometry.axis_margin_deg(physical[0], physical[1])
+        # The limits hold in the frame the user sees (the counters, after syncs) and, since the
+        # simulator knows the truth, where the tube physically points.
+        synced = any(axis.counter_offset_deg != 0.0 for axis in self.axes)
+        for primary, secondary in (counters, physical) if synced else (physical,):
+            alt, az = self.geometry.to_observed(primary, secondary)
+            margin = min(
+                margin,
+                alt - self._limits.horizon_at(az),
+                self._limits.max_altitude_deg - alt,
+                self._sun_margin(alt, az, t),
+            )
+        return margin
 
     def _sun_margin(self, alt: float, az: float, t: float) -> float:
         """How far (degrees) the tube at ``t`` is outside the Sun avoidance zone."""

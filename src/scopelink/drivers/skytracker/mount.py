@@ -676,14 +676,18 @@ class SkyTrackerMount(Mount):
             )
         self._publish_now()
 
-    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        """``Q`` ``L99 ...`` ``N`` ``q``: realign the Sky Commander on this position."""
-        line = self._require_commander()
+    def _check_sync_now(self, state: MountState) -> None:
         if self._mode is TrackerMode.GOTO:
             raise SlewInProgressError(
                 "cannot sync during a GOTO: the Sky Tracker lends no bus while it slews; "
                 "wait for the GOTO to end or abort it"
             )
+        super()._check_sync_now(state)
+
+    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """``Q`` ``L99 ...`` ``N`` ``q``: realign the Sky Commander on this position."""
+        line = self._require_commander()
+        self._check_sync_now(self.state)
         # 'N' has no reply: the position read back tells whether the realign took. Realigning
         # can be repeated, so a lost 'N' (the port is unbuffered) gets a second try.
         off_by = 0.0

@@ -109,6 +109,10 @@ FULL_READ_EVERY = 10
 """Poll cycles of a mount at rest read ``L`` and ``e`` only; every tenth also reads ``t`` and
 ``p`` (a tracking change on the keypad shows within about a third of a second)."""
 
+PARK_TOLERANCE_DEG = 1.0
+"""The park goto must end this close to the park position for the mount to read parked (the
+hand control's alt/az and ours differ by refraction, under 0.6° above the horizon)."""
+
 SYNC_TOLERANCE_DEG = 0.05
 """A sync read back further than this from its target was not obeyed (the hand control ignores
 syncs beyond ~7° silently). Generous against drift between the ``s`` and the ``e`` read back."""
@@ -178,6 +182,8 @@ class SynScanMount(Mount):
         self._connected = False
         self._aligned = False
         self._parked = False
+        self._park_target: ParkPosition | None = None
+        """Where the last park goto went (AtPark once it has ended there)."""
         self._tracking = TrackingMode.OFF
         self._pier_side = PierSide.UNKNOWN
         self._goto_running = False
@@ -359,6 +365,11 @@ class SynScanMount(Mount):
         if self._motion_epoch == epoch:
             # A goto sent while this poll waited for the wire is not over whatever L said.
             self._goto_running = self._goto_still_running(goto.in_progress, alt, az)
+        if self._parked and not self._slewing and not self._arrived_at_park(alt, az):
+            problems += (
+                "the park goto ended away from the park position: not parked (park again, "
+                "unpark, or abort)",
+            )
         state = MountState(
             read_at=read_at,
             connected=True,
@@ -371,13 +382,21 @@ class SynScanMount(Mount):
             pier_side=self._pier_side,
             slewing=self._slewing,
             tracking=mode,
-            parked=self._parked,
+            parked=self._arrived_at_park(alt, az),
             aligned=self._aligned,
             pulse_guiding=bool(self._pulses),
             problems=problems,
         )
         self._publish(state)
         return state
+
+    def _arrived_at_park(self, alt: float, az: float) -> bool:
+        """Parked: the park goto has ended, within ``PARK_TOLERANCE_DEG`` of where it went."""
+        target = self._park_target
+        if not self._parked or self._slewing or target is None:
+            return False
+        off = angular_separation_deg(az, alt, target.az_deg, target.alt_deg)
+        return bool(off <= PARK_TOLERANCE_DEG)
 
     def _stop_blind_motion(self, error: DeviceError) -> bool:
         """A poll failed (twice: the retry too) while an axis turns at a rate: nobody sees where
@@ -679,8 +698,9 @@ class SynScanMount(Mount):
                 self._tracking = TrackingMode.OFF
                 await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
         self._parked = True
+        self._park_target = park
         self._goto_started((park.alt_deg, park.az_deg))
-        self._publish(dataclasses.replace(self.state, parked=True, tracking=TrackingMode.OFF))
+        self._publish(dataclasses.replace(self.state, parked=False, tracking=TrackingMode.OFF))
 
     async def _unpark(self) -> None:
         self._parked = False

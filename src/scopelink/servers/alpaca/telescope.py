@@ -42,6 +42,7 @@ from scopelink.servers.alpaca.params import Params
 
 __all__ = [
     "INTERFACE_VERSION",
+    "MAX_SETTLE_TIME_S",
     "DriveRate",
     "EquatorialSystem",
     "Member",
@@ -53,6 +54,10 @@ logger = logging.getLogger(__name__)
 
 INTERFACE_VERSION = 4
 """ITelescopeV4 (ASCOM Platform 7): Connect/Disconnect/Connecting and DeviceState."""
+
+MAX_SETTLE_TIME_S = 300
+"""Longest SlewSettleTime accepted (seconds): a longer one holds every synchronous slew for
+that long, which is a typo (milliseconds?) rather than a mount's settling."""
 
 _SLEW_POLL_S = 0.05
 """How often a synchronous slew looks at the state cache for the end of the slew."""
@@ -133,12 +138,16 @@ def parse_utc(text: str) -> datetime:
     cleaned = _FRACTION_DIGITS.sub(r"\1", text.strip())  # .NET sends 7 fraction digits
     try:
         when = datetime.fromisoformat(cleaned)
+        return when.replace(tzinfo=UTC) if when.tzinfo is None else when.astimezone(UTC)
     except ValueError:
         raise AlpacaError(
             ErrorNumber.INVALID_VALUE,
             f"UTCDate {text!r} is not an ISO 8601 date-time (e.g. 2026-11-22T21:30:00Z)",
         ) from None
-    return when.replace(tzinfo=UTC) if when.tzinfo is None else when.astimezone(UTC)
+    except OverflowError:  # an offset that carries it past year 9999 or before year 1
+        raise AlpacaError(
+            ErrorNumber.INVALID_VALUE, f"UTCDate {text!r} lies outside any calendar"
+        ) from None
 
 
 class TelescopeDevice:
@@ -397,7 +406,7 @@ class TelescopeDevice:
         self._target_dec = params.number("TargetDeclination", -90.0, 90.0)
 
     def _put_settle_time(self, params: Params) -> None:
-        self._settle_time_s = params.integer("SlewSettleTime", 0, 32767)
+        self._settle_time_s = params.integer("SlewSettleTime", 0, MAX_SETTLE_TIME_S)
 
     async def _put_tracking(self, params: Params) -> None:
         on = params.boolean("Tracking")
@@ -420,8 +429,8 @@ class TelescopeDevice:
 
     async def _put_utc_date(self, params: Params) -> None:
         when = parse_utc(params.text("UTCDate"))
-        if not self.mount.capabilities.can_set_time:
-            raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount keeps no time")
+        # The Mount API refuses a time no mount can keep (0x401) before a mount that keeps no
+        # time says so (0x400): the same value gets the same answer on every mount.
         await self._call(self.mount.set_time(when))
 
     async def _set_site(self, **change: float) -> None:
@@ -572,7 +581,10 @@ class TelescopeDevice:
         state = self.mount.state
         alt = self._position(state.alt_deg, "position")
         az = self._position(state.az_deg, "position")
-        self.mount.park_position = ParkPosition(alt, az)
+        try:  # refused outside the limits: every later Park would drive the mount there
+            self.mount.park_position = ParkPosition(alt, az % 360.0)
+        except MountError as error:
+            raise from_mount_error(error) from error
 
     # --- the member table ------------------------------------------------------------------------
 
