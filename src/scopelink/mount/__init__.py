@@ -9,6 +9,7 @@ from scopelink.mount.errors import (
     NotConnectedError,
     NotSupportedError,
     ParkedError,
+    StaleReadingError,
 )
 from scopelink.mount.limits import Limits
 from scopelink.mount.scheduling import Priority, WireScheduler
@@ -48,6 +49,7 @@ __all__ = [
     "Priority",
     "SlewProgress",
     "SlewTarget",
+    "StaleReadingError",
     "TrackingMode",
     "WireScheduler",
     "utc_now",

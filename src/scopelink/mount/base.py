@@ -28,7 +28,13 @@ from scopelink.mount.errors import (
 )
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
-from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.polling import (
+    DEFAULT_STALE_AFTER_S,
+    StateBroadcast,
+    StatePoller,
+    check_stale_after,
+    require_fresh,
+)
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -96,9 +102,10 @@ class Mount(ABC):
         self._limits = limits or Limits()
         self._clock = clock
         self._broadcast = StateBroadcast(MountState(read_at=clock()))
+        self._stale_after_s = DEFAULT_STALE_AFTER_S
         self._poller = StatePoller(
             self.refresh,
-            lambda: self.state.connected,
+            lambda: self.engaged,
             self._report_problem,
             self._broadcast,
             interval_s=self.poll_interval_s,
@@ -179,6 +186,12 @@ class Mount(ABC):
         return self._guard.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
+        moving = state.slewing or state.pulse_guiding or state.tracking is not TrackingMode.OFF
+        if moving and not state.connected:
+            # Nobody knows what a mount does while its link is down: claim no motion.
+            state = dataclasses.replace(
+                state, slewing=False, pulse_guiding=False, tracking=TrackingMode.OFF
+            )
         state = self._guard.annotate(state)
         self._broadcast.publish(state)
         self._guard.observe(state)
@@ -189,11 +202,38 @@ class Mount(ABC):
 
     # --- the state cache ------------------------------------------------------------------------
 
+    @property
+    def stale_after_s(self) -> float:
+        """A reading older than this (seconds) is not served as current: :meth:`fresh_state`
+        refuses it (settings file ``[readings] stale_after_s``; 0.2-5 s, default 2 s)."""
+        return self._stale_after_s
+
+    @stale_after_s.setter
+    def stale_after_s(self, seconds: float) -> None:
+        self._stale_after_s = check_stale_after(seconds)
+
+    @property
+    def engaged(self) -> bool:
+        """Whether the mount is to be connected: :meth:`connect` succeeded and
+        :meth:`disconnect` has not been called since. A driver whose link was lost stays
+        engaged (``state.connected`` is false) and its poller reopens the link."""
+        return self.state.connected
+
+    def fresh_state(self, *, position: bool = True) -> MountState:
+        """The cached state if it may be served as current, without waiting on the wire; else
+        :class:`NotConnectedError` (the link is down) or
+        :class:`~scopelink.mount.errors.StaleReadingError` (older than :attr:`stale_after_s`),
+        naming the reading's age. ``position=False`` judges the state flags (slewing, tracking)
+        alone: a Sky Tracker in a GOTO reads those but not its position."""
+        name = self.identity.model or "the mount"
+        return require_fresh(self.state, self._stale_after_s, position=position, name=name)
+
     async def current_state(self) -> MountState:
         """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
-        wire, else a refresh (exact, for a simulated mount)."""
-        if self.refresh_uses_wire and self._poller.running and self.state.connected:
-            return self.state
+        wire (refused as :meth:`fresh_state` refuses it), else a refresh (exact, for a simulated
+        mount)."""
+        if self.refresh_uses_wire and self._poller.running and self.engaged:
+            return self.fresh_state()
         return await self.refresh()
 
     def watching(self) -> AbstractAsyncContextManager[None]:
@@ -240,7 +280,8 @@ class Mount(ABC):
             async for state in states:
                 if progress is not None:
                     progress(tracker.update(state))
-                if not state.slewing and state.read_at >= since:
+                # A state read while the link is down says nothing about the slew.
+                if state.connected and not state.slewing and state.read_at >= since:
                     return state
         raise AssertionError("unreachable: states() never ends")  # pragma: no cover
 
@@ -260,6 +301,8 @@ class Mount(ABC):
 
     def _require_connected(self) -> None:
         if not self.state.connected:
+            if self.engaged:  # the link was lost: say so, with the reading's age
+                self.fresh_state()
             raise NotConnectedError(f"{self.identity.model or 'the mount'} is not connected")
 
     def _require_unparked(self) -> None:
@@ -309,8 +352,10 @@ class Mount(ABC):
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
 
     async def abort(self) -> None:
-        """Stop every motion now (tracking keeps its setting where the protocol allows)."""
-        self._require_connected()
+        """Stop every motion now (tracking keeps its setting where the protocol allows).
+        Tried while the link is lost too (the driver tries it, or owes the stop)."""
+        if not self.engaged:
+            self._require_connected()
         await self._abort()
         self._guard.motions_stopped()
 

@@ -19,6 +19,7 @@ import contextlib
 import dataclasses
 import logging
 import math
+import time
 from collections.abc import Callable, Iterator
 from datetime import UTC, datetime, timedelta, timezone
 from typing import Any, Self, TypeVar
@@ -196,6 +197,12 @@ class SynScanMount(Mount):
         works again (see ``stops.py``). Kept across disconnect: the next connect sends them."""
         self._paying = False
         self._failures_at_full_read = 0
+        self._reidentify = False
+        """The link was lost (closed, or the device silent past ``stale_after_s``): the next
+        poll opens it anew and identifies the device again before reading."""
+        self._identified_on = -1
+        """``wire.statistics.reconnects`` when the device was last identified: a link the wire
+        reopened by itself gets the device identified again too."""
 
     @classmethod
     def open(cls, link: str | LinkFactory, **options: Any) -> Self:
@@ -219,42 +226,23 @@ class SynScanMount(Mount):
 
     # --- connection -------------------------------------------------------------------------------
 
+    @property
+    def engaged(self) -> bool:
+        return self._connected
+
     async def connect(self) -> None:
         """Open the link, echo, identify (``V``, ``m``, motor versions, ``J``, ``w``) and read the
-        state once; on any failure the link is closed again and the error raised."""
+        state once; on any failure the link is closed again and the error raised. While
+        connected with its link lost, reopens it now (as the poller does by itself)."""
+        if self._connected and self._reidentify:
+            await self._read_state(Priority.COMMAND)
+            return
         try:
-            await self.wire.open()
-            version = await self._ask(GetVersion(), Version)
-            if version.dialect is VersionDialect.NEXSTAR_BINARY:
-                raise DeviceError(
-                    f"{self.wire.name} answered V like a Celestron NexStar, not a SynScan hand "
-                    "control"
-                )
-            model = await self._ask(GetModel(), Model)
-            # A stale "m" reply (code + '#') must never pass for a resynchronising echo.
-            self.wire.avoid_echo.add(model.code)
-            motors = (
-                await self._motor_version(Axis.AZM_RA),
-                await self._motor_version(Axis.ALT_DEC),
-            )
-            self.info = HandControlInfo(version, model, motors)
-            if self.info.old_firmware:
-                logger.warning(
-                    "%s: hand control firmware %s predates the protocol spec (3.38 / 4.38.06)",
-                    self.wire.name,
-                    self.info.identity(self.wire.name).firmware,
-                )
-            self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
-            self._site_mismatch = _site_mismatch(
-                await self._ask(GetLocation(), Location), self.site
-            )
-            if self._site_mismatch:
-                logger.warning("%s: %s", self.wire.name, self._site_mismatch)
+            await self._identify()
         except BaseException:
             await self.wire.close()
             raise
-        self._identity = self.info.identity(self.wire.name)
-        self._capabilities = capabilities_for(self.info)
+        assert self.info is not None
         self._connected = True
         self._parked = False
         self._goto_running = False
@@ -267,6 +255,61 @@ class SynScanMount(Mount):
             await self.wire.close()
             raise
 
+    async def _identify(self) -> None:
+        """Echo on a freshly opened link, then ``V``, ``m``, motor versions, ``J``, ``w``."""
+        await self.wire.open()
+        self._identified_on = self.wire.statistics.reconnects
+        version = await self._ask(GetVersion(), Version)
+        if version.dialect is VersionDialect.NEXSTAR_BINARY:
+            raise DeviceError(
+                f"{self.wire.name} answered V like a Celestron NexStar, not a SynScan hand control"
+            )
+        model = await self._ask(GetModel(), Model)
+        # A stale "m" reply (code + '#') must never pass for a resynchronising echo.
+        self.wire.avoid_echo.add(model.code)
+        motors = (
+            await self._motor_version(Axis.AZM_RA),
+            await self._motor_version(Axis.ALT_DEC),
+        )
+        self.info = HandControlInfo(version, model, motors)
+        if self.info.old_firmware:
+            logger.warning(
+                "%s: hand control firmware %s predates the protocol spec (3.38 / 4.38.06)",
+                self.wire.name,
+                self.info.identity(self.wire.name).firmware,
+            )
+        self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
+        self._site_mismatch = _site_mismatch(await self._ask(GetLocation(), Location), self.site)
+        if self._site_mismatch:
+            logger.warning("%s: %s", self.wire.name, self._site_mismatch)
+        self._identity = self.info.identity(self.wire.name)
+        self._capabilities = capabilities_for(self.info)
+
+    async def _reconnect(self) -> None:
+        """Open the lost link anew and identify the device again: it may have been switched
+        off and on (alignment, site) or be another one. Owed stops go out with the first
+        exchange that works (see ``stops.py``)."""
+        await self.wire.close()
+        try:
+            await self._identify()
+        except BaseException:
+            await self.wire.close()
+            raise
+        self._reidentify = False
+        logger.warning("%s: the hand control answers again: reconnected", self.wire.name)
+
+    def _judge_link(self) -> None:
+        """After a failed poll: the link is lost when it is closed, or the device has been
+        silent longer than ``stale_after_s`` (a noisy line still answers its resync echoes).
+        A lost link reads as not connected and is reopened by the next poll."""
+        silent_s = time.monotonic() - self.wire.last_answer_s
+        if self.wire.is_open and silent_s <= self.stale_after_s:
+            return
+        self._reidentify = True
+        if self.state.connected:
+            logger.warning("%s: link lost (silent for %.1f s)", self.wire.name, silent_s)
+            self._publish(dataclasses.replace(self.state, connected=False))
+
     async def disconnect(self) -> None:
         """Stop manual motion this driver started (nothing could stop it later), then close.
 
@@ -274,6 +317,7 @@ class SynScanMount(Mount):
         stop because the PC let go of the link. A stop that fails here stays owed (the state
         says the mount may move) and is sent first by the next :meth:`connect`.
         """
+        self._reidentify = False
         if not self._connected:
             await self.wire.close()
             return
@@ -309,6 +353,13 @@ class SynScanMount(Mount):
     async def _read_state(self, priority: Priority) -> MountState:
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
+        if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
+            try:
+                await self._reconnect()
+            except DeviceError as error:
+                self._report_problem(f"reconnecting: {error}")
+                self._judge_link()
+                raise
         epoch = self._motion_epoch
         failures = self.wire.statistics.failures
         # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
@@ -327,6 +378,7 @@ class SynScanMount(Mount):
             goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
+            received_s = time.monotonic()
             place = _Place(position, read_at, self.site)
             if full:
                 # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
@@ -341,6 +393,7 @@ class SynScanMount(Mount):
         except DeviceError as error:
             if not self._stop_blind_motion(error):
                 self._report_problem(str(error))
+            self._judge_link()
             raise
         ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
         problems: tuple[str, ...] = (self._site_mismatch,) if self._site_mismatch else ()
@@ -375,6 +428,7 @@ class SynScanMount(Mount):
             aligned=self._aligned,
             pulse_guiding=bool(self._pulses),
             problems=problems,
+            received_s=received_s,
         )
         self._publish(state)
         return state
