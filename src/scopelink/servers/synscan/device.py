@@ -71,7 +71,7 @@ from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
 from scopelink.servers.synscan.config import SynScanConfig
 from scopelink.sim import SIDEREAL_RATE_DEG_S, synscan_fixed_rate_deg_s
 
-__all__ = ["AxisPositioning", "SynScanHandControl"]
+__all__ = ["AxisPositioning", "NoReply", "SynScanHandControl"]
 
 logger = logging.getLogger(__name__)
 
@@ -99,6 +99,18 @@ _MOUNT_TRACKING: dict[int, TrackingMode] = {
     Tracking.EQUATORIAL: TrackingMode.SIDEREAL,
     Tracking.PEC: TrackingMode.PEC,
 }
+
+
+_STATE_READS = (GetRaDec, GetAzAlt, GetTrackingMode, IsGotoInProgress, GetPointingState)
+"""Reads answered from the mount's state: without a current one they get no reply."""
+
+
+class NoReadingError(MountError):
+    """The mount has no reading of what a command asks for."""
+
+
+class NoReply(Exception):  # noqa: N818 - named after what the server does with it
+    """The command gets no reply (the message says why)."""
 
 
 @runtime_checkable
@@ -149,11 +161,18 @@ class SynScanHandControl:
         """Carry out ``command`` on the mount and return the reply a real hand control sends.
 
         A command the mount refuses (below the horizon, parked, not supported) is still
-        acknowledged with ``#`` and changes nothing, as the hand control does.
+        acknowledged with ``#`` and changes nothing, as the hand control does. A read of the
+        position or state that the mount cannot give as current (the link down, the reading
+        older than ``stale_after_s``, none yet) gets no reply (:class:`NoReply` is raised): a
+        hand control that
+        does not answer is what SynScan clients' timeouts and resynchronisation handle; a
+        ``#`` where 18 bytes are due, or an old position, would be read as data.
         """
         try:
             return await self._answer(command)
         except MountError as error:
+            if isinstance(command, _STATE_READS):
+                raise NoReply(f"{command.describe()} not answered: {error}") from None
             logger.info("%s refused: %s", command.describe(), error)
             return Ack()
 
@@ -161,9 +180,10 @@ class SynScanHandControl:
         match command:
             case GetRaDec(precise):
                 state = await self.mount.current_state()
-                return Position.from_ra_dec(
-                    state.ra_j2000_hours or 0.0, state.dec_j2000_deg or 0.0, precise
-                )
+                ra, dec = state.ra_j2000_hours, state.dec_j2000_deg
+                if ra is None or dec is None:
+                    raise NoReadingError("the mount has not reported its position yet")
+                return Position.from_ra_dec(ra, dec, precise)
             case GetAzAlt(precise):
                 az, alt = self._reported_az_alt(await self.mount.current_state())
                 return Position.from_az_alt(az, alt, precise)
@@ -230,7 +250,9 @@ class SynScanHandControl:
     # --- positions --------------------------------------------------------------------------------
 
     def _reported_az_alt(self, state: MountState) -> tuple[float, float]:
-        az, alt = state.az_deg or 0.0, state.alt_deg or 0.0
+        az, alt = state.az_deg, state.alt_deg
+        if az is None or alt is None:
+            raise NoReadingError("the mount has not reported its position yet")
         if self.aligned:
             return az, alt
         az0, alt0 = self._power_on_az_alt
