@@ -1,4 +1,4 @@
-"""Issue #11 part 5: LX200, Stellarium and SynScan servers stop reporting positions they do not have.
+"""Issue #11 part 5: LX200, Stellarium and SynScan servers stop reporting positions they lack.
 
 The stack is ``scopelink serve --device synscan:tcp://...``'s: the SynScan driver on TCP to the
 SynScan emulator, and in front of the driver the LX200, Stellarium and SynScan (bridge) servers on
