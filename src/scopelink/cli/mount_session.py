@@ -147,7 +147,7 @@ def run_on_mount(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int
 async def open_device(command: DeviceCommand) -> Mount:
     """The connected mount ``command`` names, or a :class:`CommandError` with a hint."""
     try:
-        return await open_mount(
+        mount = await open_mount(
             command.device,
             command.site,
             command.config.limits,
@@ -156,6 +156,8 @@ async def open_device(command: DeviceCommand) -> Mount:
         )
     except DeviceError as error:
         raise CommandError(str(error), error.hint) from None
+    mount.stale_after_s = command.config.stale_after_s
+    return mount
 
 
 async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:

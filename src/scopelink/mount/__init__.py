@@ -12,6 +12,7 @@ from scopelink.mount.errors import (
     StaleReadingError,
 )
 from scopelink.mount.limits import Limits
+from scopelink.mount.polling import DEFAULT_STALE_AFTER_S
 from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.mount.types import (
     AlignmentMode,
@@ -28,6 +29,7 @@ from scopelink.mount.types import (
 )
 
 __all__ = [
+    "DEFAULT_STALE_AFTER_S",
     "MAX_PULSE_GUIDE_MS",
     "AlignmentMode",
     "Capabilities",
