@@ -255,9 +255,11 @@ class SynScanMount(Mount):
             await self.wire.close()
             raise
 
-    async def _identify(self) -> None:
-        """Echo on a freshly opened link, then ``V``, ``m``, motor versions, ``J``, ``w``."""
-        await self.wire.open()
+    async def _identify(self, *, reopen: bool = True) -> None:
+        """Echo on a freshly opened link (``reopen``; else the wire's current one), then ``V``,
+        ``m``, motor versions, ``J``, ``w``."""
+        if reopen:
+            await self.wire.open()
         self._identified_on = self.wire.statistics.reconnects
         version = await self._ask(GetVersion(), Version)
         if version.dialect is VersionDialect.NEXSTAR_BINARY:
@@ -286,17 +288,19 @@ class SynScanMount(Mount):
         self._capabilities = capabilities_for(self.info)
 
     async def _reconnect(self) -> None:
-        """Open the lost link anew and identify the device again: it may have been switched
-        off and on (alignment, site) or be another one. Owed stops go out with the first
-        exchange that works (see ``stops.py``)."""
-        await self.wire.close()
+        """Open the lost link anew (or take the one the wire reopened by itself) and identify
+        the device again: it may have been switched off and on (alignment, site) or be another
+        one. Owed stops go out with the first exchange that works (see ``stops.py``)."""
+        lost = self._reidentify
+        if lost:
+            await self.wire.close()
         try:
-            await self._identify()
+            await self._identify(reopen=lost)
         except BaseException:
             await self.wire.close()
             raise
         self._reidentify = False
-        logger.warning("%s: the hand control answers again: reconnected", self.wire.name)
+        logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
 
     def _judge_link(self) -> None:
         """After a failed poll: the link is lost when it is closed, or the device has been
