@@ -52,12 +52,12 @@ class Trial:
     back_s: float
 
 
-async def _until(check: Callable[[], bool], limit_s: float = 60.0) -> float:
+async def _until(check: Callable[[], bool], mount: Mount, limit_s: float = 60.0) -> float:
     loop = asyncio.get_running_loop()
     start = loop.time()
     while not check():
         if loop.time() - start > limit_s:
-            raise TimeoutError(f"not within {limit_s} s")
+            raise TimeoutError(f"not within {limit_s} s: {mount.state}")
         await asyncio.sleep(0.01)
     return loop.time() - start
 
@@ -79,15 +79,15 @@ async def _trial(
     fault: str,
     down_s: float,
 ) -> Trial:
-    await _until(lambda: mount.state.connected and not _refused(mount))
+    await _until(lambda: mount.state.connected and not _refused(mount), mount)
     loop = asyncio.get_running_loop()
     started = loop.time()
     if fault == "close":
         await emulator.close()
     else:
         faults.add(Fault(FaultKind.STALL, ANY))
-    refused_s = await _until(lambda: _refused(mount))
-    await _until(lambda: not mount.state.connected)
+    refused_s = await _until(lambda: _refused(mount), mount)
+    await _until(lambda: not mount.state.connected, mount)
     down = loop.time() - started
     await asyncio.sleep(max(0.0, down_s - (loop.time() - started)))
     returned = loop.time()
@@ -95,7 +95,7 @@ async def _trial(
         await emulator.on_tcp("127.0.0.1", port)
     else:
         faults.clear()
-    await _until(lambda: mount.state.connected and not _refused(mount))
+    await _until(lambda: mount.state.connected and not _refused(mount), mount)
     return Trial(refused_s, down, loop.time() - returned)
 
 
@@ -119,10 +119,10 @@ async def run(driver: str, fault: str, trials: int, down_s: float) -> list[Trial
         )
         await mount.connect()
         async with mount.watching():
-            for _ in range(trials):
-                results.append(
-                    await _trial(mount, emulator, faults, port=port, fault=fault, down_s=down_s)
-                )
+            for number in range(trials):
+                trial = await _trial(mount, emulator, faults, port=port, fault=fault, down_s=down_s)
+                logging.getLogger("bench").info("%s %s #%d: %s", driver, fault, number, trial)
+                results.append(trial)
         await mount.disconnect()
     return results
 
@@ -161,6 +161,7 @@ def cli(argv: list[str] | None = None) -> None:
     parser.add_argument("--down", type=float, default=8.0, help="seconds the device stays away")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
+    logging.getLogger("bench").setLevel(logging.INFO)
     trials = 1 if args.quick else args.trials
     down_s = 3.0 if args.quick else args.down
     print(report(asyncio.run(main(trials, down_s))))

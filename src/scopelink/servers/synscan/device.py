@@ -149,8 +149,13 @@ class SynScanHandControl:
         self._axis_rates: dict[MountAxis, float] = {}
 
     async def power_on(self) -> None:
-        """Remember where the axes point now: unaligned Alt-Az positions are relative to it."""
-        state = await self.mount.current_state()
+        """Remember where the axes point now: unaligned Alt-Az positions are relative to it
+        (the last reading when no current one can be had: a bridge starts all the same)."""
+        try:
+            state = await self.mount.current_state()
+        except MountError as error:
+            logger.warning("power-on position from the last reading: %s", error)
+            state = self.mount.state
         self._power_on_az_alt = (state.az_deg or 0.0, state.alt_deg or 0.0)
 
     def now(self) -> datetime:
