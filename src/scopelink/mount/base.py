@@ -228,12 +228,12 @@ class Mount(ABC):
         name = self.identity.model or "the mount"
         return require_fresh(self.state, self._stale_after_s, position=position, name=name)
 
-    async def current_state(self) -> MountState:
+    async def current_state(self, *, position: bool = True) -> MountState:
         """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
-        wire (refused as :meth:`fresh_state` refuses it), else a refresh (exact, for a simulated
-        mount)."""
+        wire (refused as :meth:`fresh_state` refuses it, ``position`` as there), else a refresh
+        (exact, for a simulated mount)."""
         if self.refresh_uses_wire and self._poller.running and self.engaged:
-            return self.fresh_state()
+            return self.fresh_state(position=position)
         return await self.refresh()
 
     def watching(self) -> AbstractAsyncContextManager[None]:

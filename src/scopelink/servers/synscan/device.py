@@ -199,7 +199,7 @@ class SynScanHandControl:
             case SyncRaDec():
                 await self._sync(command.ra_hours, command.dec_degrees)
             case GetTrackingMode():
-                state = await self.mount.current_state()
+                state = await self.mount.current_state(position=False)
                 return TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
             case SetTrackingMode(mode):
                 await self._set_tracking(mode)
@@ -323,7 +323,7 @@ class SynScanHandControl:
             return False
         if self._goto_sticky:
             return True
-        state = await self.mount.current_state()
+        state = await self.mount.current_state(position=False)
         if self._goto_sent_at is not None and state.read_at < self._goto_sent_at:
             return True  # a cached reading from before the goto says nothing about it
         self._goto_running = state.slewing
