@@ -34,6 +34,7 @@ from scopelink.mount.polling import (
     StatePoller,
     check_stale_after,
     require_fresh,
+    without_motion_claims,
 )
 from scopelink.mount.types import (
     Capabilities,
@@ -186,13 +187,7 @@ class Mount(ABC):
         return self._guard.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
-        moving = state.slewing or state.pulse_guiding or state.tracking is not TrackingMode.OFF
-        if moving and not state.connected:
-            # Nobody knows what a mount does while its link is down: claim no motion.
-            state = dataclasses.replace(
-                state, slewing=False, pulse_guiding=False, tracking=TrackingMode.OFF
-            )
-        state = self._guard.annotate(state)
+        state = self._guard.annotate(without_motion_claims(state))
         self._broadcast.publish(state)
         self._guard.observe(state)
 
@@ -204,8 +199,7 @@ class Mount(ABC):
 
     @property
     def stale_after_s(self) -> float:
-        """A reading older than this (seconds) is not served as current: :meth:`fresh_state`
-        refuses it (settings file ``[readings] stale_after_s``; 0.2-5 s, default 2 s)."""
+        """An older reading (seconds) is not served as current (0.2-5 s, default 2 s)."""
         return self._stale_after_s
 
     @stale_after_s.setter
@@ -214,24 +208,18 @@ class Mount(ABC):
 
     @property
     def engaged(self) -> bool:
-        """Whether the mount is to be connected: :meth:`connect` succeeded and
-        :meth:`disconnect` has not been called since. A driver whose link was lost stays
-        engaged (``state.connected`` is false) and its poller reopens the link."""
+        """Connected, or a driver's link lost since (its poller reopens it) until disconnect."""
         return self.state.connected
 
     def fresh_state(self, *, position: bool = True) -> MountState:
-        """The cached state if it may be served as current, without waiting on the wire; else
-        :class:`NotConnectedError` (the link is down) or
-        :class:`~scopelink.mount.errors.StaleReadingError` (older than :attr:`stale_after_s`),
-        naming the reading's age. ``position=False`` judges the state flags (slewing, tracking)
-        alone: a Sky Tracker in a GOTO reads those but not its position."""
+        """The cache if it may be served as current, else the error saying why (see
+        :func:`~scopelink.mount.polling.require_fresh`); ``position``: judge its age."""
         name = self.identity.model or "the mount"
         return require_fresh(self.state, self._stale_after_s, position=position, name=name)
 
     async def current_state(self, *, position: bool = True) -> MountState:
         """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
-        wire (refused as :meth:`fresh_state` refuses it, ``position`` as there), else a refresh
-        (exact, for a simulated mount)."""
+        wire (as :meth:`fresh_state` allows), else a refresh (exact, for a simulated mount)."""
         if self.refresh_uses_wire and self._poller.running and self.engaged:
             return self.fresh_state(position=position)
         return await self.refresh()
@@ -352,8 +340,8 @@ class Mount(ABC):
         await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
 
     async def abort(self) -> None:
-        """Stop every motion now (tracking keeps its setting where the protocol allows).
-        Tried while the link is lost too (the driver tries it, or owes the stop)."""
+        """Stop every motion now (tracking keeps its setting where the protocol allows); tried
+        while the link is lost too (the driver tries it, or owes the stop)."""
         if not self.engaged:
             self._require_connected()
         await self._abort()

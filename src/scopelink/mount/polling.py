@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 
 from scopelink.mount.errors import NotConnectedError, StaleReadingError
-from scopelink.mount.types import MountState
+from scopelink.mount.types import MountState, TrackingMode
 
 __all__ = [
     "DEFAULT_STALE_AFTER_S",
@@ -29,6 +30,7 @@ __all__ = [
     "StatePoller",
     "check_stale_after",
     "require_fresh",
+    "without_motion_claims",
 ]
 
 logger = logging.getLogger(__name__)
@@ -74,6 +76,17 @@ def require_fresh(
         raise StaleReadingError(
             f"the last {what} reading of {name} is {age:.1f} s old, more than stale_after_s "
             f"({stale_after_s:g} s): not served as current{why or ' (no answer since)'}"
+        )
+    return state
+
+
+def without_motion_claims(state: MountState) -> MountState:
+    """``state``, claiming no motion (slewing, guiding, tracking) unless connected: nobody
+    knows what a mount does while its link is down (issue #11.6)."""
+    moving = state.slewing or state.pulse_guiding or state.tracking is not TrackingMode.OFF
+    if moving and not state.connected:
+        return dataclasses.replace(
+            state, slewing=False, pulse_guiding=False, tracking=TrackingMode.OFF
         )
     return state
 
