@@ -213,6 +213,8 @@ class SkyTrackerMount(Mount):
         """The box was silent past ``stale_after_s`` on an open line: reopen before polling."""
         self._status_at = (self.now(), time.monotonic())
         """When the last status byte arrived: (mount clock, :func:`time.monotonic`)."""
+        self._reconnecting = asyncio.Lock()
+        """One reconnection at a time (a poll and a command may both find the link lost)."""
 
     @classmethod
     async def open(
@@ -304,6 +306,9 @@ class SkyTrackerMount(Mount):
             await self._drop_line()  # the link went away under us: open it again
         await self._open_and_identify(calibration)
         self._engaged = True
+
+    def _needs_reconnect(self) -> bool:
+        return self._line is None or self._line.link.closed or self._link_lost
 
     async def _drop_line(self) -> None:
         line, self._line = self._line, None
@@ -525,14 +530,16 @@ class SkyTrackerMount(Mount):
         A lost link (closed, or the box silent longer than ``stale_after_s``) reads as not
         connected; while engaged, the next refresh opens it anew and identifies the box again.
         """
-        if self._engaged and (self._line is None or self._line.link.closed or self._link_lost):
-            try:
-                await self._reconnect()
-            except (MountError, LinkError) as error:
-                self._problems = (f"reconnecting: {error}",)
-                self._link_lost = True
-                self._publish_now()
-                raise
+        if self._engaged and self._needs_reconnect():
+            async with self._reconnecting:
+                if self._engaged and self._needs_reconnect():
+                    try:
+                        await self._reconnect()
+                    except (MountError, LinkError) as error:
+                        self._problems = (f"reconnecting: {error}",)
+                        self._link_lost = True
+                        self._publish_now()
+                        raise
         line = self._require_line()
         if self._mode is TrackerMode.GOTO:
             # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls

@@ -201,6 +201,8 @@ class SynScanMount(Mount):
         """The link was lost (closed, or the device silent past ``stale_after_s``): the next
         poll opens it anew and identifies the device again before reading."""
         self._identified_on = -1
+        self._reconnecting = asyncio.Lock()
+        """One reconnection at a time (a poll and a command may both find the link lost)."""
         """``wire.statistics.reconnects`` when the device was last identified: a link the wire
         reopened by itself gets the device identified again too."""
 
@@ -358,12 +360,14 @@ class SynScanMount(Mount):
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
         if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
-            try:
-                await self._reconnect()
-            except DeviceError as error:
-                self._report_problem(f"reconnecting: {error}")
-                self._judge_link()
-                raise
+            async with self._reconnecting:
+                if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
+                    try:
+                        await self._reconnect()
+                    except DeviceError as error:
+                        self._report_problem(f"reconnecting: {error}")
+                        self._judge_link()
+                        raise
         epoch = self._motion_epoch
         failures = self.wire.statistics.failures
         # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
