@@ -192,8 +192,14 @@ class Mount(ABC):
         self._guard.observe(state)
 
     def _report_problem(self, problem: str) -> None:
-        """Publish the last good reading again, with ``problem`` saying why it is not fresh."""
-        self._publish(dataclasses.replace(self.state, problems=(problem,)))
+        """Publish the last good reading again, with ``problem`` saying why it is not fresh
+        (and the driver's standing problems, e.g. an unconfirmed stop, after it)."""
+        standing = tuple(p for p in self._standing_problems() if p != problem)
+        self._publish(dataclasses.replace(self.state, problems=(problem, *standing)))
+
+    def _standing_problems(self) -> tuple[str, ...]:
+        """Problems that outlast a failed poll (none by default)."""
+        return ()
 
     # --- the state cache ------------------------------------------------------------------------
 

@@ -304,6 +304,10 @@ class SynScanMount(Mount):
         self._reidentify = False
         logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
 
+    def _standing_problems(self) -> tuple[str, ...]:
+        # An unconfirmed stop stays named while polls fail (no motion is claimed meanwhile).
+        return (self._owed.describe(),) if self._owed else ()
+
     def _judge_link(self) -> None:
         """After a failed poll: the link is lost when it is closed, or the device has been
         silent longer than ``stale_after_s`` (a noisy line still answers its resync echoes).
