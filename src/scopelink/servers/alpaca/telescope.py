@@ -741,6 +741,8 @@ class TelescopeDevice:
             "synctotarget": Member(put=self._sync_to_target),
         }
         for name, position in _FRESH_READS.items():
+            if name == "sideofpier" and not caps.can_report_pier_side:
+                continue  # not implemented, however fresh
             member = table[name]
             assert member.get is not None
             table[name] = replace(member, get=self._fresh_read(member.get, position=position))
