@@ -300,6 +300,11 @@ class SkyTrackerMount(Mount):
         command after power-on): a refusal raises :class:`CalibrationRuleError`, not connected.
         A lost link (see :meth:`refresh`) is opened anew.
         """
+        if self._engaged and calibration is None:  # connected, or lost: reopen it now
+            async with self._reconnecting:
+                if self._needs_reconnect():
+                    await self._reconnect()
+            return
         if self._line is not None:
             if not self._line.link.closed and not self._link_lost:
                 return
