@@ -326,6 +326,10 @@ class SkyTrackerMount(Mount):
         and on): arrows left pressed by the broken link are released (see connect)."""
         await self._drop_line()
         await self._open_and_identify(None)
+        if not self._engaged:  # disconnected meanwhile: let go of the new line
+            await self._drop_line()
+            self._publish_now()
+            raise NotConnectedError(f"the Sky Tracker on {self.spec} was disconnected meanwhile")
         logger.warning("the Sky Tracker on %s answers again: reconnected", self.spec)
 
     async def _open_and_identify(self, calibration: CalibrationFactors | None) -> None:

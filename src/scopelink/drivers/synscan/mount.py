@@ -301,6 +301,9 @@ class SynScanMount(Mount):
         except BaseException:
             await self.wire.close()
             raise
+        if not self._connected:  # disconnected meanwhile: let go of the new link
+            await self.wire.close()
+            raise NotConnectedError(f"{self.wire.name} was disconnected while reconnecting")
         self._reidentify = False
         logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
 
