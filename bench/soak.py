@@ -89,6 +89,11 @@ QUIET_SETTLE_S = 8.0
 late) costs 6 s, then the resynchronising echo and the retry."""
 QUIET_WINDOW_MIN_S = 3.0
 """Shortest stretch without faults (after the settling time) that is judged."""
+POSITION_READS = frozenset({"position", ":GR#", ":GD#", ":GA#", ":GZ#", "e"})
+"""Reads of the position (Stellarium's stream, LX200, SynScan): not answered while the mount's
+reading is older than ``stale_after_s`` (issue #11: no reply, no packet), which a fault that
+silences the device causes. Unanswered inside a fault's span (to ``QUIET_SETTLE_S`` after it)
+they are counted as withheld; anywhere else they fail the check like any unanswered read."""
 STREAM_GAP_BOUND_S = 2.0
 """Stellarium positions come every 0.5 s whatever the wire does."""
 RSS_GROWTH_FLOOR_MIB = 1.0
@@ -225,6 +230,8 @@ class Night:
     faults_cleared_at: float = math.inf
     """Client connections refused or broken by the server side."""
     stream_gaps: list[float] = field(default_factory=list)
+    withheld: list[tuple[float, str]] = field(default_factory=list)
+    """(time, what) of position reads not answered within their bound (see POSITION_READS)."""
     memory: list[tuple[float, int, int]] = field(default_factory=list)
     """(time, RSS KiB, fds) of the serve process, every second."""
     last_problems: list[str] = field(default_factory=list)
@@ -258,7 +265,10 @@ class Night:
             async with asyncio.timeout(bound_s):
                 return await work
         except TimeoutError:
-            record.late.append(f"{what} at {start:.1f} s: no answer within {bound_s:g} s")
+            if what in POSITION_READS:
+                self.withheld.append((start, f"{protocol} {what} at {start:.1f} s"))
+            else:
+                record.late.append(f"{what} at {start:.1f} s: no answer within {bound_s:g} s")
             raise
         finally:
             took = self.now() - start
@@ -1074,10 +1084,9 @@ def _quarters(values: list[tuple[float, int, int]], warm_up_s: float) -> tuple[l
     return [v[1] for v in first], [v[1] for v in last], [v[2] for v in first], [v[2] for v in last]
 
 
-def quiet_windows(night: Night, end: float) -> list[tuple[float, float]]:
-    """Stretches without faults, from ``QUIET_SETTLE_S`` after a fault ended (a stall or halt ends
-    when it is resumed, any other fault when it fires) to the next fault (or the end), long
-    enough to judge."""
+def fault_spans(night: Night, end: float) -> list[tuple[float, float]]:
+    """(start, end) of every fault: a stall or halt ends when it is resumed, any other fault when
+    it fires."""
     resumes = [at for at, line in night.fault_switches if line in {"resume", "clear"}]
     spans: list[tuple[float, float]] = []
     for at, kind in night.faults:
@@ -1085,9 +1094,15 @@ def quiet_windows(night: Night, end: float) -> list[tuple[float, float]]:
         if kind in {"stall", "halt"}:
             ends = min((t for t in resumes if t >= at), default=end)
         spans.append((at, ends))
+    return spans
+
+
+def quiet_windows(night: Night, end: float) -> list[tuple[float, float]]:
+    """Stretches without faults, from ``QUIET_SETTLE_S`` after a fault ended to the next fault
+    (or the end), long enough to judge."""
     windows: list[tuple[float, float]] = []
     quiet_from = 0.0
-    for starts, ends in sorted(spans):
+    for starts, ends in sorted(fault_spans(night, end)):
         if starts - quiet_from >= QUIET_WINDOW_MIN_S:
             windows.append((quiet_from, starts))
         quiet_from = max(quiet_from, ends + QUIET_SETTLE_S)
@@ -1123,6 +1138,12 @@ def judge(report: SoakReport) -> list[Check]:
     end = config.real_s
     unanswered = [late for record in night.requests.values() for late in record.late]
     unanswered += night.broken
+    spans = fault_spans(night, end)
+    unanswered += [
+        f"{what}: no answer outside a fault"
+        for at, what in night.withheld
+        if not any(start <= at <= ends + QUIET_SETTLE_S for start, ends in spans)
+    ]
     gap, gap_at = _longest_gap(night.reading_advances, 1.0, end)
     gap_bound = POLL_GAP_BOUND_S + (config.outage_s if config.faults and config.outages else 0.0)
     windows, not_recovered, quiet_gap = _recovery(night, end)
@@ -1157,7 +1178,14 @@ def judge(report: SoakReport) -> list[Check]:
         Check(
             "no request unanswered, no connection broken",
             not unanswered,
-            "; ".join(unanswered[:3]) or "every request answered within its bound",
+            "; ".join(unanswered[:3])
+            or "every request answered within its bound"
+            + (
+                f" ({len(night.withheld)} position reads withheld during faults: the reading "
+                "was stale)"
+                if night.withheld
+                else ""
+            ),
         ),
         Check(
             "no stuck slew",

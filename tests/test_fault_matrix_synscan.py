@@ -561,7 +561,8 @@ async def check_failure(r: Rig, command: Command, column: Column, before: MountS
         # Disconnect always lets go of the link; the stop it could not send stays owed.
         await r.mount.disconnect()
         assert not r.mount.state.connected
-        assert r.mount.state.slewing  # the axis may still turn, and the state says so
+        # Disconnected: no motion state is claimed (issue #11.6); the problem says it may turn.
+        assert not r.mount.state.slewing
         assert "not confirmed" in r.mount.state.problems[0]
         assert commanded_rate(r.sim, MountAxis.PRIMARY) != 0.0
         return
@@ -667,7 +668,7 @@ async def test_a_tcp_bridge_that_closes_during_a_goto_is_reopened_transparently(
 
 async def test_a_pty_that_closes_while_an_axis_turns_is_a_clear_error_and_says_so() -> None:
     """A serial port whose device end is gone cannot be reopened: the stop cannot reach the
-    mount, the error says the link closed, and the state keeps saying the mount may move."""
+    mount, the error says the link closed, and the state's problem says the mount may move."""
     async with rig("pty", timeout_s=TIMEOUT_S) as r:
         await start_primary(r)
         good = r.mount.state
@@ -681,7 +682,10 @@ async def test_a_pty_that_closes_while_an_axis_turns_is_a_clear_error_and_says_s
         assert commanded_rate(r.sim, MountAxis.PRIMARY) == pytest.approx(1.0, abs=1e-3)
         with pytest.raises(DeviceError, match="cannot open"):
             await r.mount.refresh()  # still owed, still nothing to send it on
-        assert r.mount.state.slewing
+        # The link is lost now: no motion state is claimed (issue #11.6), the problem says why.
+        assert not r.mount.state.connected
+        assert not r.mount.state.slewing
+        assert "stop of the primary axis not confirmed" in r.mount.state.problems[0]
 
 
 async def test_the_poller_stops_a_motion_whose_stop_was_lost_as_soon_as_the_link_returns() -> None:

@@ -21,6 +21,7 @@ import platformdirs
 from scopelink.astro import Site
 from scopelink.mount import InvalidValueError, Limits
 from scopelink.mount.limits import DEFAULT_MAX_SYNC_DEG, SUN_AVOIDANCE_DEG
+from scopelink.mount.polling import DEFAULT_STALE_AFTER_S, check_stale_after
 from scopelink.servers.access import DEFAULT_POLICY, IPNetwork, parse_network
 
 __all__ = [
@@ -85,6 +86,8 @@ class Config:
     """Whether the file named a site (``site`` pushes only a site the user chose)."""
     limits: Limits = field(default_factory=Limits)
     servers: ServersConfig = field(default_factory=ServersConfig)
+    stale_after_s: float = DEFAULT_STALE_AFTER_S
+    """``[readings] stale_after_s``: a reading older than this is not served as current."""
 
 
 def config_path() -> Path:
@@ -118,7 +121,8 @@ def parse_config(text: str, path: Path) -> Config:
     return _Reader(path).config(data)
 
 
-_TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers")
+_TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers", "readings")
+_READINGS_KEYS: Final = ("stale_after_s",)
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
 _LIMITS_KEYS: Final = ("max_altitude", "sun_avoidance_deg", "max_sync_deg")
@@ -168,7 +172,18 @@ class _Reader:
             site_configured=bool(site_table),
             limits=self.limits(self.table(data, "horizon"), self.table(data, "limits")),
             servers=self.servers(self.table(data, "servers")),
+            stale_after_s=self.readings(self.table(data, "readings")),
         )
+
+    def readings(self, table: dict[str, Any]) -> float:
+        self.known(table, "readings.", _READINGS_KEYS)
+        seconds = self.number(table, "stale_after_s", "readings")
+        if seconds is None:
+            return DEFAULT_STALE_AFTER_S
+        try:
+            return check_stale_after(seconds)
+        except ValueError as error:
+            raise self.error("readings.stale_after_s", str(error)) from None
 
     def known(self, table: Mapping[str, Any], prefix: str, keys: tuple[str, ...]) -> None:
         for key in table:

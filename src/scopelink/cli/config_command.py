@@ -41,6 +41,9 @@ synscan = 11880
 # max_connections = 64              # per server; max_connections_per_client = 16
 # requests_per_second = 50          # per client address (excess waits, HTTP: 429)
 # server_requests_per_second = 100  # per server, all clients together
+
+# [readings]
+# stale_after_s = 2.0               # an older reading is not served as current (0.2-5 s)
 """
 
 _EXAMPLES = f"""\
@@ -177,5 +180,8 @@ def show(config: Config) -> str:
         f"max_connections_per_client = {servers.max_connections_per_client}",
         f"requests_per_second = {servers.requests_per_second}",
         f"server_requests_per_second = {servers.server_requests_per_second}",
+        "",
+        "[readings]",
+        f"stale_after_s = {config.stale_after_s}",
     ]
     return "\n".join(lines) + "\n"

@@ -51,6 +51,7 @@ def state_rows(state: MountState) -> list[tuple[str, str]]:
         ("tracking", state.tracking.value),
         ("parked", _yes_no(state.parked)),
         ("read at", state.read_at.strftime("%Y-%m-%d %H:%M:%S UTC")),
+        ("reading age", f"{state.position_age_s():.1f} s"),
     ]
     if not state.connected:
         rows.append(("connected", "no"))
@@ -82,6 +83,7 @@ def state_json(state: MountState) -> dict[str, Any]:
     """The state as plain JSON values (degrees and hours as numbers)."""
     return {
         "read_at": state.read_at.isoformat(),
+        "age_s": round(state.position_age_s(), 3),
         "connected": state.connected,
         "ra_j2000_hours": state.ra_j2000_hours,
         "dec_j2000_deg": state.dec_j2000_deg,

@@ -9,9 +9,11 @@ from scopelink.mount.errors import (
     NotConnectedError,
     NotSupportedError,
     ParkedError,
+    StaleReadingError,
     SunAvoidanceError,
 )
 from scopelink.mount.limits import Limits
+from scopelink.mount.polling import DEFAULT_STALE_AFTER_S
 from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.mount.types import (
     AlignmentMode,
@@ -28,6 +30,7 @@ from scopelink.mount.types import (
 )
 
 __all__ = [
+    "DEFAULT_STALE_AFTER_S",
     "MAX_PULSE_GUIDE_MS",
     "AlignmentMode",
     "Capabilities",
@@ -49,6 +52,7 @@ __all__ = [
     "Priority",
     "SlewProgress",
     "SlewTarget",
+    "StaleReadingError",
     "SunAvoidanceError",
     "TrackingMode",
     "WireScheduler",

@@ -28,7 +28,14 @@ from scopelink.mount.errors import (
 )
 from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
-from scopelink.mount.polling import StateBroadcast, StatePoller
+from scopelink.mount.polling import (
+    DEFAULT_STALE_AFTER_S,
+    StateBroadcast,
+    StatePoller,
+    check_stale_after,
+    require_fresh,
+    without_motion_claims,
+)
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import (
@@ -105,9 +112,10 @@ class Mount(ABC):
         self._limits = limits or Limits()
         self._clock = clock
         self._broadcast = StateBroadcast(MountState(read_at=clock()))
+        self._stale_after_s = DEFAULT_STALE_AFTER_S
         self._poller = StatePoller(
             self.refresh,
-            lambda: self.state.connected,
+            lambda: self.engaged,
             self._report_problem,
             self._broadcast,
             interval_s=self.poll_interval_s,
@@ -198,21 +206,47 @@ class Mount(ABC):
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
             self._parking = False  # a device that reconnects says itself whether it is parked
-        state = self._guard.annotate(state)
+        state = self._guard.annotate(without_motion_claims(state))
         self._broadcast.publish(state)
         self._guard.observe(state)
 
     def _report_problem(self, problem: str) -> None:
-        """Publish the last good reading again, with ``problem`` saying why it is not fresh."""
-        self._publish(dataclasses.replace(self.state, problems=(problem,)))
+        """Publish the last good reading again, with ``problem`` saying why it is not fresh
+        (and the driver's standing problems, e.g. an unconfirmed stop, after it)."""
+        standing = tuple(p for p in self._standing_problems() if p != problem)
+        self._publish(dataclasses.replace(self.state, problems=(problem, *standing)))
+
+    def _standing_problems(self) -> tuple[str, ...]:
+        """Problems that outlast a failed poll (none by default)."""
+        return ()
 
     # --- the state cache ------------------------------------------------------------------------
 
-    async def current_state(self) -> MountState:
+    @property
+    def stale_after_s(self) -> float:
+        """An older reading (seconds) is not served as current (0.2-5 s, default 2 s)."""
+        return self._stale_after_s
+
+    @stale_after_s.setter
+    def stale_after_s(self, seconds: float) -> None:
+        self._stale_after_s = check_stale_after(seconds)
+
+    @property
+    def engaged(self) -> bool:
+        """Connected, or a driver's link lost since (its poller reopens it) until disconnect."""
+        return self.state.connected
+
+    def fresh_state(self, *, position: bool = True) -> MountState:
+        """The cache if it may be served as current, else the error saying why (see
+        :func:`~scopelink.mount.polling.require_fresh`); ``position``: judge its age."""
+        name = self.identity.model or "the mount"
+        return require_fresh(self.state, self._stale_after_s, position=position, name=name)
+
+    async def current_state(self, *, position: bool = True) -> MountState:
         """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
-        wire, else a refresh (exact, for a simulated mount)."""
-        if self.refresh_uses_wire and self._poller.running and self.state.connected:
-            return self.state
+        wire (as :meth:`fresh_state` allows), else a refresh (exact, for a simulated mount)."""
+        if self.refresh_uses_wire and self._poller.running and self.engaged:
+            return self.fresh_state(position=position)
         return await self.refresh()
 
     def watching(self) -> AbstractAsyncContextManager[None]:
@@ -259,7 +293,8 @@ class Mount(ABC):
             async for state in states:
                 if progress is not None:
                     progress(tracker.update(state))
-                if not state.slewing and state.read_at >= since:
+                # A state read while the link is down says nothing about the slew.
+                if state.connected and not state.slewing and state.read_at >= since:
                     return state
         raise AssertionError("unreachable: states() never ends")  # pragma: no cover
 
@@ -279,6 +314,8 @@ class Mount(ABC):
 
     def _require_connected(self) -> None:
         if not self.state.connected:
+            if self.engaged:  # the link was lost: say so, with the reading's age
+                self.fresh_state()
             raise NotConnectedError(f"{self.identity.model or 'the mount'} is not connected")
 
     def _require_unparked(self) -> None:
@@ -390,8 +427,10 @@ class Mount(ABC):
             zone.check_slew_from(state, (alt_deg, az_deg), what=f"the slew to the {what}")
 
     async def abort(self) -> None:
-        """Stop every motion now (tracking keeps its setting where the protocol allows)."""
-        self._require_connected()
+        """Stop every motion now (tracking keeps its setting where the protocol allows); tried
+        while the link is lost too (the driver tries it, or owes the stop)."""
+        if not self.engaged:
+            self._require_connected()
         cancels_park = self.parking
         await self._abort()
         self._guard.motions_stopped()

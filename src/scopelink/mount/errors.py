@@ -32,3 +32,8 @@ class InvalidValueError(MountError, ValueError):
 
 class DeviceError(MountError):
     """The device did not answer, or answered something that makes no sense."""
+
+
+class StaleReadingError(DeviceError):
+    """The last reading is older than the mount's ``stale_after_s``: it is not served as current
+    (the message names its age and why no newer one came)."""

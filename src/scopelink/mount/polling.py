@@ -3,22 +3,92 @@
 Front ends never wait on the wire to answer a read: they take :attr:`Mount.state`, which this
 poller keeps fresh by calling ``refresh()`` back to back (no faster than ``interval_s``) for as long
 as at least one watcher is registered. A failed poll keeps the last good reading, names the cause
-in ``problems`` and is retried after ``retry_s``; the poller itself never dies of a device error.
+in ``problems`` and is retried after ``retry_s``, doubling with each failure in a row up to
+``max_retry_s``; the poller itself never dies of a device error. It polls while the mount is
+*engaged* (connected, or its link lost but not disconnected): a driver's ``refresh`` reopens a lost
+link, so polling on is what brings it back (docs/reliability-safety.md, "Lost and stalled devices").
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 
-from scopelink.mount.types import MountState
+from scopelink.mount.errors import NotConnectedError, StaleReadingError
+from scopelink.mount.types import MountState, TrackingMode
 
-__all__ = ["StateBroadcast", "StatePoller"]
+__all__ = [
+    "DEFAULT_STALE_AFTER_S",
+    "MAX_RETRY_S",
+    "MAX_STALE_AFTER_S",
+    "MIN_STALE_AFTER_S",
+    "StateBroadcast",
+    "StatePoller",
+    "check_stale_after",
+    "require_fresh",
+    "without_motion_claims",
+]
 
 logger = logging.getLogger(__name__)
+
+DEFAULT_STALE_AFTER_S = 2.0
+"""A reading older than this is not served as current. Several polls of the slowest device
+(a SynScan poll with its full read is ~0.1-0.3 s; a failed poll is retried after 1 s), so one
+lost reply never shows; well inside the 5 s a watching client may be shown an old position."""
+MIN_STALE_AFTER_S = 0.2
+"""Shorter would call readings stale between two healthy polls."""
+MAX_STALE_AFTER_S = 5.0
+"""No setting serves a reading older than this as current while a client watches."""
+MAX_RETRY_S = 2.0
+"""The poller's back-off after failures in a row stops growing here: a device that comes back is
+polled again within this (plus one attempt), inside the 5 s the reconnect promise gives."""
+
+
+def check_stale_after(seconds: float) -> float:
+    """``seconds`` if it is an allowed ``stale_after_s``, else ValueError naming the range."""
+    if not (isinstance(seconds, int | float) and MIN_STALE_AFTER_S <= seconds <= MAX_STALE_AFTER_S):
+        raise ValueError(
+            f"stale_after_s {seconds!r} must lie in [{MIN_STALE_AFTER_S:g}, "
+            f"{MAX_STALE_AFTER_S:g}] seconds"
+        )
+    return float(seconds)
+
+
+def require_fresh(
+    state: MountState, stale_after_s: float, *, position: bool, name: str
+) -> MountState:
+    """``state`` if it may be served as current; else :class:`NotConnectedError` (the link is
+    down) or :class:`StaleReadingError` (older than ``stale_after_s``), naming the reading's age
+    and the last problem. ``position``: judge the coordinates' age (else the state's)."""
+    age = state.position_age_s() if position else state.age_s()
+    why = f": {state.problems[0]}" if state.problems else ""
+    if not state.connected:
+        raise NotConnectedError(
+            f"the link to {name} is down (last reading {age:.1f} s old){why}; it is reopened "
+            "by itself while a client watches"
+        )
+    if age > stale_after_s:
+        what = "position" if position else "state"
+        raise StaleReadingError(
+            f"the last {what} reading of {name} is {age:.1f} s old, more than stale_after_s "
+            f"({stale_after_s:g} s): not served as current{why or ' (no answer since)'}"
+        )
+    return state
+
+
+def without_motion_claims(state: MountState) -> MountState:
+    """``state``, claiming no motion (slewing, guiding, tracking) unless connected: nobody
+    knows what a mount does while its link is down (issue #11.6)."""
+    moving = state.slewing or state.pulse_guiding or state.tracking is not TrackingMode.OFF
+    if moving and not state.connected:
+        return dataclasses.replace(
+            state, slewing=False, pulse_guiding=False, tracking=TrackingMode.OFF
+        )
+    return state
 
 
 class StateBroadcast:
@@ -55,19 +125,22 @@ class StatePoller:
     def __init__(
         self,
         refresh: Callable[[], Awaitable[MountState]],
-        is_connected: Callable[[], bool],
+        is_engaged: Callable[[], bool],
         report_problem: Callable[[str], None],
         broadcast: StateBroadcast,
         *,
         interval_s: float,
         retry_s: float,
+        max_retry_s: float = MAX_RETRY_S,
     ) -> None:
         self._refresh = refresh
-        self._is_connected = is_connected
+        self._is_engaged = is_engaged
         self._report_problem = report_problem
         self._broadcast = broadcast
         self.interval_s = interval_s
         self.retry_s = retry_s
+        self.max_retry_s = max_retry_s
+        self.failures_in_a_row = 0
         self._watchers = 0
         self._task: asyncio.Task[None] | None = None
         self._refreshing = False
@@ -109,7 +182,7 @@ class StatePoller:
         last_error = ""
         while self._watchers > 0:
             started = loop.time()
-            if not self._is_connected():
+            if not self._is_engaged():
                 await self._pause(self.retry_s)
                 continue
             self._refreshing = True
@@ -119,20 +192,28 @@ class StatePoller:
                 raise
             except Exception as error:  # the poller must outlive any device fault
                 self.failures += 1
+                self.failures_in_a_row += 1
                 message = f"position poll failed: {error}"
                 if message != last_error:
                     logger.warning("%s", message)
                 last_error = message
                 self._report_problem(message)
                 if self._watchers > 0:
-                    await self._pause(self.retry_s)
+                    await self._pause(self.backoff_s())
                 continue
             finally:
                 self._refreshing = False
             last_error = ""
+            self.failures_in_a_row = 0
             self.polls += 1
             if self._watchers > 0:
                 await asyncio.sleep(max(0.0, self.interval_s - (loop.time() - started)))
+
+    def backoff_s(self) -> float:
+        """The pause before the next poll after ``failures_in_a_row`` failures: ``retry_s``,
+        doubling with each further failure, at most ``max_retry_s``."""
+        doublings = min(max(self.failures_in_a_row - 1, 0), 16)
+        return min(self.retry_s * 2.0**doublings, max(self.max_retry_s, self.retry_s))
 
     async def _pause(self, seconds: float) -> None:
         """Wait ``seconds``, or less if a new state (e.g. a reconnect) is published."""

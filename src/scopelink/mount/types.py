@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import enum
+import time
 from dataclasses import dataclass, field
 from datetime import datetime
 
@@ -90,6 +91,14 @@ class MountState:
 
     Coordinates are ``None`` until the mount has reported them; RA/Dec are J2000 (the frame both
     device protocols use) and of date; Alt/Az are observed (refracted) for the configured site.
+
+    ``read_at`` is on the mount's clock (a simulator's may run fast or stand still); how old a
+    reading is, is measured on the PC's monotonic clock instead: ``received_s`` is
+    :func:`time.monotonic` when the reading arrived (a newly made state is a new reading;
+    ``dataclasses.replace`` keeps the stamp, so a state republished with a problem ages on).
+    ``position_received_s`` is when the coordinates arrived, when that is earlier than the rest
+    (a Sky Tracker in a GOTO reads its status but lends no bus for the position); None: with the
+    rest. Neither takes part in comparisons.
     """
 
     read_at: datetime
@@ -107,6 +116,17 @@ class MountState:
     aligned: bool = False
     pulse_guiding: bool = False
     problems: tuple[str, ...] = field(default=())
+    received_s: float = field(default_factory=time.monotonic, compare=False, repr=False)
+    position_received_s: float | None = field(default=None, compare=False, repr=False)
+
+    def age_s(self, now_s: float | None = None) -> float:
+        """Seconds since this reading arrived (``now_s``: a :func:`time.monotonic` value)."""
+        return (time.monotonic() if now_s is None else now_s) - self.received_s
+
+    def position_age_s(self, now_s: float | None = None) -> float:
+        """Seconds since the coordinates of this reading arrived."""
+        received = self.received_s if self.position_received_s is None else self.position_received_s
+        return (time.monotonic() if now_s is None else now_s) - received
 
 
 @dataclass(frozen=True, slots=True)

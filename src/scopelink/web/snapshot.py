@@ -40,9 +40,15 @@ def state_json(mount: Mount, state: MountState) -> dict[str, object]:
     elif target.alt_deg is not None and target.az_deg is not None:
         target_altaz = (target.alt_deg, target.az_deg)
     poller = mount.poller
+    age_s = state.position_age_s()
     return {
         "read_at": state.read_at.isoformat(),
         "connected": state.connected,
+        # How old the position is, and whether it may be shown as current (the page greys it).
+        "age_s": round(age_s, 1),
+        "state_age_s": round(state.age_s(), 1),
+        "stale_after_s": mount.stale_after_s,
+        "stale": not state.connected or age_s > mount.stale_after_s,
         "ra_j2000_hours": _round(state.ra_j2000_hours, 6),
         "dec_j2000_deg": _round(state.dec_j2000_deg, 5),
         "ra_of_date_hours": _round(state.ra_of_date_hours, 6),

@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -130,6 +131,9 @@ class SkyTrackerLine:
         """The box's version reply, once read: the answer the resync's ``V`` waits for."""
         self._commander_behind = False
         """A Sky Commander exchange failed: it may still owe replies (see _catch_up_commander)."""
+        self.last_answer_s = time.monotonic()
+        """:func:`time.monotonic` when the box last answered a command (or the line opened):
+        how long it has been silent, which tells a lost box from a noisy line."""
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
@@ -297,6 +301,7 @@ class SkyTrackerLine:
             self._client.abandon_reply()
             self._interrupted = True
             raise
+        self.last_answer_s = time.monotonic()  # an answer, if perhaps a garbled one
         if isinstance(event, BadReply):
             await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")

@@ -14,7 +14,7 @@ import logging
 import math
 import time
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import datetime
 
 from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, j2000_to_observed
@@ -123,6 +123,8 @@ class _Position:
     dec_of_date_deg: float
     alt_deg: float
     az_deg: float
+    received_s: float = field(default_factory=time.monotonic)
+    """When the reply arrived (:func:`time.monotonic`): the position's age."""
 
     @classmethod
     def from_reply(cls, reply: object, read_at: datetime, site: Site) -> _Position:
@@ -130,10 +132,18 @@ class _Position:
         return cls.of(reply.ra_hours, reply.dec_degrees, read_at, site)
 
     @classmethod
-    def of(cls, ra: float, dec: float, read_at: datetime, site: Site) -> _Position:
+    def of(
+        cls,
+        ra: float,
+        dec: float,
+        read_at: datetime,
+        site: Site,
+        received_s: float | None = None,
+    ) -> _Position:
         alt, az = j2000_to_observed(ra, dec, read_at, site)
         ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
-        return cls(ra, dec, read_at, ra_of_date, dec_of_date, alt, az)
+        received = time.monotonic() if received_s is None else received_s
+        return cls(ra, dec, read_at, ra_of_date, dec_of_date, alt, az, received)
 
 
 class SkyTrackerMount(Mount):
@@ -197,6 +207,14 @@ class SkyTrackerMount(Mount):
         self._poll_s = 0.05
         """How long the last poll took (seconds on the mount's clock)."""
         self._goto_status_at = -math.inf
+        self._engaged = False
+        """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
+        self._link_lost = False
+        """The box was silent past ``stale_after_s`` on an open line: reopen before polling."""
+        self._status_at = (self.now(), time.monotonic())
+        """When the last status byte arrived: (mount clock, :func:`time.monotonic`)."""
+        self._reconnecting = asyncio.Lock()
+        """One reconnection at a time (a poll and a command may both find the link lost)."""
 
     @classmethod
     async def open(
@@ -271,16 +289,50 @@ class SkyTrackerMount(Mount):
 
     # --- connection ------------------------------------------------------------------------------
 
+    @property
+    def engaged(self) -> bool:
+        return self._engaged
+
     async def connect(self, *, calibration: CalibrationFactors | None = None) -> None:
         """Open the link and identify: ``V``, ``k``, ``R`` and a position read through the bus.
 
         With ``calibration``, ``S`` is sent first of all (the box takes it only as the first
         command after power-on): a refusal raises :class:`CalibrationRuleError`, not connected.
+        A lost link (see :meth:`refresh`) is opened anew.
         """
+        if self._engaged and calibration is None:  # connected, or lost: reopen it now
+            async with self._reconnecting:
+                if self._needs_reconnect():
+                    await self._reconnect()
+            return
         if self._line is not None:
-            if not self._line.link.closed:
+            if not self._line.link.closed and not self._link_lost:
                 return
-            self._line = None  # the link went away under us: open it again
+            await self._drop_line()  # the link went away under us: open it again
+        await self._open_and_identify(calibration)
+        self._engaged = True
+
+    def _needs_reconnect(self) -> bool:
+        return self._line is None or self._line.link.closed or self._link_lost
+
+    async def _drop_line(self) -> None:
+        line, self._line = self._line, None
+        if line is not None:
+            with contextlib.suppress(LinkError):
+                await line.link.close()
+
+    async def _reconnect(self) -> None:
+        """Open the lost link anew and identify the box again (it may have been switched off
+        and on): arrows left pressed by the broken link are released (see connect)."""
+        await self._drop_line()
+        await self._open_and_identify(None)
+        if not self._engaged:  # disconnected meanwhile: let go of the new line
+            await self._drop_line()
+            self._publish_now()
+            raise NotConnectedError(f"the Sky Tracker on {self.spec} was disconnected meanwhile")
+        logger.warning("the Sky Tracker on %s answers again: reconnected", self.spec)
+
+    async def _open_and_identify(self, calibration: CalibrationFactors | None) -> None:
         link = await self._open_link()
         line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
         self._line = line
@@ -306,6 +358,7 @@ class SkyTrackerMount(Mount):
                 await link.close()
             raise
         self._problems = ()
+        self._link_lost = False
         self._publish_now()
 
     async def _release_orphaned_arrows(self, line: SkyTrackerLine) -> None:
@@ -395,8 +448,11 @@ class SkyTrackerMount(Mount):
 
     async def disconnect(self) -> None:
         """Release the arrows, abort a GOTO (``U``), close the link. Tracking keeps running."""
+        self._engaged = False
+        self._link_lost = False
         line = self._line
         if line is None:
+            self._publish_now()
             return
         self._cancel_pulses()
         self._held.clear()
@@ -414,7 +470,7 @@ class SkyTrackerMount(Mount):
             self._line = None
             with contextlib.suppress(LinkError):
                 await line.link.close()
-            self._publish(replace(self.state, connected=False, read_at=self.now()))
+            self._publish(replace(self.state, connected=False))
 
     # --- calibration -----------------------------------------------------------------------------
 
@@ -478,7 +534,21 @@ class SkyTrackerMount(Mount):
     # --- reading ---------------------------------------------------------------------------------
 
     async def refresh(self) -> MountState:
-        """``R`` status; then, unless a GOTO keeps the bus, the position through the bus."""
+        """``R`` status; then, unless a GOTO keeps the bus, the position through the bus.
+
+        A lost link (closed, or the box silent longer than ``stale_after_s``) reads as not
+        connected; while engaged, the next refresh opens it anew and identifies the box again.
+        """
+        if self._engaged and self._needs_reconnect():
+            async with self._reconnecting:
+                if self._engaged and self._needs_reconnect():
+                    try:
+                        await self._reconnect()
+                    except (MountError, LinkError) as error:
+                        self._problems = (f"reconnecting: {error}",)
+                        self._link_lost = True
+                        self._publish_now()
+                        raise
         line = self._require_line()
         if self._mode is TrackerMode.GOTO:
             # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls
@@ -494,14 +564,18 @@ class SkyTrackerMount(Mount):
                 await self._poll_position(line)
         except (DeviceError, NotConnectedError) as error:
             self._problems = (str(error),)
-            if line.link.closed:  # the link is gone: so is the connection
-                self._line = None
+            silent_s = time.monotonic() - line.last_answer_s
+            if line.link.closed or silent_s > self.stale_after_s:
+                # The link is gone (or the box silent): so is the connection, until reopened.
+                if not self._link_lost:
+                    logger.warning("the Sky Tracker on %s is lost: %s", self.spec, error)
+                self._link_lost = True
             self._publish_now()
             raise
         self._problems = ()
         state = self._publish_now()
         # On the mount's clock, so an accelerated simulator gets a margin in simulated time.
-        self._poll_s = (state.read_at - started).total_seconds()
+        self._poll_s = (self.now() - started).total_seconds()
         await self._guard_horizon(state)
         return self.state
 
@@ -554,6 +628,7 @@ class SkyTrackerMount(Mount):
         assert isinstance(reply, StatusReply)
         self._status = reply.status
         self._mode = reply.status.mode
+        self._status_at = (self.now(), time.monotonic())
 
     def _publish_now(self) -> MountState:
         position = self._position
@@ -562,9 +637,11 @@ class SkyTrackerMount(Mount):
         for direction, _ in self._pulses.values():
             pulsing |= direction
         pressed = status.directions if status is not None else Direction(0)
+        line = self._line
+        read_at, received_s = self._status_at
         state = MountState(
-            read_at=self.now(),
-            connected=self._line is not None and not self._line.link.closed,
+            read_at=read_at,
+            connected=line is not None and not line.link.closed and not self._link_lost,
             ra_j2000_hours=position.ra_j2000_hours if position else None,
             dec_j2000_deg=position.dec_j2000_deg if position else None,
             ra_of_date_hours=position.ra_of_date_hours if position else None,
@@ -577,6 +654,8 @@ class SkyTrackerMount(Mount):
             aligned=True,
             pulse_guiding=bool(self._pulses),
             problems=self._problems,
+            received_s=received_s,
+            position_received_s=position.received_s if position else None,
         )
         self._publish(state)
         return state
@@ -718,7 +797,11 @@ class SkyTrackerMount(Mount):
         position = self._position
         if position is not None:
             self._position = _Position.of(
-                position.ra_j2000_hours, position.dec_j2000_deg, position.read_at, site
+                position.ra_j2000_hours,
+                position.dec_j2000_deg,
+                position.read_at,
+                site,
+                position.received_s,
             )
             self._publish_now()
 

@@ -19,6 +19,7 @@ import contextlib
 import dataclasses
 import logging
 import math
+import time
 from collections.abc import Callable, Iterator
 from datetime import UTC, datetime, timedelta, timezone
 from typing import Any, Self, TypeVar
@@ -202,6 +203,14 @@ class SynScanMount(Mount):
         works again (see ``stops.py``). Kept across disconnect: the next connect sends them."""
         self._paying = False
         self._failures_at_full_read = 0
+        self._reidentify = False
+        """The link was lost (closed, or the device silent past ``stale_after_s``): the next
+        poll opens it anew and identifies the device again before reading."""
+        self._identified_on = -1
+        self._reconnecting = asyncio.Lock()
+        """One reconnection at a time (a poll and a command may both find the link lost)."""
+        """``wire.statistics.reconnects`` when the device was last identified: a link the wire
+        reopened by itself gets the device identified again too."""
 
     @classmethod
     def open(cls, link: str | LinkFactory, **options: Any) -> Self:
@@ -225,42 +234,23 @@ class SynScanMount(Mount):
 
     # --- connection -------------------------------------------------------------------------------
 
+    @property
+    def engaged(self) -> bool:
+        return self._connected
+
     async def connect(self) -> None:
         """Open the link, echo, identify (``V``, ``m``, motor versions, ``J``, ``w``) and read the
-        state once; on any failure the link is closed again and the error raised."""
+        state once; on any failure the link is closed again and the error raised. While
+        connected with its link lost, reopens it now (as the poller does by itself)."""
+        if self._connected and self._reidentify:
+            await self._read_state(Priority.COMMAND)
+            return
         try:
-            await self.wire.open()
-            version = await self._ask(GetVersion(), Version)
-            if version.dialect is VersionDialect.NEXSTAR_BINARY:
-                raise DeviceError(
-                    f"{self.wire.name} answered V like a Celestron NexStar, not a SynScan hand "
-                    "control"
-                )
-            model = await self._ask(GetModel(), Model)
-            # A stale "m" reply (code + '#') must never pass for a resynchronising echo.
-            self.wire.avoid_echo.add(model.code)
-            motors = (
-                await self._motor_version(Axis.AZM_RA),
-                await self._motor_version(Axis.ALT_DEC),
-            )
-            self.info = HandControlInfo(version, model, motors)
-            if self.info.old_firmware:
-                logger.warning(
-                    "%s: hand control firmware %s predates the protocol spec (3.38 / 4.38.06)",
-                    self.wire.name,
-                    self.info.identity(self.wire.name).firmware,
-                )
-            self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
-            self._site_mismatch = _site_mismatch(
-                await self._ask(GetLocation(), Location), self.site
-            )
-            if self._site_mismatch:
-                logger.warning("%s: %s", self.wire.name, self._site_mismatch)
+            await self._identify()
         except BaseException:
             await self.wire.close()
             raise
-        self._identity = self.info.identity(self.wire.name)
-        self._capabilities = capabilities_for(self.info)
+        assert self.info is not None
         self._connected = True
         self._parked = False
         self._goto_running = False
@@ -273,6 +263,72 @@ class SynScanMount(Mount):
             await self.wire.close()
             raise
 
+    async def _identify(self, *, reopen: bool = True) -> None:
+        """Echo on a freshly opened link (``reopen``; else the wire's current one), then ``V``,
+        ``m``, motor versions, ``J``, ``w``."""
+        if reopen:
+            await self.wire.open()
+        self._identified_on = self.wire.statistics.reconnects
+        version = await self._ask(GetVersion(), Version)
+        if version.dialect is VersionDialect.NEXSTAR_BINARY:
+            raise DeviceError(
+                f"{self.wire.name} answered V like a Celestron NexStar, not a SynScan hand control"
+            )
+        model = await self._ask(GetModel(), Model)
+        # A stale "m" reply (code + '#') must never pass for a resynchronising echo.
+        self.wire.avoid_echo.add(model.code)
+        motors = (
+            await self._motor_version(Axis.AZM_RA),
+            await self._motor_version(Axis.ALT_DEC),
+        )
+        self.info = HandControlInfo(version, model, motors)
+        if self.info.old_firmware:
+            logger.warning(
+                "%s: hand control firmware %s predates the protocol spec (3.38 / 4.38.06)",
+                self.wire.name,
+                self.info.identity(self.wire.name).firmware,
+            )
+        self._aligned = (await self._ask(IsAligned(), Aligned)).aligned
+        self._site_mismatch = _site_mismatch(await self._ask(GetLocation(), Location), self.site)
+        if self._site_mismatch:
+            logger.warning("%s: %s", self.wire.name, self._site_mismatch)
+        self._identity = self.info.identity(self.wire.name)
+        self._capabilities = capabilities_for(self.info)
+
+    async def _reconnect(self) -> None:
+        """Open the lost link anew (or take the one the wire reopened by itself) and identify
+        the device again: it may have been switched off and on (alignment, site) or be another
+        one. Owed stops go out with the first exchange that works (see ``stops.py``)."""
+        lost = self._reidentify
+        if lost:
+            await self.wire.close()
+        try:
+            await self._identify(reopen=lost)
+        except BaseException:
+            await self.wire.close()
+            raise
+        if not self._connected:  # disconnected meanwhile: let go of the new link
+            await self.wire.close()
+            raise NotConnectedError(f"{self.wire.name} was disconnected while reconnecting")
+        self._reidentify = False
+        logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
+
+    def _standing_problems(self) -> tuple[str, ...]:
+        # An unconfirmed stop stays named while polls fail (no motion is claimed meanwhile).
+        return (self._owed.describe(),) if self._owed else ()
+
+    def _judge_link(self) -> None:
+        """After a failed poll: the link is lost when it is closed, or the device has been
+        silent longer than ``stale_after_s`` (a noisy line still answers its resync echoes).
+        A lost link reads as not connected and is reopened by the next poll."""
+        silent_s = time.monotonic() - self.wire.last_answer_s
+        if self.wire.is_open and silent_s <= self.stale_after_s:
+            return
+        self._reidentify = True
+        if self.state.connected:
+            logger.warning("%s: link lost (silent for %.1f s)", self.wire.name, silent_s)
+            self._publish(dataclasses.replace(self.state, connected=False))
+
     async def disconnect(self) -> None:
         """Stop manual motion this driver started (nothing could stop it later), then close.
 
@@ -280,6 +336,7 @@ class SynScanMount(Mount):
         stop because the PC let go of the link. A stop that fails here stays owed (the state
         says the mount may move) and is sent first by the next :meth:`connect`.
         """
+        self._reidentify = False
         if not self._connected:
             await self.wire.close()
             return
@@ -315,6 +372,15 @@ class SynScanMount(Mount):
     async def _read_state(self, priority: Priority) -> MountState:
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
+        if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
+            async with self._reconnecting:
+                if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
+                    try:
+                        await self._reconnect()
+                    except DeviceError as error:
+                        self._report_problem(f"reconnecting: {error}")
+                        self._judge_link()
+                        raise
         epoch = self._motion_epoch
         failures = self.wire.statistics.failures
         # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
@@ -333,6 +399,7 @@ class SynScanMount(Mount):
             goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
+            received_s = time.monotonic()
             place = _Place(position, read_at, self.site)
             if full:
                 # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
@@ -347,6 +414,7 @@ class SynScanMount(Mount):
         except DeviceError as error:
             if not self._stop_blind_motion(error):
                 self._report_problem(str(error))
+            self._judge_link()
             raise
         ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
         problems: tuple[str, ...] = (self._site_mismatch,) if self._site_mismatch else ()
@@ -386,6 +454,7 @@ class SynScanMount(Mount):
             aligned=self._aligned,
             pulse_guiding=bool(self._pulses),
             problems=problems,
+            received_s=received_s,
         )
         self._publish(state)
         return state

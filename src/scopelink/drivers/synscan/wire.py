@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -105,6 +106,9 @@ class SynScanWire:
         self._holder: asyncio.Task[object] | None = None
         self.last_write_at = 0.0
         """Event-loop time at which the last command started to leave (times guide pulses)."""
+        self.last_answer_s = -float("inf")
+        """:func:`time.monotonic` when the device last answered an exchange (a resynchronising
+        echo too): how long it has been silent, which tells a lost device from a noisy line."""
 
     @property
     def link(self) -> Link | None:
@@ -261,6 +265,7 @@ class SynScanWire:
             async with asyncio.timeout(self.timeout_s) as deadline:
                 reply = await self._read_reply(link, deadline if patient else None)
             completed = True
+            self.last_answer_s = time.monotonic()
             return reply
         except TimeoutError:
             raise _ExchangeError(

@@ -95,6 +95,19 @@ _GUIDE_DIRECTIONS = (
     GuideDirection.WEST,
 )
 _FRACTION_DIGITS = re.compile(r"(\.\d{6})\d+")
+_FRESH_READS = {
+    "altitude": True,
+    "azimuth": True,
+    "rightascension": True,
+    "declination": True,
+    "sideofpier": True,
+    "atpark": False,
+    "slewing": False,
+    "tracking": False,
+    "ispulseguiding": False,
+}
+"""Reads of the device's state, refused while it is not current: True for the position's age,
+False for the state flags' (docs/alpaca.md, "Lost and stalled devices")."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -212,7 +225,16 @@ class TelescopeDevice:
                 ErrorNumber.NOT_CONNECTED, "not connected: set Connected to True (or Connect) first"
             )
         if not self.mount.state.connected:
+            self.require_fresh()  # names the link's loss and the last reading's age
             raise AlpacaError(ErrorNumber.NOT_CONNECTED, "the mount has lost its connection")
+
+    def require_fresh(self, *, position: bool = True) -> MountState:
+        """The state, if it may be served as current: 0x407 while the link is down, 0x500 when
+        the reading is older than the mount's ``stale_after_s`` (both name its age)."""
+        try:
+            return self.mount.fresh_state(position=position)
+        except MountError as error:
+            raise from_mount_error(error) from None
 
     # --- state helpers ---------------------------------------------------------------------------
 
@@ -321,27 +343,47 @@ class TelescopeDevice:
         )
 
     def _device_state(self, _: Params) -> list[dict[str, object]]:
+        # ASCOM: a value that cannot be read is left out. A stale reading is not current.
         state = self.mount.state
-        values: dict[str, object] = {
-            "AtHome": False,
-            "AtPark": state.parked,
-            "IsPulseGuiding": state.pulse_guiding,
-            "Slewing": self.slewing,
-            "Tracking": state.tracking is not TrackingMode.OFF,
-            "SiderealTime": self.sidereal_time(),
-            "UTCDate": format_utc(self.mount.now()),
-        }
-        if state.alt_deg is not None and state.az_deg is not None:
+        flags_fresh = self._is_fresh(position=False)
+        values: dict[str, object] = {"AtHome": False}
+        if flags_fresh:
+            values |= {
+                "AtPark": state.parked,
+                "IsPulseGuiding": state.pulse_guiding,
+                "Slewing": self.slewing,
+                "Tracking": state.tracking is not TrackingMode.OFF,
+            }
+        values["SiderealTime"] = self.sidereal_time()
+        values["UTCDate"] = format_utc(self.mount.now())
+        position_fresh = self._is_fresh(position=True)
+        if position_fresh and state.alt_deg is not None and state.az_deg is not None:
             values["Altitude"] = state.alt_deg
             values["Azimuth"] = state.az_deg
         ra, dec = self._radec_if_known(state)
-        if ra is not None and dec is not None:
+        if position_fresh and ra is not None and dec is not None:
             values["RightAscension"] = ra
             values["Declination"] = dec
-        if self.mount.capabilities.can_report_pier_side:
+        if position_fresh and self.mount.capabilities.can_report_pier_side:
             values["SideOfPier"] = int(state.pier_side)
         values["TimeStamp"] = format_utc(state.read_at)[:-1]  # ASCOM: local-less ISO stamp
         return [{"Name": name, "Value": value} for name, value in values.items()]
+
+    def _is_fresh(self, *, position: bool) -> bool:
+        try:
+            self.mount.fresh_state(position=position)
+        except MountError:
+            return False
+        return True
+
+    def _fresh_read(self, read: Handler, *, position: bool) -> Handler:
+        """``read``, refused while the state it reports is not current (see require_fresh)."""
+
+        def handler(params: Params) -> object:
+            self.require_fresh(position=position)
+            return read(params)
+
+        return handler
 
     # --- telescope reads -------------------------------------------------------------------------
 
@@ -503,7 +545,9 @@ class TelescopeDevice:
         """Return once the state cache says the slew has ended, then wait SlewSettleTime."""
         loop = asyncio.get_running_loop()
         deadline = loop.time() + self.config.slew_timeout_s
-        while self.slewing:
+        while self.slewing or not self.mount.state.connected:
+            if not self.mount.state.connected:  # the end of the slew cannot be seen
+                self.require_fresh(position=False)
             if loop.time() > deadline:
                 raise AlpacaError(
                     ErrorNumber.DRIVER_ERROR,
@@ -541,6 +585,8 @@ class TelescopeDevice:
         await self._call(self.mount.sync_equatorial(ra, dec))
 
     async def _abort_slew(self, _: Params) -> None:
+        if not self._connected:
+            self.require_connected()
         self._require_unparked()
         await self._call(self.mount.abort())
         self._slew_started_at = None
@@ -706,6 +752,14 @@ class TelescopeDevice:
             "synctocoordinates": Member(put=self._sync_to_coordinates),
             "synctotarget": Member(put=self._sync_to_target),
         }
+        for name, position in _FRESH_READS.items():
+            if name == "sideofpier" and not caps.can_report_pier_side:
+                continue  # not implemented, however fresh
+            member = table[name]
+            assert member.get is not None
+            table[name] = replace(member, get=self._fresh_read(member.get, position=position))
+        # An abort is tried while the link is down too (the driver tries it, or owes it).
+        table["abortslew"] = replace(table["abortslew"], needs_connection=False)
         return table
 
     def _action(self, params: Params) -> None:

@@ -1,7 +1,12 @@
 """An LX200 handset in front of a Mount: each command as calls on the mount and one reply.
 
 Reads answer from :attr:`Mount.state` (kept fresh by the server's ``mount.watching()``), never
-waiting on the wire. Coordinates on the wire are of date (JNow, the apparent place: what LX200
+waiting on the wire. A position or state the mount does not have (no reading yet, the link down,
+the reading older than ``stale_after_s``) gets no reply at all: LX200 has no error reply to a
+``:GR#``, and a handset that does not answer is what a client's timeout handles; a made-up or old
+value would be read as the truth.
+
+Coordinates on the wire are of date (JNow, the apparent place: what LX200
 handsets and INDI use); the mount API speaks J2000, so targets are converted at the mount's time.
 Motions go through the mount's public methods, so nothing below the horizon is ever commanded.
 
@@ -13,7 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Awaitable
+from collections.abc import Awaitable, Callable
 from datetime import UTC, date, datetime, time, timedelta
 
 from scopelink.astro import PierSide, apparent_to_j2000, lst_hours
@@ -105,6 +110,29 @@ _CHANGES_THE_MOUNT = (
     SetLocalDate,
 )
 """Refused on a read-only server. Targets, rate and precision belong to the connection."""
+_POSITION_QUERIES: dict[
+    Query, tuple[Callable[[MountState], float | None], Callable[[float, bool], str]]
+] = {
+    Query.RA: (
+        lambda state: state.ra_of_date_hours,
+        lambda value, precise: format_ra(value, high_precision=precise),
+    ),
+    Query.DEC: (
+        lambda state: state.dec_of_date_deg,
+        lambda value, precise: format_dec(value, high_precision=precise),
+    ),
+    Query.ALTITUDE: (
+        lambda state: state.alt_deg,
+        lambda value, precise: format_altitude(value, high_precision=precise),
+    ),
+    Query.AZIMUTH: (
+        lambda state: state.az_deg,
+        lambda value, precise: format_azimuth(value, high_precision=precise),
+    ),
+}
+"""Reads of the mount's position: not answered without a current reading of it."""
+_STATE_QUERIES = frozenset({Query.STATUS, Query.DISTANCE_BARS, Query.TRACKING_RATE})
+"""Reads of its state flags (tracking, slewing): not answered without a current state."""
 
 
 class LX200Handset:
@@ -156,7 +184,8 @@ class LX200Session:
                 mode = self.mount.capabilities.alignment_mode
                 return _ALIGNMENT_LETTER[mode].encode("ascii")
             case Get(what):
-                return text_reply(self._read(what))
+                text = self._read(what)
+                return b"" if text is None else text_reply(text)
             case TogglePrecision():
                 self.high_precision = not self.high_precision
                 return b""
@@ -214,18 +243,27 @@ class LX200Session:
 
     # --- reads ----------------------------------------------------------------------------------
 
-    def _read(self, what: Query) -> str:
-        state = self.mount.state
+    def _current(self, *, position: bool) -> MountState | None:
+        """The state if it may be served as current, else None (logged at debug level)."""
+        try:
+            return self.mount.fresh_state(position=position)
+        except MountError as error:
+            logger.debug("no current reading to answer with: %s", error)
+            return None
+
+    def _read(self, what: Query) -> str | None:
+        """The text of a ``:G..#`` reply; None: no reply (no current reading to give)."""
         precise = self.high_precision
+        position = _POSITION_QUERIES.get(what)
+        if position is not None:
+            read, text = position
+            current = self._current(position=True)
+            value = None if current is None else read(current)
+            return None if value is None else text(value, precise)
+        if what in _STATE_QUERIES and self._current(position=False) is None:
+            return None
+        state = self.mount.state
         match what:
-            case Query.RA:
-                return format_ra(state.ra_of_date_hours or 0.0, high_precision=precise)
-            case Query.DEC:
-                return format_dec(state.dec_of_date_deg or 0.0, high_precision=precise)
-            case Query.ALTITUDE:
-                return format_altitude(state.alt_deg or 0.0, high_precision=precise)
-            case Query.AZIMUTH:
-                return format_azimuth(state.az_deg or 0.0, high_precision=precise)
             case Query.TARGET_RA:
                 target = self.target_ra_hours or 0.0
                 return format_ra(target, high_precision=precise)
@@ -266,6 +304,7 @@ class LX200Session:
                 return self._status(state)
             case Query.DISTANCE_BARS:
                 return "\x7f" if state.slewing else ""
+        return None  # pragma: no cover - every query is matched above
 
     def _status(self, state: MountState) -> str:
         """``:GW#``: mount type, tracking (``T``/``N``) and alignment (``1``/``0``)."""

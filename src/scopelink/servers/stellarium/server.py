@@ -4,7 +4,10 @@ Each connected client gets the mount's current position every ``interval_s`` sec
 :attr:`Mount.state` (kept fresh by ``mount.watching()`` for as long as any client is connected),
 and each goto it sends becomes :meth:`Mount.goto_equatorial`, whose horizon check refuses
 anything below the configured horizon. The protocol has no error reply, so a refused goto is
-logged and the position messages simply keep showing where the mount is.
+logged and the position messages simply keep showing where the mount is. A position the mount
+does not have (the link down, the reading older than ``stale_after_s``) is not sent: Stellarium
+then keeps its reticle where the last message put it (and says nothing new), which is the only
+honest form the protocol has; sending resumes with the next current reading.
 
 Stellarium sends and expects J2000 unless its telescope is configured for JNow: ``frame``
 must match that setting. JNow here means the apparent place of date (what the mount reports as
@@ -177,8 +180,20 @@ class StellariumServer:
         )
 
     async def _send_positions(self, link: Link) -> None:
+        withheld = ""
         while True:
-            position = self.position_message(self.mount.state)
+            try:
+                state: MountState | None = self.mount.fresh_state()
+            except MountError as error:
+                state = None
+                if not withheld:
+                    logger.warning("%s: no position sent while: %s", link.name, error)
+                withheld = str(error)
+            else:
+                if withheld:
+                    logger.info("%s: current positions again", link.name)
+                withheld = ""
+            position = None if state is None else self.position_message(state)
             if position is not None:
                 await link.write(position.encode())
             await asyncio.sleep(self.interval_s)

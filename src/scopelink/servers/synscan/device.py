@@ -72,7 +72,7 @@ from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
 from scopelink.servers.synscan.config import SynScanConfig
 from scopelink.sim import SIDEREAL_RATE_DEG_S, synscan_fixed_rate_deg_s
 
-__all__ = ["AxisPositioning", "SynScanHandControl"]
+__all__ = ["AxisPositioning", "NoReply", "SynScanHandControl"]
 
 logger = logging.getLogger(__name__)
 
@@ -100,6 +100,18 @@ _MOUNT_TRACKING: dict[int, TrackingMode] = {
     Tracking.EQUATORIAL: TrackingMode.SIDEREAL,
     Tracking.PEC: TrackingMode.PEC,
 }
+
+
+_STATE_READS = (GetRaDec, GetAzAlt, GetTrackingMode, IsGotoInProgress, GetPointingState)
+"""Reads answered from the mount's state: without a current one they get no reply."""
+
+
+class NoReadingError(MountError):
+    """The mount has no reading of what a command asks for."""
+
+
+class NoReply(Exception):  # noqa: N818 - named after what the server does with it
+    """The command gets no reply (the message says why)."""
 
 
 @runtime_checkable
@@ -138,8 +150,13 @@ class SynScanHandControl:
         self._axis_rates: dict[MountAxis, float] = {}
 
     async def power_on(self) -> None:
-        """Remember where the axes point now: unaligned Alt-Az positions are relative to it."""
-        state = await self.mount.current_state()
+        """Remember where the axes point now: unaligned Alt-Az positions are relative to it
+        (the last reading when no current one can be had: a bridge starts all the same)."""
+        try:
+            state = await self.mount.current_state()
+        except MountError as error:
+            logger.warning("power-on position from the last reading: %s", error)
+            state = self.mount.state
         self._power_on_az_alt = (state.az_deg or 0.0, state.alt_deg or 0.0)
 
     def now(self) -> datetime:
@@ -150,7 +167,12 @@ class SynScanHandControl:
         """Carry out ``command`` on the mount and return the reply a real hand control sends.
 
         A command the mount refuses (below the horizon, parked, not supported) is still
-        acknowledged with ``#`` and changes nothing, as the hand control does.
+        acknowledged with ``#`` and changes nothing, as the hand control does. A read of the
+        position or state that the mount cannot give as current (the link down, the reading
+        older than ``stale_after_s``, none yet) gets no reply (:class:`NoReply` is raised): a
+        hand control that
+        does not answer is what SynScan clients' timeouts and resynchronisation handle; a
+        ``#`` where 18 bytes are due, or an old position, would be read as data.
         """
         try:
             return await self._answer(command)
@@ -158,6 +180,8 @@ class SynScanHandControl:
             logger.warning("%s refused: %s", command.describe(), error)
             return Ack()
         except MountError as error:
+            if isinstance(command, _STATE_READS):
+                raise NoReply(f"{command.describe()} not answered: {error}") from None
             logger.info("%s refused: %s", command.describe(), error)
             return Ack()
 
@@ -165,9 +189,10 @@ class SynScanHandControl:
         match command:
             case GetRaDec(precise):
                 state = await self.mount.current_state()
-                return Position.from_ra_dec(
-                    state.ra_j2000_hours or 0.0, state.dec_j2000_deg or 0.0, precise
-                )
+                ra, dec = state.ra_j2000_hours, state.dec_j2000_deg
+                if ra is None or dec is None:
+                    raise NoReadingError("the mount has not reported its position yet")
+                return Position.from_ra_dec(ra, dec, precise)
             case GetAzAlt(precise):
                 az, alt = self._reported_az_alt(await self.mount.current_state())
                 return Position.from_az_alt(az, alt, precise)
@@ -178,7 +203,7 @@ class SynScanHandControl:
             case SyncRaDec():
                 await self._sync(command.ra_hours, command.dec_degrees)
             case GetTrackingMode():
-                state = await self.mount.current_state()
+                state = await self.mount.current_state(position=False)
                 return TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
             case SetTrackingMode(mode):
                 await self._set_tracking(mode)
@@ -234,7 +259,9 @@ class SynScanHandControl:
     # --- positions --------------------------------------------------------------------------------
 
     def _reported_az_alt(self, state: MountState) -> tuple[float, float]:
-        az, alt = state.az_deg or 0.0, state.alt_deg or 0.0
+        az, alt = state.az_deg, state.alt_deg
+        if az is None or alt is None:
+            raise NoReadingError("the mount has not reported its position yet")
         if self.aligned:
             return az, alt
         az0, alt0 = self._power_on_az_alt
@@ -300,7 +327,7 @@ class SynScanHandControl:
             return False
         if self._goto_sticky:
             return True
-        state = await self.mount.current_state()
+        state = await self.mount.current_state(position=False)
         if self._goto_sent_at is not None and state.read_at < self._goto_sent_at:
             return True  # a cached reading from before the goto says nothing about it
         self._goto_running = state.slewing

@@ -38,7 +38,7 @@ from scopelink.protocol.synscan import (
 )
 from scopelink.servers.access import AccessControl, current_client
 from scopelink.servers.faults import FaultInjector, FaultKind
-from scopelink.servers.synscan.device import SynScanHandControl
+from scopelink.servers.synscan.device import NoReply, SynScanHandControl
 
 __all__ = ["PARTIAL_FRAME_TIMEOUT_S", "SynScanServer"]
 
@@ -159,7 +159,12 @@ class SynScanServer:
                 logger.info("%s: read-only: %s refused", link.name, event.describe())
                 reply: AnyReply = Ack()
             else:
-                reply = await self.hand_control.answer(event)
+                try:
+                    reply = await self.hand_control.answer(event)
+                except NoReply as silence:  # nothing current to answer with, as a hung device
+                    logger.info("%s: %s", link.name, silence)
+                    connection.skip_reply()
+                    continue
             if self.hand_control.config.latency_s:
                 await asyncio.sleep(self.hand_control.config.latency_s)
             if not await self.faults.deliver(link, connection.send(reply), fault):

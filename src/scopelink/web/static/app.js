@@ -327,15 +327,23 @@ function renderState() {
   setText("st-j2000", `${fmtHours(s.ra_j2000_hours)}  ${fmtDeg(s.dec_j2000_deg)}`);
   setText("st-jnow", `${fmtHours(s.ra_of_date_hours)}  ${fmtDeg(s.dec_of_date_deg)}`);
   setText("st-altaz", `${fmtAngle(s.alt_deg)}  ${fmtAngle(s.az_deg)}`);
+  // A position older than stale_after_s (or from a lost link) is shown greyed, never as current.
+  for (const id of ["st-j2000", "st-jnow", "st-altaz", "st-pier"]) $(id).classList.toggle("stale", s.stale);
   setText("st-pier", s.pier_side);
-  setText("st-slewing", yesNo(s.slewing));
-  setText("st-tracking", s.tracking);
+  // While the link is down nobody knows whether the mount moves: no motion state is claimed.
+  setText("st-slewing", s.connected ? yesNo(s.slewing) : "unknown (link down)");
+  setText("st-tracking", s.connected ? s.tracking : "unknown (link down)");
   setText("st-parked", yesNo(s.parked));
   setText("st-target", s.target ? s.target.name || targetText(s.target) : "—");
   setText("hl-connected", yesNo(s.connected));
   setText("hl-polls", `${s.health.polls} / ${s.health.failures} (watchers ${s.health.watchers})`);
-  setText("hl-read-at", s.read_at.replace("T", " ").replace(/\.\d+/, "").replace("+00:00", " UTC"));
-  setText("mount-time", `mount clock: ${$("hl-read-at").textContent}`);
+  const readAt = s.read_at.replace("T", " ").replace(/\.\d+/, "").replace("+00:00", " UTC");
+  setText("hl-read-at", readAt);
+  setText("mount-time", `mount clock: ${readAt}`);
+  const age = $("hl-age");
+  setText("hl-age", s.stale ? `${s.age_s.toFixed(1)} s: stale (over ${s.stale_after_s} s), not current`
+    : `${s.age_s.toFixed(1)} s`);
+  age.classList.toggle("bad", s.stale);
   const problems = $("hl-problems");
   setText("hl-problems", s.problems.length ? s.problems.join("; ") : "none");
   problems.classList.toggle("bad", s.problems.length > 0);
