@@ -31,13 +31,16 @@ import dataclasses
 import logging
 import math
 import secrets
-from collections.abc import AsyncIterator, Iterator
+import statistics
+from collections import deque
+from collections.abc import AsyncIterator, Awaitable, Iterator
 from contextlib import aclosing, asynccontextmanager, contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
+from datetime import datetime
 from typing import TYPE_CHECKING
 
-from scopelink.mount.errors import LimitError, MountError
+from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
 
 if TYPE_CHECKING:
@@ -47,6 +50,11 @@ if TYPE_CHECKING:
 __all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
 
 logger = logging.getLogger(__name__)
+
+_STEP_DEG = 0.01
+"""Finite-difference step of the altitude slopes: far above rounding, far below curvature."""
+_FLAT = 1e-6 / _STEP_DEG
+"""A slope below this moves no altitude that can be told (the polar axis on the meridian)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,6 +71,13 @@ class GuardSettings:
     Tracking alone moves at most 15°/h: while the tracked position is more than ``near_deg``
     (plus the margin) from every limit, the guard computes where tracking has carried it every
     ``far_check_s`` (real) seconds instead of polling the device; nearer, it polls.
+
+    Between good readings (a noisy link) the guard budgets for the travel it cannot see: the
+    time since the last good reading plus ``stop_latency_s`` (from the decision until the
+    device has the stop) at the worst rate the commanded motions and ``tracking_deg_s`` allow,
+    plus the braking distance; it checks that budget every ``blind_check_s``. A stop the device
+    has not confirmed within ``confirm_s`` is sent again (the wait doubling up to
+    ``confirm_max_s``), both axes, until it is confirmed.
     """
 
     margin_deg: float = 0.2
@@ -71,6 +86,11 @@ class GuardSettings:
     braking_deg_s2: float = 1.5
     near_deg: float = 1.0
     far_check_s: float = 0.25
+    stop_latency_s: float = 0.15
+    blind_check_s: float = 0.02
+    tracking_deg_s: float = 0.0045
+    confirm_s: float = 1.0
+    confirm_max_s: float = 8.0
 
 
 class MotionClient:
@@ -93,6 +113,18 @@ _acting_for: ContextVar[MotionClient | None] = ContextVar("scopelink_motion_clie
 class _RateMotion:
     rate_deg_s: float
     owner: MotionClient | None
+    since: datetime | None = None
+    """Mount clock when its command was about to leave (the device may move from then on)."""
+    speed_deg_s: float = 0.0
+    """The speed the blind budget assumes: this rate's, or the one it replaced, if faster."""
+
+
+_INTERVALS = 8
+"""Poll intervals whose median is the typical poll period."""
+_REPEAT_PAUSE_S = 0.2
+"""Pause before sending again a stop that failed at once (a closed port, a refused reopen)."""
+_PROFILE_STEP_DEG = 0.5
+"""Azimuth step at which a horizon profile is searched for its highest point."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +134,14 @@ class _Reading:
     at_s: float
     alt_deg: float
     az_deg: float
+
+
+@dataclass(frozen=True, slots=True)
+class _Base:
+    """The last good reading, and each rate motion's altitude slope there (None: unknown)."""
+
+    reading: _Reading
+    slopes: dict[MountAxis, float | None]
 
 
 class HorizonGuard:
@@ -176,16 +216,27 @@ class HorizonGuard:
         cannot be told). The altitude's change with hour angle and declination comes from the
         reading's J2000 position through the same astrometry as everything else.
         """
-        mode = self._mount.capabilities.alignment_mode
-        if mode is AlignmentMode.ALT_AZ:
+        if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
             if axis is MountAxis.SECONDARY:
                 return math.copysign(1.0, rate_deg_s)
             return None
+        slope = self.altitude_slope(axis, rate_deg_s, state)
+        if slope is None or abs(slope) < _FLAT:
+            return None
+        return math.copysign(1.0, slope)
+
+    def altitude_slope(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> float | None:
+        """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``,
+        at the reading ``state`` (None where that cannot be told); see
+        :meth:`altitude_direction` for the conventions."""
+        if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
+            return math.copysign(1.0, rate_deg_s) if axis is MountAxis.SECONDARY else 0.0
+        mode = self._mount.capabilities.alignment_mode
         ra, dec, alt = state.ra_j2000_hours, state.dec_j2000_deg, state.alt_deg
         if ra is None or dec is None or alt is None:
             return None
         hemisphere = 1.0 if self._mount.site.latitude_deg >= 0.0 else -1.0
-        step = 0.01  # degrees: far above rounding, far below curvature
+        step = _STEP_DEG
         if axis is MountAxis.PRIMARY:
             # The hour angle grows as the right ascension under the tube falls.
             moved, _ = self._mount.observed_altaz((ra - step / 15.0) % 24.0, dec)
@@ -199,17 +250,50 @@ class HorizonGuard:
             moved, _ = self._mount.observed_altaz(ra, dec + towards)
             sign = hemisphere * (-1.0 if flipped else 1.0) * math.copysign(1.0, towards)
         here_alt, _ = self._mount.observed_altaz(ra, dec)
-        change = (moved - here_alt) * sign * math.copysign(1.0, rate_deg_s)
-        if abs(change) < 1e-6:
-            return None
-        return math.copysign(1.0, change)
+        return (moved - here_alt) / step * sign * math.copysign(1.0, rate_deg_s)
+
+    @asynccontextmanager
+    async def starting(self, axis: MountAxis, rate_deg_s: float) -> AsyncIterator[None]:
+        """Around the command that starts a rate motion: the motion is watched from before its
+        command leaves (a reply that takes a resynchronisation may come seconds after the axis
+        started to turn). If the command fails before reaching the device (refused, not
+        supported) the previous motion stands again; after a DeviceError, or if the caller gives
+        up, the device may be moving: the motion stays watched until a stop is confirmed."""
+        if rate_deg_s == 0.0 or not self.enabled:
+            yield
+            self.motion_commanded(axis, rate_deg_s)
+            return
+        previous = self._motions.get(axis)
+        speed = abs(rate_deg_s)
+        if previous is not None:
+            speed = max(speed, previous.speed_deg_s)
+        self._motions[axis] = _RateMotion(
+            rate_deg_s, _acting_for.get(), previous.since if previous else self._mount.now(), speed
+        )
+        if self._poke is not None:
+            self._poke.set()
+        self._wake()
+        try:
+            yield
+        except MountError as error:
+            if not isinstance(error, DeviceError):  # nothing reached the device
+                if previous is None:
+                    self._motions.pop(axis, None)
+                else:
+                    self._motions[axis] = previous
+            raise
+        self.motion_commanded(axis, rate_deg_s)
 
     def motion_commanded(self, axis: MountAxis, rate_deg_s: float) -> None:
         """``move_axis`` reached the device: remember the motion and its owner, and watch it."""
         if rate_deg_s == 0.0:
             self._motions.pop(axis, None)
             return
-        self._motions[axis] = _RateMotion(rate_deg_s, _acting_for.get())
+        started = self._motions.get(axis)
+        since = started.since if started is not None else None
+        self._motions[axis] = _RateMotion(
+            rate_deg_s, _acting_for.get(), since or self._mount.now(), abs(rate_deg_s)
+        )
         self.notice = ""
         if self._poke is not None:
             self._poke.set()
@@ -354,44 +438,161 @@ class HorizonGuard:
 
     async def _watch_closely(self) -> None:
         """Keep the poller running and judge every new reading until the mount is far from the
-        limits again with no rate motion."""
+        limits again with no rate motion; between readings, stop the mount before the travel
+        it could have made unseen (the blind budget) could reach a limit."""
         mount = self._mount
         previous: _Reading | None = None
-        period_s: float | None = None
+        intervals: deque[float] = deque(maxlen=_INTERVALS)
         origin = mount.now()
         # A reading from before the watch (the cache may be minutes old) would spoil both the
         # rate and the poll period: judge from fresh readings only.
         ignore_until_s = 0.0
         plausible_deg_s = 2.0 * mount.capabilities.max_axis_rate_deg_s + 1.0
+        base: _Base | None = None
+        """The last good reading: where the blind budget starts from."""
         async with aclosing(mount.states()) as states:
-            async for state in states:
-                if not self._needed(state):
-                    return
-                if not self._motions and not self._near_limit(state, factor=2.0):
-                    return
-                if state.alt_deg is None or state.az_deg is None:
-                    continue
-                reading = _Reading(
-                    (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
-                )
-                if reading.at_s <= ignore_until_s:
-                    continue
-                if previous is None or reading.at_s <= previous.at_s:
-                    previous = previous or reading
-                    continue
-                elapsed = reading.at_s - previous.at_s
-                if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
-                    previous = reading  # a garbled reading or a jump: judge from the next one
-                    continue
-                period_s = elapsed if period_s is None else max(elapsed, 0.8 * period_s)
-                reason = self._danger(previous, reading, period_s, state)
-                previous = reading
-                if reason is None:
-                    continue
-                await self._stop(state, reason)
-                # Readings until the stop has taken effect still show the braking motion.
-                ignore_until_s = (mount.now() - origin).total_seconds() + period_s
-                previous = None
+            upcoming: asyncio.Task[MountState] | None = None
+            try:
+                while True:
+                    if upcoming is None:
+                        upcoming = asyncio.ensure_future(_next_state(states))
+                    done, _ = await asyncio.wait({upcoming}, timeout=self.settings.blind_check_s)
+                    if not done:
+                        state = mount.state
+                        if not self._needed(state):
+                            return
+                        if base is None:
+                            continue
+                        now_s = (mount.now() - origin).total_seconds()
+                        reason = self._blind_danger(base, now_s, origin, state)
+                        if reason is not None:
+                            await self._stop(state, reason)
+                            ignore_until_s = (mount.now() - origin).total_seconds()
+                            previous = base = None
+                        continue
+                    state = upcoming.result()
+                    upcoming = None
+                    if not self._needed(state):
+                        return
+                    if not self._motions and not self._near_limit(state, factor=2.0):
+                        return
+                    if state.alt_deg is None or state.az_deg is None:
+                        continue
+                    reading = _Reading(
+                        (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
+                    )
+                    if base is None or reading.at_s > base.reading.at_s:
+                        base = self._base(reading, state)
+                    if reading.at_s <= ignore_until_s:
+                        continue
+                    if previous is None or reading.at_s <= previous.at_s:
+                        previous = previous or reading
+                        continue
+                    elapsed = reading.at_s - previous.at_s
+                    if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
+                        previous = reading  # a garbled reading or a jump: judge from the next one
+                        continue
+                    # The typical poll period: a gap (a reply lost) is the blind budget's part.
+                    intervals.append(elapsed)
+                    period_s = statistics.median(intervals)
+                    reason = self._danger(previous, reading, period_s, state)
+                    previous = reading
+                    if reason is None:
+                        reason = self._blind_danger(base, reading.at_s, origin, state)
+                    if reason is None:
+                        continue
+                    await self._stop(state, reason)
+                    # Readings until the stop has taken effect still show the braking motion.
+                    ignore_until_s = (mount.now() - origin).total_seconds() + period_s
+                    previous = base = None
+            finally:
+                if upcoming is not None:
+                    upcoming.cancel()
+                    with contextlib.suppress(asyncio.CancelledError, StopAsyncIteration):
+                        await upcoming
+
+    def _base(self, reading: _Reading, state: MountState) -> _Base:
+        """A good reading and, for each rate motion, its altitude slope there."""
+        slopes = {
+            axis: self.altitude_slope(axis, motion.rate_deg_s, state)
+            for axis, motion in self._motions.items()
+        }
+        return _Base(reading, slopes)
+
+    def _blind_danger(
+        self, base: _Base, now_s: float, origin: datetime, state: MountState
+    ) -> str | None:
+        """Why the mount must stop now because of what it may have done unseen since ``base``
+        (mount-clock seconds since ``origin``), or None while even the worst case stays inside.
+
+        The budget: from the last good reading, each rate motion turns its axis at its commanded
+        speed for the time since then (or since its command, if later) plus the stop's latency,
+        then brakes at ``braking_deg_s2``. How much altitude a degree of axis travel moves is
+        its slope at the reading (alt-az: exactly 1 or 0); on an equatorial mount the slope can
+        drift as the tube moves (at most 2x the axes' speed in radians per second, capped at
+        cos(latitude) for the polar axis, 1 for the declination axis), and a slope that cannot
+        be told counts as heading straight for the limit. Tracking adds ``tracking_deg_s``.
+        The horizon is the highest it gets over the azimuths the tube could reach meanwhile.
+        """
+        settings = self.settings
+        mount = self._mount
+        reading = base.reading
+        latency = settings.stop_latency_s
+        altaz = mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
+        cos_lat = abs(math.cos(math.radians(mount.site.latitude_deg)))
+        total_speed = sum(motion.speed_deg_s for motion in self._motions.values())
+        drift = 0.0 if altaz else 2.0 * math.radians(total_speed)
+        unseen_s = now_s - reading.at_s + latency
+        fall = rise = 0.0  # by the rate motions
+        longest_s = unseen_s
+        for axis, motion in self._motions.items():
+            since_s = reading.at_s
+            if motion.since is not None:
+                since_s = max(since_s, (motion.since - origin).total_seconds())
+            moving_s = max(now_s - since_s, 0.0) + latency
+            brake_s = motion.speed_deg_s / settings.braking_deg_s2
+            longest_s = max(longest_s, moving_s + brake_s)
+            if altaz and axis is MountAxis.PRIMARY:
+                continue  # the azimuth axis moves no altitude (the horizon profile is below)
+            steepest = cos_lat if axis is MountAxis.PRIMARY and not altaz else 1.0
+            slope = base.slopes.get(axis)
+            speed = motion.speed_deg_s
+            for sign in (-1.0, 1.0):  # towards the horizon, then towards the altitude limit
+                towards = steepest if slope is None else sign * slope
+                travel = _worst_travel(towards, steepest, drift, moving_s)
+                braking = _clamp(towards + drift * moving_s, steepest) * speed * brake_s / 2.0
+                if sign < 0.0:
+                    fall += speed * travel + braking
+                else:
+                    rise += speed * travel + braking
+        limits = mount.limits
+        az_speed = (
+            total_speed
+            if altaz
+            else total_speed / max(math.cos(math.radians(reading.alt_deg)), 0.1)
+        )
+        floor = _highest_floor(limits, reading.az_deg, az_speed * longest_s)
+        what = "a manual motion" if self._motions else f"{state.tracking.value} tracking"
+        blind = max(now_s - reading.at_s, 0.0)
+        unseen = f"worst case after {blind:.2f} s unseen, the stop and the braking"
+        tracked = (
+            settings.tracking_deg_s * unseen_s if state.tracking is not TrackingMode.OFF else 0
+        )
+        # Beyond a limit already, only a motion that may head further out is stopped (one that
+        # heads back in must be allowed to); tracking alone is judged by the readings there.
+        if _heads_out(reading.alt_deg - floor - settings.margin_deg, fall, tracked):
+            return (
+                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
+                f"{reading.az_deg % 360.0:.1f}°): it was heading below the configured horizon of "
+                f"{floor:.2f}° ({unseen})"
+            )
+        room_up = limits.max_altitude_deg - settings.margin_deg - reading.alt_deg
+        if _has_ceiling(limits) and _heads_out(room_up, rise, tracked):
+            return (
+                f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
+                f"the configured limit of {limits.max_altitude_deg:.2f}° ({unseen})"
+            )
+        return None
 
     def _danger(
         self, previous: _Reading, reading: _Reading, period_s: float, state: MountState
@@ -430,19 +631,82 @@ class HorizonGuard:
         return None
 
     async def _stop(self, state: MountState, reason: str) -> None:
+        """Stop the mount, and repeat the stop until the device has confirmed it (or the mount
+        is no longer connected): a lost or garbled reply must not leave it running."""
         mount = self._mount
         logger.warning("%s", reason)
         self.notice = reason
         self.stops += 1
-        try:
-            if self._motions:
-                await mount.abort()
-            elif state.tracking is not TrackingMode.OFF:
-                await mount.set_tracking(TrackingMode.OFF)
-        except MountError as error:
-            logger.error("the horizon guard could not stop the mount: %s", error)
-            self.notice = f"{reason}; stopping it FAILED: {error}"
+        wait_s = self.settings.confirm_s
+        while True:
+            try:
+                async with asyncio.timeout(wait_s):
+                    if self._motions:
+                        await mount.abort()
+                    elif state.tracking is not TrackingMode.OFF:
+                        await mount.set_tracking(TrackingMode.OFF)
+                self.notice = reason
+                break
+            except NotConnectedError as error:
+                self.notice = f"{reason}; stopping it FAILED: {error}"
+                logger.error("the horizon guard could not stop the mount: %s", error)
+                break
+            except (MountError, TimeoutError) as error:
+                why = str(error) or f"not confirmed within {wait_s:g} s"
+                self.notice = f"{reason}; the stop is not confirmed yet, sending it again: {why}"
+                logger.error("the horizon guard's stop is not confirmed: %s; again", why)
+                mount._publish(mount.state)
+                if not mount.state.connected:
+                    break
+                if isinstance(error, MountError):
+                    await asyncio.sleep(_REPEAT_PAUSE_S)  # a fast failure (a closed port)
+                wait_s = min(2.0 * wait_s, self.settings.confirm_max_s)
         mount._publish(mount.state)  # show the notice now, not at the next poll
+
+
+def _next_state(states: AsyncIterator[MountState]) -> Awaitable[MountState]:
+    return anext(states)
+
+
+def _heads_out(room_deg: float, travel_deg: float, tracked_deg: float) -> bool:
+    """Whether unseen travel (``travel_deg`` by rate motions, ``tracked_deg`` by tracking) may
+    use up ``room_deg`` (negative: beyond the limit already)."""
+    if room_deg <= 0.0:
+        return travel_deg > 0.0
+    return travel_deg + tracked_deg >= room_deg
+
+
+def _clamp(slope: float, steepest: float) -> float:
+    return min(max(slope, 0.0), steepest)
+
+
+def _worst_travel(towards: float, steepest: float, drift: float, seconds: float) -> float:
+    """Degrees of altitude per °/s of axis speed over ``seconds``, towards a limit: the slope
+    (altitude per axis degree, positive towards the limit) starts at ``towards``, grows by at
+    most ``drift`` a second and is at most ``steepest``; a slope away from the limit counts 0."""
+    if drift <= 0.0:
+        return _clamp(towards, steepest) * seconds
+    # The slope reaches 0 at t0 and the cap at t1; linear in between.
+    t0 = min(max(-towards / drift, 0.0), seconds)
+    t1 = min(max((steepest - towards) / drift, 0.0), seconds)
+    if t1 <= t0:
+        return _clamp(towards, steepest) * (seconds - t0) if towards >= steepest else 0.0
+    linear = towards * (t1 - t0) + drift * (t1 * t1 - t0 * t0) / 2.0
+    return linear + steepest * (seconds - t1)
+
+
+def _highest_floor(limits: Limits, az_deg: float, span_deg: float) -> float:
+    """The highest horizon within ``span_deg`` of ``az_deg`` either way."""
+    if not limits.horizon_profile:
+        return limits.horizon_deg
+    if span_deg >= 180.0:
+        return max(limits.horizon_deg, *(alt for _, alt in limits.horizon_profile))
+    steps = max(2, math.ceil(2.0 * span_deg / _PROFILE_STEP_DEG))
+    candidates = [az_deg - span_deg + 2.0 * span_deg * i / steps for i in range(steps + 1)]
+    candidates += [
+        az for az, _ in limits.horizon_profile if abs(_wrap_signed(az - az_deg)) <= span_deg
+    ]
+    return max(limits.horizon_at(az % 360.0) for az in candidates)
 
 
 def _wrap_signed(degrees: float) -> float:
