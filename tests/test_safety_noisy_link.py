@@ -13,7 +13,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
@@ -21,6 +21,7 @@ import pytest
 
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Limits, MountAxis, MountError
+from scopelink.protocol.synscan import AnyCommand, AnyReply, FixedRateSlew
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, SimClock, SimulatedMount
@@ -39,16 +40,33 @@ class Trial:
 
 @asynccontextmanager
 async def noisy_rig(
-    kind: FaultKind, probability: float, seed: int, *, timeout_s: float = 5.0
+    kind: FaultKind | None,
+    probability: float = 1.0,
+    seed: int = 0,
+    *,
+    timeout_s: float = 5.0,
+    alt_deg: float = START_ALT_DEG,
+    received: list[AnyCommand] | None = None,
 ) -> AsyncIterator[tuple[SynScanMount, SimulatedMount, FaultInjector]]:
+    """The driver (5 s timeout, the spec's) on TCP to the emulated AZ-GTi at (``alt_deg``, 180°);
+    ``kind`` fires on any command with ``probability`` once connected; ``received`` collects
+    every command the device carried out, with the time it arrived."""
     clock = SimClock.accelerated(500.0, START)
     sim = SimulatedMount(AZ_GTI, site=SITE, clock=clock, limits=DEVICE_LIMITS)
     await sim.connect()
-    await place(sim, START_ALT_DEG, 180.0)
+    await place(sim, alt_deg, 180.0)
     clock.set_rate(1.0)
     faults = FaultInjector(seed=seed)
     config = SynScanConfig(model=AZ_GTI.synscan_model_code or 0)
     async with SynScanEmulator(sim, config, faults=faults) as emulator:
+        if received is not None:
+            answer = emulator.hand_control.answer
+
+            async def recording_answer(command: AnyCommand) -> AnyReply:
+                received.append(command)
+                return await answer(command)
+
+            emulator.hand_control.answer = recording_answer  # type: ignore[method-assign]
         host, port = await emulator.on_tcp("127.0.0.1", 0)
         mount = SynScanMount(
             f"tcp://{host}:{port}",
@@ -58,7 +76,8 @@ async def noisy_rig(
             timeout_s=timeout_s,
         )
         await mount.connect()
-        faults.add(Fault(kind, times=None, probability=probability))
+        if kind is not None:
+            faults.add(Fault(kind, times=None, probability=probability))
         try:
             yield mount, sim, faults
         finally:
@@ -100,3 +119,61 @@ async def test_a_full_speed_motion_down_never_ends_below_the_horizon_on_a_noisy_
     for seed in range(3):
         trial = await run_trial(kind, probability, seed)
         assert trial.lowest_alt_deg >= HORIZON_DEG, (seed, trial)
+
+
+def _stops(received: list[AnyCommand]) -> int:
+    return sum(1 for c in received if isinstance(c, FixedRateSlew) and c.rate == 0)
+
+
+async def _until(condition: Callable[[], bool], timeout_s: float) -> float:
+    """Wait (polling every 2 ms) until ``condition()``; returns the seconds it took."""
+    loop = asyncio.get_running_loop()
+    began = loop.time()
+    while not condition() and loop.time() - began < timeout_s:  # noqa: ASYNC110
+        await asyncio.sleep(0.002)
+    return loop.time() - began
+
+
+async def test_a_stop_goes_out_at_once_although_the_resynchronising_echo_is_garbled() -> None:
+    # The issue's case: a poll's reply is garbled, then the reply to the echo that resynchronises
+    # the stream, so the wire waits out the 5 s timeout. A stop must not wait behind it.
+    received: list[AnyCommand] = []
+    rig = noisy_rig(None, alt_deg=45.0, received=received)
+    async with rig as (mount, sim, faults), mount.watching():
+        await mount.move_axis(MountAxis.SECONDARY, 1.0)  # up, far from every limit
+        faults.add(Fault(FaultKind.MALFORMED, "e"))
+        faults.add(Fault(FaultKind.MALFORMED, "K"))
+        await _until(lambda: len(faults.fired) == 2, 5.0)
+        assert [f.command for f in faults.fired] == ["e", "K"]
+        stops_before = _stops(received)
+        abort = asyncio.create_task(mount.abort())
+        reached_s = await _until(lambda: _stops(received) > stops_before, 6.0)
+        await abort  # and it is confirmed
+        assert reached_s < 0.5, reached_s
+        assert mount.wire.statistics.stops_at_once == 1
+        assert not mount.state.slewing
+        alt = sim.observed_at(sim.elapsed())[0]
+        await asyncio.sleep(0.3)
+        assert sim.observed_at(sim.elapsed())[0] == pytest.approx(alt, abs=1e-3)  # it stopped
+
+
+async def test_a_stop_the_device_did_not_take_is_sent_again_until_confirmed() -> None:
+    # The device goes deaf (a stall: commands are read and dropped, nothing answered) during a
+    # motion down; the guard's budget runs out and its stop is lost. When the device listens
+    # again, the repeated stop ends the motion at once, not after the 5 s timeouts and
+    # resynchronisations of the polls.
+    received: list[AnyCommand] = []
+    async with noisy_rig(None, alt_deg=16.0, received=received) as (mount, sim, faults):
+        await mount.move_axis(MountAxis.SECONDARY, -2.0)
+        await _until(lambda: sim.observed_at(sim.elapsed())[0] < 15.0, 5.0)
+        faults.add(Fault(FaultKind.STALL))
+        await _until(lambda: mount.guard.stops > 0, 5.0)
+        await asyncio.sleep(0.5)
+        assert mount.guard.stops == 1
+        assert _stops(received) == 0  # lost on the deaf device
+        faults.resume()
+        took_s = await _until(lambda: _stops(received) > 0, 10.0)
+        assert took_s < 2.5, took_s
+        assert mount.wire.statistics.stops_at_once >= 2  # it was sent again
+        await mount.wait_for(lambda state: not state.slewing, timeout_s=15.0)
+        assert "not confirmed" not in mount.guard.notice  # confirmed in the end
