@@ -5,7 +5,7 @@ tube below it.
 The trials are the benchmark's (``bench.safety_guard.noisy_trial``, three seeds per level here,
 ten there): the SynScan driver (the spec's 5 s timeout) on TCP (9600-baud pacing) to the SynScan
 emulator, whose simulated AZ-GTi has a permissive -10° horizon; scopelink's horizon is 10°; full
-speed down from 14°. The fault is armed after the connect and fires on any command with
+speed down from 18°. The fault is armed after the connect and fires on any command with
 probability p, from a seeded generator. The true altitude is the simulated mount's own, sampled
 every 2 ms; "never below" means not by any amount (the guard aims 0.2° above).
 """
