@@ -281,12 +281,18 @@ async def noisy_rig(
 
 
 async def noisy_trial(
-    kind: FaultKind, probability: float, seed: int, *, timeout_s: float = 5.0
+    kind: FaultKind,
+    probability: float,
+    seed: int,
+    *,
+    timeout_s: float = 5.0,
+    alt_deg: float = NOISY_START_ALT_DEG,
 ) -> Trial:
-    """Full speed down from 18° (the altitude axis, -3.34°/s); the lowest true altitude until
-    the mount has rested for 0.5 s (the device's own -10° horizon ends the worst case)."""
+    """Full speed down from ``alt_deg`` (the altitude axis, -3.34°/s); the lowest true altitude
+    until the mount has rested for 0.5 s (the device's own -10° horizon ends the worst case)."""
     lowest = math.inf
-    async with noisy_rig(kind, probability, seed, timeout_s=timeout_s) as (mount, sim, faults):
+    rig = noisy_rig(kind, probability, seed, timeout_s=timeout_s, alt_deg=alt_deg)
+    async with rig as (mount, sim, faults):
         loop = asyncio.get_running_loop()
         rate = mount.capabilities.max_axis_rate_deg_s
         with contextlib.suppress(MountError):  # a failed start is owed a stop: still guarded

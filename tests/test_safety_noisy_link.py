@@ -2,12 +2,13 @@
 replies corrupted or dropped, a full-speed manual motion down towards the horizon never carries the
 tube below it.
 
-The trials are the benchmark's (``bench.safety_guard.noisy_trial``, three seeds per level here,
-ten there): the SynScan driver (the spec's 5 s timeout) on TCP (9600-baud pacing) to the SynScan
-emulator, whose simulated AZ-GTi has a permissive -10° horizon; scopelink's horizon is 10°; full
-speed down from 18°. The fault is armed after the connect and fires on any command with
-probability p, from a seeded generator. The true altitude is the simulated mount's own, sampled
-every 2 ms; "never below" means not by any amount (the guard aims 0.2° above).
+The trials are the benchmark's (``bench.safety_guard.noisy_trial``; here two seeds per level and
+kind from 16°, there ten from 18°): the SynScan driver (the spec's 5 s timeout) on TCP (9600-baud
+pacing) to the SynScan emulator, whose simulated AZ-GTi has a permissive -10° horizon;
+scopelink's horizon is 10°; full speed down. The fault is armed after the connect and fires on
+any command with probability p, from a seeded generator. The true altitude is the simulated
+mount's own, sampled every 2 ms; "never below" means not by any amount (the guard aims 0.2°
+above).
 """
 
 from __future__ import annotations
@@ -28,8 +29,8 @@ from scopelink.servers.faults import Fault, FaultKind
 async def test_a_full_speed_motion_down_never_ends_below_the_horizon_on_a_noisy_link(
     kind: FaultKind, probability: float
 ) -> None:
-    for seed in range(3):
-        trial = await noisy_trial(kind, probability, seed)
+    for seed in range(2):
+        trial = await noisy_trial(kind, probability, seed, alt_deg=16.0)
         assert trial.lowest_alt_deg >= HORIZON_DEG, (seed, trial)
 
 

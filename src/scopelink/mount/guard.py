@@ -119,6 +119,9 @@ class _RateMotion:
     """The speed the blind budget assumes: this rate's, or the one it replaced, if faster."""
 
 
+_LATE_ANSWER_S = 0.1
+"""A rate motion's command unanswered this long (a resynchronisation, a timeout) is watched
+without waiting for its answer: the axis may be turning."""
 _INTERVALS = 8
 """Poll intervals whose median is the typical poll period."""
 _REPEAT_PAUSE_S = 0.2
@@ -270,19 +273,30 @@ class HorizonGuard:
         self._motions[axis] = _RateMotion(
             rate_deg_s, _acting_for.get(), previous.since if previous else self._mount.now(), speed
         )
-        if self._poke is not None:
-            self._poke.set()
-        self._wake()
+        # Watching begins with the answer, as before, unless the answer is late: polls started
+        # with the command would only compete with it for the wire.
+        late = asyncio.get_running_loop().call_later(_LATE_ANSWER_S, self._watch_now)
         try:
             yield
         except MountError as error:
-            if not isinstance(error, DeviceError):  # nothing reached the device
-                if previous is None:
-                    self._motions.pop(axis, None)
-                else:
-                    self._motions[axis] = previous
+            if isinstance(error, DeviceError):
+                self._watch_now()  # it may be turning
+            elif previous is None:  # nothing reached the device
+                self._motions.pop(axis, None)
+            else:
+                self._motions[axis] = previous
             raise
+        except BaseException:
+            self._watch_now()  # given up (cancelled) on the way: it may be turning
+            raise
+        finally:
+            late.cancel()
         self.motion_commanded(axis, rate_deg_s)
+
+    def _watch_now(self) -> None:
+        if self._poke is not None:
+            self._poke.set()
+        self._wake()
 
     def motion_commanded(self, axis: MountAxis, rate_deg_s: float) -> None:
         """``move_axis`` reached the device: remember the motion and its owner, and watch it."""
