@@ -14,12 +14,18 @@ above).
 from __future__ import annotations
 
 import asyncio
+import dataclasses
+import re
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 from bench.safety_guard import HORIZON_DEG, noisy_rig, noisy_trial
 
+from scopelink.drivers.synscan.wire import STOP_GRACE_S
 from scopelink.mount import MountAxis
+from scopelink.mount import guard as guard_module
+from scopelink.mount.guard import GuardSettings
 from scopelink.protocol.synscan import AnyCommand, FixedRateSlew
 from scopelink.servers.faults import Fault, FaultKind
 
@@ -90,3 +96,16 @@ async def test_a_stop_the_device_did_not_take_is_sent_again_until_confirmed() ->
         assert mount.wire.statistics.stops_at_once >= 2  # it was sent again
         await mount.wait_for(lambda state: not state.slewing, timeout_s=15.0)
         assert "not confirmed" not in mount.guard.notice  # confirmed in the end
+
+
+def test_the_documented_guard_settings_are_the_defaults() -> None:
+    text = (Path(__file__).parents[1] / "docs" / "reliability-safety.md").read_text()
+    documented = {
+        name: float(value)
+        for name, value in re.findall(r"^\| `(\w+)`[^|]*\| ([0-9.]+) \|", text, re.MULTILINE)
+    }
+    defaults = GuardSettings()
+    for field in dataclasses.fields(GuardSettings):
+        assert documented.get(field.name) == getattr(defaults, field.name), field.name
+    assert documented["STOP_GRACE_S"] == STOP_GRACE_S
+    assert documented["_LATE_ANSWER_S"] == guard_module._LATE_ANSWER_S
