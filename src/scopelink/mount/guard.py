@@ -138,6 +138,9 @@ class _Reading:
     alt_deg: float
     az_deg: float
 
+    def same_place(self, other: _Reading) -> bool:
+        return self.alt_deg == other.alt_deg and self.az_deg == other.az_deg
+
 
 @dataclass(frozen=True, slots=True)
 class _Base:
@@ -145,6 +148,8 @@ class _Base:
 
     reading: _Reading
     slopes: dict[MountAxis, float | None]
+    rates: dict[MountAxis, float]
+    """The rate motions the slopes are for."""
 
 
 class HorizonGuard:
@@ -475,8 +480,12 @@ class HorizonGuard:
                         state = mount.state
                         if not self._needed(state):
                             return
-                        if base is None:
-                            continue
+                        if base is None or base.rates != self.rate_motions:
+                            # No good reading since the watch (or the last stop) began, or the
+                            # motions changed since: the budget starts from what is known.
+                            base = self._base_from(state, origin, base)
+                            if base is None:
+                                continue
                         now_s = (mount.now() - origin).total_seconds()
                         reason = self._blind_danger(base, now_s, origin, state)
                         if reason is not None:
@@ -495,16 +504,24 @@ class HorizonGuard:
                     reading = _Reading(
                         (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
                     )
-                    if base is None or reading.at_s > base.reading.at_s:
-                        base = self._base(reading, state)
-                    if reading.at_s <= ignore_until_s:
+                    if self._motions and base is not None and reading.same_place(base.reading):
+                        # Not a new reading but the last one published again with a new time (a
+                        # poll that read the status only, a command's state): a turning axis
+                        # moves every good reading.
                         continue
                     if previous is None or reading.at_s <= previous.at_s:
-                        previous = previous or reading
+                        if base is None or reading.at_s > base.reading.at_s:
+                            base = self._base(reading, state)
+                        if reading.at_s > ignore_until_s:
+                            previous = previous or reading
                         continue
                     elapsed = reading.at_s - previous.at_s
                     if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
                         previous = reading  # a garbled reading or a jump: judge from the next one
+                        continue
+                    base = self._base(reading, state)
+                    if reading.at_s <= ignore_until_s:
+                        previous = None
                         continue
                     # The typical poll period: a gap (a reply lost) is the blind budget's part.
                     intervals.append(elapsed)
@@ -531,7 +548,20 @@ class HorizonGuard:
             axis: self.altitude_slope(axis, motion.rate_deg_s, state)
             for axis, motion in self._motions.items()
         }
-        return _Base(reading, slopes)
+        return _Base(reading, slopes, self.rate_motions)
+
+    def _base_from(self, state: MountState, origin: datetime, base: _Base | None) -> _Base | None:
+        """The budget's start when no good reading came in: the last one published (its time
+        is its own), or the current base's reading with the slopes of today's motions."""
+        if base is not None:
+            reading = base.reading
+        elif state.alt_deg is not None and state.az_deg is not None:
+            reading = _Reading(
+                (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
+            )
+        else:
+            return None
+        return self._base(reading, state)
 
     def _blind_danger(
         self, base: _Base, now_s: float, origin: datetime, state: MountState
