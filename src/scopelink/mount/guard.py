@@ -40,21 +40,24 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING
 
+from scopelink.mount.budget import (
+    FLAT_SLOPE,
+    Base,
+    Reading,
+    Unseen,
+    altitude_slope,
+    blind_danger,
+    has_ceiling,
+)
 from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
-from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
+from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
 
 if TYPE_CHECKING:
     from scopelink.mount.base import Mount
-    from scopelink.mount.limits import Limits
 
 __all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
 
 logger = logging.getLogger(__name__)
-
-_STEP_DEG = 0.01
-"""Finite-difference step of the altitude slopes: far above rounding, far below curvature."""
-_FLAT = 1e-6 / _STEP_DEG
-"""A slope below this moves no altitude that can be told (the polar axis on the meridian)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,30 +129,6 @@ _INTERVALS = 8
 """Poll intervals whose median is the typical poll period."""
 _REPEAT_PAUSE_S = 0.2
 """Pause before sending again a stop that failed at once (a closed port, a refused reopen)."""
-_PROFILE_STEP_DEG = 0.5
-"""Azimuth step at which a horizon profile is searched for its highest point."""
-
-
-@dataclass(frozen=True, slots=True)
-class _Reading:
-    """The part of a state the prediction needs, with its time on the mount's clock."""
-
-    at_s: float
-    alt_deg: float
-    az_deg: float
-
-    def same_place(self, other: _Reading) -> bool:
-        return self.alt_deg == other.alt_deg and self.az_deg == other.az_deg
-
-
-@dataclass(frozen=True, slots=True)
-class _Base:
-    """The last good reading, and each rate motion's altitude slope there (None: unknown)."""
-
-    reading: _Reading
-    slopes: dict[MountAxis, float | None]
-    rates: dict[MountAxis, float]
-    """The rate motions the slopes are for."""
 
 
 class HorizonGuard:
@@ -192,7 +171,7 @@ class HorizonGuard:
         margin = self.settings.margin_deg
         floor = limits.horizon_at(state.az_deg)
         at_floor = state.alt_deg <= floor + margin
-        at_top = _has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
+        at_top = has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
         if not (at_floor or at_top):
             return
         direction = self.altitude_direction(axis, rate_deg_s, state)
@@ -229,36 +208,15 @@ class HorizonGuard:
                 return math.copysign(1.0, rate_deg_s)
             return None
         slope = self.altitude_slope(axis, rate_deg_s, state)
-        if slope is None or abs(slope) < _FLAT:
+        if slope is None or abs(slope) < FLAT_SLOPE:
             return None
         return math.copysign(1.0, slope)
 
     def altitude_slope(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> float | None:
-        """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``,
-        at the reading ``state`` (None where that cannot be told); see
-        :meth:`altitude_direction` for the conventions."""
-        if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
-            return math.copysign(1.0, rate_deg_s) if axis is MountAxis.SECONDARY else 0.0
-        mode = self._mount.capabilities.alignment_mode
-        ra, dec, alt = state.ra_j2000_hours, state.dec_j2000_deg, state.alt_deg
-        if ra is None or dec is None or alt is None:
-            return None
-        hemisphere = 1.0 if self._mount.site.latitude_deg >= 0.0 else -1.0
-        step = _STEP_DEG
-        if axis is MountAxis.PRIMARY:
-            # The hour angle grows as the right ascension under the tube falls.
-            moved, _ = self._mount.observed_altaz((ra - step / 15.0) % 24.0, dec)
-            sign = hemisphere
-        else:
-            normal = PierSide.EAST if hemisphere > 0.0 else PierSide.WEST
-            if mode is AlignmentMode.GERMAN_POLAR and state.pier_side is PierSide.UNKNOWN:
-                return None
-            flipped = mode is AlignmentMode.GERMAN_POLAR and state.pier_side is not normal
-            towards = step if dec + step <= 90.0 else -step
-            moved, _ = self._mount.observed_altaz(ra, dec + towards)
-            sign = hemisphere * (-1.0 if flipped else 1.0) * math.copysign(1.0, towards)
-        here_alt, _ = self._mount.observed_altaz(ra, dec)
-        return (moved - here_alt) / step * sign * math.copysign(1.0, rate_deg_s)
+        """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``
+        at the reading ``state`` (None where that cannot be told): see
+        :func:`scopelink.mount.budget.altitude_slope`."""
+        return altitude_slope(self._mount, axis, rate_deg_s, state)
 
     @asynccontextmanager
     async def starting(self, axis: MountAxis, rate_deg_s: float) -> AsyncIterator[None]:
@@ -438,7 +396,7 @@ class HorizonGuard:
         near = self.settings.margin_deg + factor * self.settings.near_deg
         if alt - limits.horizon_at(state.az_deg) < near:
             return True
-        return _has_ceiling(limits) and limits.max_altitude_deg - alt < near
+        return has_ceiling(limits) and limits.max_altitude_deg - alt < near
 
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
@@ -460,14 +418,14 @@ class HorizonGuard:
         limits again with no rate motion; between readings, stop the mount before the travel
         it could have made unseen (the blind budget) could reach a limit."""
         mount = self._mount
-        previous: _Reading | None = None
+        previous: Reading | None = None
         intervals: deque[float] = deque(maxlen=_INTERVALS)
         origin = mount.now()
         # A reading from before the watch (the cache may be minutes old) would spoil both the
         # rate and the poll period: judge from fresh readings only.
         ignore_until_s = 0.0
         plausible_deg_s = 2.0 * mount.capabilities.max_axis_rate_deg_s + 1.0
-        base: _Base | None = None
+        base: Base | None = None
         """The last good reading: where the blind budget starts from."""
         async with aclosing(mount.states()) as states:
             upcoming: asyncio.Task[MountState] | None = None
@@ -501,7 +459,7 @@ class HorizonGuard:
                         return
                     if state.alt_deg is None or state.az_deg is None:
                         continue
-                    reading = _Reading(
+                    reading = Reading(
                         (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
                     )
                     if self._motions and base is not None and reading.same_place(base.reading):
@@ -542,104 +500,48 @@ class HorizonGuard:
                     with contextlib.suppress(asyncio.CancelledError, StopAsyncIteration):
                         await upcoming
 
-    def _base(self, reading: _Reading, state: MountState) -> _Base:
+    def _base(self, reading: Reading, state: MountState) -> Base:
         """A good reading and, for each rate motion, its altitude slope there."""
         slopes = {
             axis: self.altitude_slope(axis, motion.rate_deg_s, state)
             for axis, motion in self._motions.items()
         }
-        return _Base(reading, slopes, self.rate_motions)
+        return Base(reading, slopes, self.rate_motions)
 
-    def _base_from(self, state: MountState, origin: datetime, base: _Base | None) -> _Base | None:
+    def _base_from(self, state: MountState, origin: datetime, base: Base | None) -> Base | None:
         """The budget's start when no good reading came in: the last one published (its time
         is its own), or the current base's reading with the slopes of today's motions."""
         if base is not None:
             reading = base.reading
         elif state.alt_deg is not None and state.az_deg is not None:
-            reading = _Reading(
-                (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
-            )
+            reading = Reading((state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg)
         else:
             return None
         return self._base(reading, state)
 
     def _blind_danger(
-        self, base: _Base, now_s: float, origin: datetime, state: MountState
+        self, base: Base, now_s: float, origin: datetime, state: MountState
     ) -> str | None:
         """Why the mount must stop now because of what it may have done unseen since ``base``
-        (mount-clock seconds since ``origin``), or None while even the worst case stays inside.
+        (mount-clock seconds since ``origin``), or None: see :func:`budget.blind_danger`."""
+        motions = [
+            Unseen(axis, motion.speed_deg_s, self._moving_s(motion, base.reading, now_s, origin))
+            for axis, motion in self._motions.items()
+        ]
+        return blind_danger(self._mount, self.settings, motions, base, now_s=now_s, state=state)
 
-        The budget: from the last good reading, each rate motion turns its axis at its commanded
-        speed for the time since then (or since its command, if later) plus the stop's latency,
-        then brakes at ``braking_deg_s2``. How much altitude a degree of axis travel moves is
-        its slope at the reading (alt-az: exactly 1 or 0); on an equatorial mount the slope can
-        drift as the tube moves (at most 2x the axes' speed in radians per second, capped at
-        cos(latitude) for the polar axis, 1 for the declination axis), and a slope that cannot
-        be told counts as heading straight for the limit. Tracking adds ``tracking_deg_s``.
-        The horizon is the highest it gets over the azimuths the tube could reach meanwhile.
-        """
-        settings = self.settings
-        mount = self._mount
-        reading = base.reading
-        latency = settings.stop_latency_s
-        altaz = mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
-        cos_lat = abs(math.cos(math.radians(mount.site.latitude_deg)))
-        total_speed = sum(motion.speed_deg_s for motion in self._motions.values())
-        drift = 0.0 if altaz else 2.0 * math.radians(total_speed)
-        unseen_s = now_s - reading.at_s + latency
-        fall = rise = 0.0  # by the rate motions
-        longest_s = unseen_s
-        for axis, motion in self._motions.items():
-            since_s = reading.at_s
-            if motion.since is not None:
-                since_s = max(since_s, (motion.since - origin).total_seconds())
-            moving_s = max(now_s - since_s, 0.0) + latency
-            brake_s = motion.speed_deg_s / settings.braking_deg_s2
-            longest_s = max(longest_s, moving_s + brake_s)
-            if altaz and axis is MountAxis.PRIMARY:
-                continue  # the azimuth axis moves no altitude (the horizon profile is below)
-            steepest = cos_lat if axis is MountAxis.PRIMARY and not altaz else 1.0
-            slope = base.slopes.get(axis)
-            speed = motion.speed_deg_s
-            for sign in (-1.0, 1.0):  # towards the horizon, then towards the altitude limit
-                towards = steepest if slope is None else sign * slope
-                travel = _worst_travel(towards, steepest, drift, moving_s)
-                braking = _clamp(towards + drift * moving_s, steepest) * speed * brake_s / 2.0
-                if sign < 0.0:
-                    fall += speed * travel + braking
-                else:
-                    rise += speed * travel + braking
-        limits = mount.limits
-        az_speed = (
-            total_speed
-            if altaz
-            else total_speed / max(math.cos(math.radians(reading.alt_deg)), 0.1)
-        )
-        floor = _highest_floor(limits, reading.az_deg, az_speed * longest_s)
-        what = "a manual motion" if self._motions else f"{state.tracking.value} tracking"
-        blind = max(now_s - reading.at_s, 0.0)
-        unseen = f"worst case after {blind:.2f} s unseen, the stop and the braking"
-        tracked = (
-            settings.tracking_deg_s * unseen_s if state.tracking is not TrackingMode.OFF else 0
-        )
-        # Beyond a limit already, only a motion that may head further out is stopped (one that
-        # heads back in must be allowed to); tracking alone is judged by the readings there.
-        if _heads_out(reading.alt_deg - floor - settings.margin_deg, fall, tracked):
-            return (
-                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
-                f"{reading.az_deg % 360.0:.1f}°): it was heading below the configured horizon of "
-                f"{floor:.2f}° ({unseen})"
-            )
-        room_up = limits.max_altitude_deg - settings.margin_deg - reading.alt_deg
-        if _has_ceiling(limits) and _heads_out(room_up, rise, tracked):
-            return (
-                f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
-                f"the configured limit of {limits.max_altitude_deg:.2f}° ({unseen})"
-            )
-        return None
+    def _moving_s(
+        self, motion: _RateMotion, reading: Reading, now_s: float, origin: datetime
+    ) -> float:
+        """How long ``motion`` may have turned unseen: since ``reading`` (or its command, if
+        later) until the stop takes effect."""
+        since_s = reading.at_s
+        if motion.since is not None:
+            since_s = max(since_s, (motion.since - origin).total_seconds())
+        return max(now_s - since_s, 0.0) + self.settings.stop_latency_s
 
     def _danger(
-        self, previous: _Reading, reading: _Reading, period_s: float, state: MountState
+        self, previous: Reading, reading: Reading, period_s: float, state: MountState
     ) -> str | None:
         """Why the mount must stop now, or None while it stays inside the limits."""
         settings = self.settings
@@ -667,7 +569,7 @@ class HorizonGuard:
             )
         below_now = limits.max_altitude_deg - reading.alt_deg
         below_then = limits.max_altitude_deg - alt_then
-        if _has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
+        if has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
             return (
                 f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
                 f"the configured limit of {limits.max_altitude_deg:.2f}°"
@@ -712,52 +614,5 @@ def _next_state(states: AsyncIterator[MountState]) -> Awaitable[MountState]:
     return anext(states)
 
 
-def _heads_out(room_deg: float, travel_deg: float, tracked_deg: float) -> bool:
-    """Whether unseen travel (``travel_deg`` by rate motions, ``tracked_deg`` by tracking) may
-    use up ``room_deg`` (negative: beyond the limit already)."""
-    if room_deg <= 0.0:
-        return travel_deg > 0.0
-    return travel_deg + tracked_deg >= room_deg
-
-
-def _clamp(slope: float, steepest: float) -> float:
-    return min(max(slope, 0.0), steepest)
-
-
-def _worst_travel(towards: float, steepest: float, drift: float, seconds: float) -> float:
-    """Degrees of altitude per °/s of axis speed over ``seconds``, towards a limit: the slope
-    (altitude per axis degree, positive towards the limit) starts at ``towards``, grows by at
-    most ``drift`` a second and is at most ``steepest``; a slope away from the limit counts 0."""
-    if drift <= 0.0:
-        return _clamp(towards, steepest) * seconds
-    # The slope reaches 0 at t0 and the cap at t1; linear in between.
-    t0 = min(max(-towards / drift, 0.0), seconds)
-    t1 = min(max((steepest - towards) / drift, 0.0), seconds)
-    if t1 <= t0:
-        return _clamp(towards, steepest) * (seconds - t0) if towards >= steepest else 0.0
-    linear = towards * (t1 - t0) + drift * (t1 * t1 - t0 * t0) / 2.0
-    return linear + steepest * (seconds - t1)
-
-
-def _highest_floor(limits: Limits, az_deg: float, span_deg: float) -> float:
-    """The highest horizon within ``span_deg`` of ``az_deg`` either way."""
-    if not limits.horizon_profile:
-        return limits.horizon_deg
-    if span_deg >= 180.0:
-        return max(limits.horizon_deg, *(alt for _, alt in limits.horizon_profile))
-    steps = max(2, math.ceil(2.0 * span_deg / _PROFILE_STEP_DEG))
-    candidates = [az_deg - span_deg + 2.0 * span_deg * i / steps for i in range(steps + 1)]
-    candidates += [
-        az for az, _ in limits.horizon_profile if abs(_wrap_signed(az - az_deg)) <= span_deg
-    ]
-    return max(limits.horizon_at(az % 360.0) for az in candidates)
-
-
 def _wrap_signed(degrees: float) -> float:
     return (degrees + 180.0) % 360.0 - 180.0
-
-
-def _has_ceiling(limits: Limits) -> bool:
-    """Whether an altitude limit is set: at 90° (the default) nothing can pass it, and a star
-    culminating near the zenith must not have its tracking turned off."""
-    return limits.max_altitude_deg < 90.0
