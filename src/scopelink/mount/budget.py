@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from datetime import datetime
 from typing import TYPE_CHECKING
 
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
@@ -28,10 +29,12 @@ __all__ = [
     "Travel",
     "Unseen",
     "altitude_slope",
+    "base_from",
     "blind_danger",
     "has_ceiling",
     "heads_out",
     "highest_floor",
+    "make_base",
     "unseen_travel",
 ]
 
@@ -123,6 +126,32 @@ def altitude_slope(
         sign = hemisphere * (-1.0 if flipped else 1.0) * math.copysign(1.0, towards)
     here_alt, _ = mount.observed_altaz(ra, dec)
     return (moved - here_alt) / step * sign * math.copysign(1.0, rate_deg_s)
+
+
+def make_base(
+    mount: Mount, rates: dict[MountAxis, float], reading: Reading, state: MountState
+) -> Base:
+    """A good reading and, for each rate motion, its altitude slope there."""
+    slopes = {axis: altitude_slope(mount, axis, rate, state) for axis, rate in rates.items()}
+    return Base(reading, slopes, dict(rates))
+
+
+def base_from(
+    mount: Mount,
+    rates: dict[MountAxis, float],
+    state: MountState,
+    origin: datetime,
+    base: Base | None,
+) -> Base | None:
+    """The budget's start when no good reading came in: the last one published (its time is its
+    own), or the current base's reading with the slopes of today's motions."""
+    if base is not None:
+        reading = base.reading
+    elif state.alt_deg is not None and state.az_deg is not None:
+        reading = Reading((state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg)
+    else:
+        return None
+    return make_base(mount, rates, reading, state)
 
 
 def unseen_travel(

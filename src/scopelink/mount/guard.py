@@ -33,7 +33,7 @@ import math
 import secrets
 import statistics
 from collections import deque
-from collections.abc import AsyncIterator, Awaitable, Iterator
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from contextlib import aclosing, asynccontextmanager, contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -46,8 +46,10 @@ from scopelink.mount.budget import (
     Reading,
     Unseen,
     altitude_slope,
+    base_from,
     blind_danger,
     has_ceiling,
+    make_base,
 )
 from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
@@ -194,15 +196,7 @@ class HorizonGuard:
         self, axis: MountAxis, rate_deg_s: float, state: MountState
     ) -> float | None:
         """Whether turning ``axis`` at ``rate_deg_s`` raises (+1) or lowers (-1) the tube now;
-        None where that cannot be told.
-
-        Alt-az: the secondary axis is the altitude (positive is up); the azimuth axis moves no
-        altitude. Equatorial: the primary axis forwards turns westwards (hour angle up) in the
-        north and eastwards in the south; the secondary forwards moves north in the north and
-        south in the south, the other way when a German mount is flipped (an unknown pier side
-        cannot be told). The altitude's change with hour angle and declination comes from the
-        reading's J2000 position through the same astrometry as everything else.
-        """
+        None where that cannot be told (conventions: :func:`budget.altitude_slope`)."""
         if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
             if axis is MountAxis.SECONDARY:
                 return math.copysign(1.0, rate_deg_s)
@@ -441,7 +435,7 @@ class HorizonGuard:
                         if base is None or base.rates != self.rate_motions:
                             # No good reading since the watch (or the last stop) began, or the
                             # motions changed since: the budget starts from what is known.
-                            base = self._base_from(state, origin, base)
+                            base = base_from(self._mount, self.rate_motions, state, origin, base)
                             if base is None:
                                 continue
                         now_s = (mount.now() - origin).total_seconds()
@@ -469,7 +463,7 @@ class HorizonGuard:
                         continue
                     if previous is None or reading.at_s <= previous.at_s:
                         if base is None or reading.at_s > base.reading.at_s:
-                            base = self._base(reading, state)
+                            base = make_base(self._mount, self.rate_motions, reading, state)
                         if reading.at_s > ignore_until_s:
                             previous = previous or reading
                         continue
@@ -477,7 +471,7 @@ class HorizonGuard:
                     if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
                         previous = reading  # a garbled reading or a jump: judge from the next one
                         continue
-                    base = self._base(reading, state)
+                    base = make_base(self._mount, self.rate_motions, reading, state)
                     if reading.at_s <= ignore_until_s:
                         previous = None
                         continue
@@ -499,25 +493,6 @@ class HorizonGuard:
                     upcoming.cancel()
                     with contextlib.suppress(asyncio.CancelledError, StopAsyncIteration):
                         await upcoming
-
-    def _base(self, reading: Reading, state: MountState) -> Base:
-        """A good reading and, for each rate motion, its altitude slope there."""
-        slopes = {
-            axis: self.altitude_slope(axis, motion.rate_deg_s, state)
-            for axis, motion in self._motions.items()
-        }
-        return Base(reading, slopes, self.rate_motions)
-
-    def _base_from(self, state: MountState, origin: datetime, base: Base | None) -> Base | None:
-        """The budget's start when no good reading came in: the last one published (its time
-        is its own), or the current base's reading with the slopes of today's motions."""
-        if base is not None:
-            reading = base.reading
-        elif state.alt_deg is not None and state.az_deg is not None:
-            reading = Reading((state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg)
-        else:
-            return None
-        return self._base(reading, state)
 
     def _blind_danger(
         self, base: Base, now_s: float, origin: datetime, state: MountState
@@ -579,35 +554,54 @@ class HorizonGuard:
     async def _stop(self, state: MountState, reason: str) -> None:
         """Stop the mount, and repeat the stop until the device has confirmed it (or the mount
         is no longer connected): a lost or garbled reply must not leave it running."""
-        mount = self._mount
         logger.warning("%s", reason)
         self.notice = reason
         self.stops += 1
-        wait_s = self.settings.confirm_s
-        while True:
-            try:
-                async with asyncio.timeout(wait_s):
-                    if self._motions:
-                        await mount.abort()
-                    elif state.tracking is not TrackingMode.OFF:
-                        await mount.set_tracking(TrackingMode.OFF)
-                self.notice = reason
-                break
-            except NotConnectedError as error:
-                self.notice = f"{reason}; stopping it FAILED: {error}"
-                logger.error("the horizon guard could not stop the mount: %s", error)
-                break
-            except (MountError, TimeoutError) as error:
-                why = str(error) or f"not confirmed within {wait_s:g} s"
-                self.notice = f"{reason}; the stop is not confirmed yet, sending it again: {why}"
-                logger.error("the horizon guard's stop is not confirmed: %s; again", why)
-                mount._publish(mount.state)
-                if not mount.state.connected:
-                    break
-                if isinstance(error, MountError):
-                    await asyncio.sleep(_REPEAT_PAUSE_S)  # a fast failure (a closed port)
-                wait_s = min(2.0 * wait_s, self.settings.confirm_max_s)
-        mount._publish(mount.state)  # show the notice now, not at the next poll
+
+        async def stop() -> None:
+            if self._motions:
+                await self._mount.abort()
+            elif state.tracking is not TrackingMode.OFF:
+                await self._mount.set_tracking(TrackingMode.OFF)
+
+        def tell(notice: str) -> None:
+            self.notice = notice
+
+        await _until_confirmed(self._mount, self.settings, stop, reason, tell)
+        self._mount._publish(self._mount.state)  # show the notice now, not at the next poll
+
+
+async def _until_confirmed(
+    mount: Mount,
+    settings: GuardSettings,
+    stop: Callable[[], Awaitable[None]],
+    reason: str,
+    tell: Callable[[str], None],
+) -> None:
+    """Run ``stop`` until it returns (the device confirmed it) within ``confirm_s``, the wait
+    doubling up to ``confirm_max_s``; give up only when the mount is no longer connected.
+    ``tell`` gets the notice to show meanwhile."""
+    wait_s = settings.confirm_s
+    while True:
+        try:
+            async with asyncio.timeout(wait_s):
+                await stop()
+            tell(reason)
+            return
+        except NotConnectedError as error:
+            tell(f"{reason}; stopping it FAILED: {error}")
+            logger.error("the horizon guard could not stop the mount: %s", error)
+            return
+        except (MountError, TimeoutError) as error:
+            why = str(error) or f"not confirmed within {wait_s:g} s"
+            tell(f"{reason}; the stop is not confirmed yet, sending it again: {why}")
+            logger.error("the horizon guard's stop is not confirmed: %s; again", why)
+            mount._publish(mount.state)
+            if not mount.state.connected:
+                return
+            if isinstance(error, MountError):
+                await asyncio.sleep(_REPEAT_PAUSE_S)  # a fast failure (a closed port)
+            wait_s = min(2.0 * wait_s, settings.confirm_max_s)
 
 
 def _next_state(states: AsyncIterator[MountState]) -> Awaitable[MountState]:
