@@ -68,7 +68,7 @@ async def test_a_stop_goes_out_at_once_although_the_resynchronising_echo_is_garb
         abort = asyncio.create_task(mount.abort())
         reached_s = await _until(lambda: _stops(received) > stops_before, 6.0)
         await abort  # and it is confirmed
-        assert reached_s < 0.5, reached_s
+        assert reached_s < 1.0, reached_s  # 5.06 s before the fix
         assert mount.wire.statistics.stops_at_once == 1
         assert not mount.state.slewing
         alt = sim.observed_at(sim.elapsed())[0]

@@ -61,4 +61,4 @@ async def test_a_stop_goes_out_at_once_while_a_reply_is_missing(tmp_path: Path) 
             abort.cancel()
             with contextlib.suppress(asyncio.CancelledError, MountError):
                 await abort
-        assert reached_s < 0.3, reached_s
+        assert reached_s < 1.0, reached_s  # never, before the fix
