@@ -460,8 +460,8 @@ class Mount(ABC):
             self._guard.check_move(axis, rate_deg_s, self.state)
         except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
             self._guard.check_move(axis, rate_deg_s, await self.refresh())
-        await start()
-        self._guard.motion_commanded(axis, rate_deg_s)
+        async with self._guard.starting(axis, rate_deg_s):  # watched before its command leaves
+            await start()
 
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """Nudge the mount at the guide rate for ``duration_ms`` milliseconds."""

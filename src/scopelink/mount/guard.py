@@ -31,19 +31,32 @@ import dataclasses
 import logging
 import math
 import secrets
-from collections.abc import AsyncIterator, Iterator
+import statistics
+from collections import deque
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from contextlib import aclosing, asynccontextmanager, contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
+from datetime import datetime
 from typing import TYPE_CHECKING
 
-from scopelink.mount.errors import LimitError, MountError
+from scopelink.mount.budget import (
+    FLAT_SLOPE,
+    Base,
+    Reading,
+    Unseen,
+    altitude_slope,
+    base_from,
+    blind_danger,
+    has_ceiling,
+    make_base,
+)
+from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
 from scopelink.mount.sun import SETTING as SUN_SETTING
-from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
+from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
 
 if TYPE_CHECKING:
     from scopelink.mount.base import Mount
-    from scopelink.mount.limits import Limits
 
 __all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
 
@@ -64,6 +77,13 @@ class GuardSettings:
     Tracking alone moves at most 15°/h: while the tracked position is more than ``near_deg``
     (plus the margin) from every limit, the guard computes where tracking has carried it every
     ``far_check_s`` (real) seconds instead of polling the device; nearer, it polls.
+
+    Between good readings (a noisy link) the guard budgets for the travel it cannot see: the
+    time since the last good reading plus ``stop_latency_s`` (from the decision until the
+    device has the stop) at the worst rate the commanded motions and ``tracking_deg_s`` allow,
+    plus the braking distance; it checks that budget every ``blind_check_s``. A stop the device
+    has not confirmed within ``confirm_s`` is sent again (the wait doubling up to
+    ``confirm_max_s``), both axes, until it is confirmed.
     """
 
     margin_deg: float = 0.2
@@ -72,6 +92,11 @@ class GuardSettings:
     braking_deg_s2: float = 1.5
     near_deg: float = 1.0
     far_check_s: float = 0.25
+    stop_latency_s: float = 0.15
+    blind_check_s: float = 0.02
+    tracking_deg_s: float = 0.0045
+    confirm_s: float = 1.0
+    confirm_max_s: float = 8.0
 
 
 class MotionClient:
@@ -94,15 +119,19 @@ _acting_for: ContextVar[MotionClient | None] = ContextVar("scopelink_motion_clie
 class _RateMotion:
     rate_deg_s: float
     owner: MotionClient | None
+    since: datetime | None = None
+    """Mount clock when its command was about to leave (the device may move from then on)."""
+    speed_deg_s: float = 0.0
+    """The speed the blind budget assumes: this rate's, or the one it replaced, if faster."""
 
 
-@dataclass(frozen=True, slots=True)
-class _Reading:
-    """The part of a state the prediction needs, with its time on the mount's clock."""
-
-    at_s: float
-    alt_deg: float
-    az_deg: float
+_LATE_ANSWER_S = 0.1
+"""A rate motion's command unanswered this long (a resynchronisation, a timeout) is watched
+without waiting for its answer: the axis may be turning."""
+_INTERVALS = 8
+"""Poll intervals whose median is the typical poll period."""
+_REPEAT_PAUSE_S = 0.2
+"""Pause before sending again a stop that failed at once (a closed port, a refused reopen)."""
 
 
 class HorizonGuard:
@@ -145,7 +174,7 @@ class HorizonGuard:
         margin = self.settings.margin_deg
         floor = limits.horizon_at(state.az_deg)
         at_floor = state.alt_deg <= floor + margin
-        at_top = _has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
+        at_top = has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
         if not (at_floor or at_top):
             return
         direction = self.altitude_direction(axis, rate_deg_s, state)
@@ -168,49 +197,75 @@ class HorizonGuard:
         self, axis: MountAxis, rate_deg_s: float, state: MountState
     ) -> float | None:
         """Whether turning ``axis`` at ``rate_deg_s`` raises (+1) or lowers (-1) the tube now;
-        None where that cannot be told.
-
-        Alt-az: the secondary axis is the altitude (positive is up); the azimuth axis moves no
-        altitude. Equatorial: the primary axis forwards turns westwards (hour angle up) in the
-        north and eastwards in the south; the secondary forwards moves north in the north and
-        south in the south, the other way when a German mount is flipped (an unknown pier side
-        cannot be told). The altitude's change with hour angle and declination comes from the
-        reading's J2000 position through the same astrometry as everything else.
-        """
-        mode = self._mount.capabilities.alignment_mode
-        if mode is AlignmentMode.ALT_AZ:
+        None where that cannot be told (conventions: :func:`budget.altitude_slope`)."""
+        if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
             if axis is MountAxis.SECONDARY:
                 return math.copysign(1.0, rate_deg_s)
             return None
-        ra, dec, alt = state.ra_j2000_hours, state.dec_j2000_deg, state.alt_deg
-        if ra is None or dec is None or alt is None:
+        slope = self.altitude_slope(axis, rate_deg_s, state)
+        if slope is None or abs(slope) < FLAT_SLOPE:
             return None
-        hemisphere = 1.0 if self._mount.site.latitude_deg >= 0.0 else -1.0
-        step = 0.01  # degrees: far above rounding, far below curvature
-        if axis is MountAxis.PRIMARY:
-            # The hour angle grows as the right ascension under the tube falls.
-            moved, _ = self._mount.observed_altaz((ra - step / 15.0) % 24.0, dec)
-            sign = hemisphere
-        else:
-            normal = PierSide.EAST if hemisphere > 0.0 else PierSide.WEST
-            if mode is AlignmentMode.GERMAN_POLAR and state.pier_side is PierSide.UNKNOWN:
-                return None
-            flipped = mode is AlignmentMode.GERMAN_POLAR and state.pier_side is not normal
-            towards = step if dec + step <= 90.0 else -step
-            moved, _ = self._mount.observed_altaz(ra, dec + towards)
-            sign = hemisphere * (-1.0 if flipped else 1.0) * math.copysign(1.0, towards)
-        here_alt, _ = self._mount.observed_altaz(ra, dec)
-        change = (moved - here_alt) * sign * math.copysign(1.0, rate_deg_s)
-        if abs(change) < 1e-6:
-            return None
-        return math.copysign(1.0, change)
+        return math.copysign(1.0, slope)
+
+    def altitude_slope(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> float | None:
+        """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``
+        at the reading ``state`` (None where that cannot be told): see
+        :func:`scopelink.mount.budget.altitude_slope`."""
+        return altitude_slope(self._mount, axis, rate_deg_s, state)
+
+    @asynccontextmanager
+    async def starting(self, axis: MountAxis, rate_deg_s: float) -> AsyncIterator[None]:
+        """Around the command that starts a rate motion: the motion is watched from before its
+        command leaves (a reply that takes a resynchronisation may come seconds after the axis
+        started to turn). If the command fails before reaching the device (refused, not
+        supported) the previous motion stands again; after a DeviceError, or if the caller gives
+        up, the device may be moving: the motion stays watched until a stop is confirmed."""
+        if rate_deg_s == 0.0 or not self.enabled:
+            yield
+            self.motion_commanded(axis, rate_deg_s)
+            return
+        previous = self._motions.get(axis)
+        speed = abs(rate_deg_s)
+        if previous is not None:
+            speed = max(speed, previous.speed_deg_s)
+        self._motions[axis] = _RateMotion(
+            rate_deg_s, _acting_for.get(), previous.since if previous else self._mount.now(), speed
+        )
+        # Watching begins with the answer, as before, unless the answer is late: polls started
+        # with the command would only compete with it for the wire.
+        late = asyncio.get_running_loop().call_later(_LATE_ANSWER_S, self._watch_now)
+        try:
+            yield
+        except MountError as error:
+            if isinstance(error, DeviceError):
+                self._watch_now()  # it may be turning
+            elif previous is None:  # nothing reached the device
+                self._motions.pop(axis, None)
+            else:
+                self._motions[axis] = previous
+            raise
+        except BaseException:
+            self._watch_now()  # given up (cancelled) on the way: it may be turning
+            raise
+        finally:
+            late.cancel()
+        self.motion_commanded(axis, rate_deg_s)
+
+    def _watch_now(self) -> None:
+        if self._poke is not None:
+            self._poke.set()
+        self._wake()
 
     def motion_commanded(self, axis: MountAxis, rate_deg_s: float) -> None:
         """``move_axis`` reached the device: remember the motion and its owner, and watch it."""
         if rate_deg_s == 0.0:
             self._motions.pop(axis, None)
             return
-        self._motions[axis] = _RateMotion(rate_deg_s, _acting_for.get())
+        started = self._motions.get(axis)
+        since = started.since if started is not None else None
+        self._motions[axis] = _RateMotion(
+            rate_deg_s, _acting_for.get(), since or self._mount.now(), abs(rate_deg_s)
+        )
         self.notice = ""
         if self._poke is not None:
             self._poke.set()
@@ -338,7 +393,7 @@ class HorizonGuard:
             return True
         if alt - limits.horizon_at(state.az_deg) < near:
             return True
-        return _has_ceiling(limits) and limits.max_altitude_deg - alt < near
+        return has_ceiling(limits) and limits.max_altitude_deg - alt < near
 
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
@@ -357,47 +412,114 @@ class HorizonGuard:
 
     async def _watch_closely(self) -> None:
         """Keep the poller running and judge every new reading until the mount is far from the
-        limits again with no rate motion."""
+        limits again with no rate motion; between readings, stop the mount before the travel
+        it could have made unseen (the blind budget) could reach a limit."""
         mount = self._mount
-        previous: _Reading | None = None
-        period_s: float | None = None
+        previous: Reading | None = None
+        intervals: deque[float] = deque(maxlen=_INTERVALS)
         origin = mount.now()
         # A reading from before the watch (the cache may be minutes old) would spoil both the
         # rate and the poll period: judge from fresh readings only.
         ignore_until_s = 0.0
         plausible_deg_s = 2.0 * mount.capabilities.max_axis_rate_deg_s + 1.0
+        base: Base | None = None
+        """The last good reading: where the blind budget starts from."""
         async with aclosing(mount.states()) as states:
-            async for state in states:
-                if not self._needed(state):
-                    return
-                if not self._motions and not self._near_limit(state, factor=2.0):
-                    return
-                if state.alt_deg is None or state.az_deg is None:
-                    continue
-                reading = _Reading(
-                    (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
-                )
-                if reading.at_s <= ignore_until_s:
-                    continue
-                if previous is None or reading.at_s <= previous.at_s:
-                    previous = previous or reading
-                    continue
-                elapsed = reading.at_s - previous.at_s
-                if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
-                    previous = reading  # a garbled reading or a jump: judge from the next one
-                    continue
-                period_s = elapsed if period_s is None else max(elapsed, 0.8 * period_s)
-                reason = self._danger(previous, reading, period_s, state)
-                previous = reading
-                if reason is None:
-                    continue
-                await self._stop(state, reason)
-                # Readings until the stop has taken effect still show the braking motion.
-                ignore_until_s = (mount.now() - origin).total_seconds() + period_s
-                previous = None
+            upcoming: asyncio.Task[MountState] | None = None
+            try:
+                while True:
+                    if upcoming is None:
+                        upcoming = asyncio.ensure_future(_next_state(states))
+                    done, _ = await asyncio.wait({upcoming}, timeout=self.settings.blind_check_s)
+                    if not done:
+                        state = mount.state
+                        if not self._needed(state):
+                            return
+                        if base is None or base.rates != self.rate_motions:
+                            # No good reading since the watch (or the last stop) began, or the
+                            # motions changed since: the budget starts from what is known.
+                            base = base_from(self._mount, self.rate_motions, state, origin, base)
+                            if base is None:
+                                continue
+                        now_s = (mount.now() - origin).total_seconds()
+                        reason = self._blind_danger(base, now_s, origin, state)
+                        if reason is not None:
+                            await self._stop(state, reason)
+                            ignore_until_s = (mount.now() - origin).total_seconds()
+                            previous = base = None
+                        continue
+                    state = upcoming.result()
+                    upcoming = None
+                    if not self._needed(state):
+                        return
+                    if not self._motions and not self._near_limit(state, factor=2.0):
+                        return
+                    if state.alt_deg is None or state.az_deg is None:
+                        continue
+                    reading = Reading(
+                        (state.read_at - origin).total_seconds(), state.alt_deg, state.az_deg
+                    )
+                    if self._motions and base is not None and reading.same_place(base.reading):
+                        # Not a new reading but the last one published again with a new time (a
+                        # poll that read the status only, a command's state): a turning axis
+                        # moves every good reading.
+                        continue
+                    if previous is None or reading.at_s <= previous.at_s:
+                        if base is None or reading.at_s > base.reading.at_s:
+                            base = make_base(self._mount, self.rate_motions, reading, state)
+                        if reading.at_s > ignore_until_s:
+                            previous = previous or reading
+                        continue
+                    elapsed = reading.at_s - previous.at_s
+                    if abs(reading.alt_deg - previous.alt_deg) > plausible_deg_s * elapsed:
+                        previous = reading  # a garbled reading or a jump: judge from the next one
+                        continue
+                    base = make_base(self._mount, self.rate_motions, reading, state)
+                    if reading.at_s <= ignore_until_s:
+                        previous = None
+                        continue
+                    # The typical poll period: a gap (a reply lost) is the blind budget's part.
+                    intervals.append(elapsed)
+                    period_s = statistics.median(intervals)
+                    reason = self._danger(previous, reading, period_s, state)
+                    previous = reading
+                    if reason is None:
+                        reason = self._blind_danger(base, reading.at_s, origin, state)
+                    if reason is None:
+                        continue
+                    await self._stop(state, reason)
+                    # Readings until the stop has taken effect still show the braking motion.
+                    ignore_until_s = (mount.now() - origin).total_seconds() + period_s
+                    previous = base = None
+            finally:
+                if upcoming is not None:
+                    upcoming.cancel()
+                    with contextlib.suppress(asyncio.CancelledError, StopAsyncIteration):
+                        await upcoming
+
+    def _blind_danger(
+        self, base: Base, now_s: float, origin: datetime, state: MountState
+    ) -> str | None:
+        """Why the mount must stop now because of what it may have done unseen since ``base``
+        (mount-clock seconds since ``origin``), or None: see :func:`budget.blind_danger`."""
+        motions = [
+            Unseen(axis, motion.speed_deg_s, self._moving_s(motion, base.reading, now_s, origin))
+            for axis, motion in self._motions.items()
+        ]
+        return blind_danger(self._mount, self.settings, motions, base, now_s=now_s, state=state)
+
+    def _moving_s(
+        self, motion: _RateMotion, reading: Reading, now_s: float, origin: datetime
+    ) -> float:
+        """How long ``motion`` may have turned unseen: since ``reading`` (or its command, if
+        later) until the stop takes effect."""
+        since_s = reading.at_s
+        if motion.since is not None:
+            since_s = max(since_s, (motion.since - origin).total_seconds())
+        return max(now_s - since_s, 0.0) + self.settings.stop_latency_s
 
     def _danger(
-        self, previous: _Reading, reading: _Reading, period_s: float, state: MountState
+        self, previous: Reading, reading: Reading, period_s: float, state: MountState
     ) -> str | None:
         """Why the mount must stop now, or None while it stays inside the limits."""
         settings = self.settings
@@ -425,7 +547,7 @@ class HorizonGuard:
             )
         below_now = limits.max_altitude_deg - reading.alt_deg
         below_then = limits.max_altitude_deg - alt_then
-        if _has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
+        if has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
             return (
                 f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
                 f"the configured limit of {limits.max_altitude_deg:.2f}°"
@@ -433,7 +555,7 @@ class HorizonGuard:
         return self._sun_danger(reading, alt_then, az_then, ahead_s, what)
 
     def _sun_danger(
-        self, reading: _Reading, alt_then: float, az_then: float, ahead_s: float, what: str
+        self, reading: Reading, alt_then: float, az_then: float, ahead_s: float, what: str
     ) -> str | None:
         """Why a motion heading into the Sun avoidance zone must stop now (``_danger``'s
         prediction, judged against where the Sun will be then), or None."""
@@ -470,26 +592,61 @@ class HorizonGuard:
         return distance < zone.radius_deg + near_deg
 
     async def _stop(self, state: MountState, reason: str) -> None:
-        mount = self._mount
+        """Stop the mount, and repeat the stop until the device has confirmed it (or the mount
+        is no longer connected): a lost or garbled reply must not leave it running."""
         logger.warning("%s", reason)
         self.notice = reason
         self.stops += 1
-        try:
+
+        async def stop() -> None:
             if self._motions:
-                await mount.abort()
+                await self._mount.abort()
             elif state.tracking is not TrackingMode.OFF:
-                await mount.set_tracking(TrackingMode.OFF)
-        except MountError as error:
+                await self._mount.set_tracking(TrackingMode.OFF)
+
+        def tell(notice: str) -> None:
+            self.notice = notice
+
+        await _until_confirmed(self._mount, self.settings, stop, reason, tell)
+        self._mount._publish(self._mount.state)  # show the notice now, not at the next poll
+
+
+async def _until_confirmed(
+    mount: Mount,
+    settings: GuardSettings,
+    stop: Callable[[], Awaitable[None]],
+    reason: str,
+    tell: Callable[[str], None],
+) -> None:
+    """Run ``stop`` until it returns (the device confirmed it) within ``confirm_s``, the wait
+    doubling up to ``confirm_max_s``; give up only when the mount is no longer connected.
+    ``tell`` gets the notice to show meanwhile."""
+    wait_s = settings.confirm_s
+    while True:
+        try:
+            async with asyncio.timeout(wait_s):
+                await stop()
+            tell(reason)
+            return
+        except NotConnectedError as error:
+            tell(f"{reason}; stopping it FAILED: {error}")
             logger.error("the horizon guard could not stop the mount: %s", error)
-            self.notice = f"{reason}; stopping it FAILED: {error}"
-        mount._publish(mount.state)  # show the notice now, not at the next poll
+            return
+        except (MountError, TimeoutError) as error:
+            why = str(error) or f"not confirmed within {wait_s:g} s"
+            tell(f"{reason}; the stop is not confirmed yet, sending it again: {why}")
+            logger.error("the horizon guard's stop is not confirmed: %s; again", why)
+            mount._publish(mount.state)
+            if not mount.state.connected:
+                return
+            if isinstance(error, MountError):
+                await asyncio.sleep(_REPEAT_PAUSE_S)  # a fast failure (a closed port)
+            wait_s = min(2.0 * wait_s, settings.confirm_max_s)
+
+
+def _next_state(states: AsyncIterator[MountState]) -> Awaitable[MountState]:
+    return anext(states)
 
 
 def _wrap_signed(degrees: float) -> float:
     return (degrees + 180.0) % 360.0 - 180.0
-
-
-def _has_ceiling(limits: Limits) -> bool:
-    """Whether an altitude limit is set: at 90° (the default) nothing can pass it, and a star
-    culminating near the zenith must not have its tracking turned off."""
-    return limits.max_altitude_deg < 90.0

@@ -7,6 +7,12 @@ the line is resynchronised: ``q`` (harmless when the bus is not held), then ``V`
 point: the box answers in order, so once its known version string has come back every late
 reply sent before it has been read and discarded; then drain until quiet, and a fresh codec. A
 late reply can never be read as the answer to a later command.
+
+A stop does not wait for any of that (issue #11): :meth:`SkyTrackerLine.stop_at_once` writes ``q``
+(ending a grant, so the next bytes reach the box; harmless otherwise) and the stop's commands at
+once, ahead of the turn. A reply being waited for is abandoned (the line resynchronises before its
+next exchange), and the turn in progress ends at its next command (it must not press an arrow
+again after the stop): :class:`StopWentFirstError`.
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ __all__ = [
     "LineOutOfSyncError",
     "ReplyTimeoutError",
     "SkyTrackerLine",
+    "StopWentFirstError",
 ]
 
 logger = logging.getLogger(__name__)
@@ -75,6 +82,10 @@ class LineOutOfSyncError(ReplyTimeoutError):
     busy with an earlier command. The next exchange tries to resynchronise again first."""
 
 
+class StopWentFirstError(DeviceError):
+    """A stop was written at once while this turn was in progress: the turn ends here."""
+
+
 class BadReplyError(DeviceError):
     """A reply of the right length that does not fit its command (the line was resynchronised)."""
 
@@ -90,6 +101,18 @@ class BusRefusedError(DeviceError):
         super().__init__(message)
         self.refused = refused
         self.unanswered = unanswered
+
+
+@dataclass(slots=True)
+class _Reading:
+    """A reply being waited for: its deadline, and whether a stop abandoned it."""
+
+    deadline: asyncio.Timeout
+    interrupted: bool = False
+
+    def interrupt(self) -> None:
+        self.interrupted = True
+        self.deadline.reschedule(asyncio.get_running_loop().time())
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,6 +157,14 @@ class SkyTrackerLine:
         self.last_answer_s = time.monotonic()
         """:func:`time.monotonic` when the box last answered a command (or the line opened):
         how long it has been silent, which tells a lost box from a noisy line."""
+        self._writing = asyncio.Lock()
+        """Held while bytes are written: a stop never lands inside another command's bytes."""
+        self._reading: _Reading | None = None
+        """The reply being waited for, which a stop may abandon."""
+        self._stops = 0
+        """Stops written at once so far; a turn that began before the last one ends."""
+        self._turn_stops = 0
+        self.stops_at_once = 0
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
@@ -142,6 +173,7 @@ class SkyTrackerLine:
     ) -> Reply | None:
         """One Sky Tracker command and its reply (None for a command without one)."""
         async with self.scheduler.turn(priority):
+            self._turn_stops = self._stops
             return await self._exchange(command, self.options.reply_timeout_s)
 
     async def tracker_sequence(
@@ -149,6 +181,7 @@ class SkyTrackerLine:
     ) -> list[Reply | None]:
         """Several Sky Tracker commands in one turn (e.g. ``b`` then the arrows still held)."""
         async with self.scheduler.turn(priority):
+            self._turn_stops = self._stops
             return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
 
     # --- Sky Commander commands through the bus ----------------------------------------------
@@ -174,6 +207,7 @@ class SkyTrackerLine:
                 await asyncio.sleep(delays[attempt - 1])
             attempt += 1
             async with self.scheduler.turn(priority):
+                self._turn_stops = self._stops
                 answer = await self._request_bus()
                 if answer is None:
                     unanswered += 1
@@ -215,6 +249,27 @@ class SkyTrackerLine:
             unanswered=unanswered,
         )
 
+    async def stop_at_once(self, commands: Sequence[TrackerCommand]) -> None:
+        """Write ``q`` and ``commands`` (commands without replies: ``b``, ``U``) now, ahead of
+        the turn and of any resynchronisation; a reply being waited for is abandoned. The stop
+        is unconfirmed: the caller reads the status back through ordinary exchanges."""
+        self._stops += 1
+        reading = self._reading
+        if reading is not None:
+            reading.interrupt()
+        data = ReleaseBus().encode() + b"".join(command.encode() for command in commands)
+        try:
+            async with self._writing:
+                await self.link.write(data)
+        except LinkError as error:
+            self._interrupted = True
+            raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
+        self.commands_sent += 1 + len(commands)
+        self.stops_at_once += 1
+        logger.info(
+            "stop written at once: %s", ", ".join(command.describe() for command in commands)
+        )
+
     async def _catch_up_commander(self) -> None:
         """Inside a grant, after a failed Sky Commander exchange: ask for a position (``\r``)
         and read its 16-byte reply and on until quiet. The Sky Commander answers in order, so
@@ -222,7 +277,8 @@ class SkyTrackerLine:
         discarded with it; only then may the next reply be taken as the answer to a command.
         Replies it sends while the bus is released never reach the PC (the box keeps them)."""
         self._flush_strays()
-        await self.link.write(b"\r")
+        async with self._writing:
+            await self.link.write(b"\r")
         self.commands_sent += 1
         received = b""
         try:
@@ -275,17 +331,32 @@ class SkyTrackerLine:
                     "off?"
                 )
             self._interrupted = False
+        if self._stops != self._turn_stops and not isinstance(command, ReleaseBus):
+            raise StopWentFirstError(
+                f"{command.describe()!r} not sent: a stop was written meanwhile"
+            )
         self._flush_strays()
         data = self._client.send(command)
+        reading: _Reading | None = None
         try:
-            await self.link.write(data)
+            async with self._writing:
+                await self.link.write(data)
             self.commands_sent += 1
             if command.reply is None:
                 return None
-            async with asyncio.timeout(reply_within_s):
-                event = await self._next_reply()
+            async with asyncio.timeout(reply_within_s) as deadline:
+                reading = self._reading = _Reading(deadline)
+                try:
+                    event = await self._next_reply()
+                finally:
+                    self._reading = None
         except TimeoutError:
             self._client.abandon_reply()
+            if reading is not None and reading.interrupted:
+                self._interrupted = True  # resynchronised before the next exchange
+                raise ReplyTimeoutError(
+                    f"the reply to {command.describe()!r} was abandoned: a stop went first"
+                ) from None
             await self._resync_after_fault()
             raise ReplyTimeoutError(
                 f"no reply to {command.describe()!r} within {reply_within_s * 1000:.0f} ms on "
@@ -352,17 +423,20 @@ class SkyTrackerLine:
                 # Still inside the grant: CR ends any partial 'L' line the Sky Commander holds
                 # (bytes lost on the unbuffered port); without one it asks for a position, whose
                 # reply is drained here, before 'q', so it cannot reach the box's own next poll.
-                await self.link.write(b"\r")
+                async with self._writing:
+                    await self.link.write(b"\r")
                 discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
                 # Still behind if it is slow (its replies may come in a later grant).
                 self._commander_behind = True
-            await self.link.write(ReleaseBus().encode())
+            async with self._writing:
+                await self.link.write(ReleaseBus().encode())
             self.commands_sent += 1 + held
             if self._sync_marker is not None:
                 # The box answers in order: a reply it is late with comes before the answer to
                 # this 'V'. A quiet drain alone would let a reply later than the drain through,
                 # to be read as the answer to the next command.
-                await self.link.write(ReadVersion().encode())
+                async with self._writing:
+                    await self.link.write(ReadVersion().encode())
                 self.commands_sent += 1
                 received, synced = await self._read_through(self._sync_marker)
                 discarded += received

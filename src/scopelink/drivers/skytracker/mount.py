@@ -822,10 +822,19 @@ class SkyTrackerMount(Mount):
     # --- abort and tracking ----------------------------------------------------------------------
 
     async def _abort(self) -> None:
-        """Release every arrow; ``U`` ends a GOTO (motors ramp down, UTILITY mode)."""
-        self._require_line()
+        """Release every arrow; ``U`` ends a GOTO (motors ramp down, UTILITY mode). Written at
+        once first (``q``, ``b``, and ``U`` during a GOTO: see ``SkyTrackerLine.stop_at_once``),
+        then confirmed in an ordinary turn by reading the status back."""
+        line = self._require_line()
         self._cancel_pulses()
         self._held.clear()
+        at_once: list[TrackerCommand] = [ReleaseDirections()]
+        if self._mode is TrackerMode.GOTO:
+            at_once.append(SelectMode(TrackerMode.UTILITY))
+        try:
+            await line.stop_at_once(at_once)
+        except NotConnectedError as error:  # the confirming turn below says what is wrong
+            logger.warning("a stop could not be written at once: %s", error)
         commands: list[TrackerCommand] = [ReleaseDirections()]
         mode = self._mode
         if mode is TrackerMode.GOTO:

@@ -555,10 +555,15 @@ class SynScanMount(Mount):
     # --- stopping ---------------------------------------------------------------------------------
 
     async def _abort(self) -> None:
-        """``M``, then rate 0 on both axes (firmware up to 3.36 resumes rate motion after ``M``),
-        tracking re-enabled as it was, and ``L`` checked (``M`` sent again if a goto still runs)."""
+        """At once: ``M`` and rate 0 on both axes, ahead of everything queued and, when the stream
+        is out of step, written before any resynchronisation (see ``SynScanWire.stop_at_once``).
+        Then confirmed: ``M``, rate 0 on both axes (firmware up to 3.36 resumes rate motion after
+        ``M``), tracking re-enabled as it was, and ``L`` checked (``M`` again if a goto still
+        runs). A stop not confirmed (an error, or the caller gave up waiting) stays owed: it is
+        sent again before anything else."""
         await self._cancel_pulses()
-        with self._stops_owed_on_failure(cancel_goto=True, axes=set(MountAxis)):
+        try:
+            await self._stop_at_once([CancelGoto(), *(_rate_zero(axis) for axis in MountAxis)])
             async with self.wire.exclusive():
                 await self._ask(CancelGoto(), Ack)
                 for axis in MountAxis:
@@ -574,13 +579,25 @@ class SynScanMount(Mount):
                             "abort: the hand control still reports a goto in progress"
                         )
                     await self._ask(CancelGoto(), Ack)
+        except (DeviceError, asyncio.CancelledError) as error:
+            cause = str(error) or "the abort was given up before the device confirmed it"
+            self._owe_stops(cancel_goto=True, axes=set(MountAxis), cause=cause)
+            raise
         self._motion_epoch += 1
         self._goto_running = False
         self._settle = None
         self._publish(dataclasses.replace(self.state, slewing=False, pulse_guiding=False))
 
+    async def _stop_at_once(self, commands: list[AnyCommand]) -> None:
+        """The first, unconfirmed, part of a stop: see ``SynScanWire.stop_at_once``. A failure
+        here is left to the confirming exchanges that follow (they recover, or raise)."""
+        try:
+            await self.wire.stop_at_once(commands)
+        except DeviceError as error:
+            logger.warning("%s: a stop could not be written at once: %s", self.wire.name, error)
+
     async def _send_rate_zero(self, axis: MountAxis) -> None:
-        reply = await self._wire_ask(FixedRateSlew(_AXES[axis], positive=True, rate=0))
+        reply = await self._wire_ask(_rate_zero(axis))
         if isinstance(reply, PassthroughFailed):
             logger.warning("%s: stop of the %s axis not acknowledged", self.wire.name, axis.name)
 
@@ -590,6 +607,7 @@ class SynScanMount(Mount):
             await self._ask(SetTrackingMode(synscan_tracking(self._tracking)), Ack)
 
     async def _stop_axis(self, axis: MountAxis) -> None:
+        await self._stop_at_once([_rate_zero(axis)])
         with self._stops_owed_on_failure(axes={axis}):
             async with self.wire.exclusive():
                 await self._send_rate_zero(axis)
@@ -846,6 +864,11 @@ class SynScanMount(Mount):
                 f"{command.describe()!r}: the motor controller did not answer the hand control "
                 "(failed passthrough)"
             )
+
+
+def _rate_zero(axis: MountAxis) -> FixedRateSlew:
+    """Rate 0 on ``axis``: stops a fixed- or variable-rate slew (see the protocol notes)."""
+    return FixedRateSlew(_AXES[axis], positive=True, rate=0)
 
 
 SITE_TOLERANCE_DEG = 1.0 / 60.0

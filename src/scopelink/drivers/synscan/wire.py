@@ -12,6 +12,14 @@ command is idempotent (a repeated goto, sync, rate or tracking command has the e
 the retry is safe. A link that closed is reopened through the factory first (a TCP bridge that
 dropped the connection comes back transparently). When recovery fails the caller gets a
 :class:`~scopelink.mount.DeviceError` naming the cause, and the next exchange recovers again.
+
+A stop must not wait for any of that (issue #11: a corrupted reply to the resynchronising echo
+held an owed stop back for the 5 s timeout, 17° of travel at full speed). :meth:`stop_at_once`
+takes the link ahead of every queued exchange; an exchange that is still reading after
+``STOP_GRACE_S`` (or any reading while the stream is out of step) is interrupted, fails with a
+``DeviceError`` and is *not* retried (a retried slew would undo the stop); and if the stream is
+out of step the stop's bytes are written at once, back to back, without reading their replies.
+The caller then confirms the stop through ordinary exchanges (which resynchronise first).
 """
 
 from __future__ import annotations
@@ -19,7 +27,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
@@ -34,9 +42,10 @@ from scopelink.protocol.synscan import (
     MalformedReply,
     SynScanClientConnection,
     UnexpectedData,
+    encode_command,
 )
 
-__all__ = ["DEFAULT_TIMEOUT_S", "LinkFactory", "SynScanWire", "WireStatistics"]
+__all__ = ["DEFAULT_TIMEOUT_S", "STOP_GRACE_S", "LinkFactory", "SynScanWire", "WireStatistics"]
 
 logger = logging.getLogger(__name__)
 
@@ -58,8 +67,32 @@ _ECHO_PATIENCE = 3
 a device still sending the rest of a slow reply is alive, and answers the echo right after."""
 
 
+STOP_GRACE_S = 0.1
+"""A stop waits this long for an exchange in flight on a stream in step (the longest reply, 18
+bytes, takes 19 ms at 9600 baud); a reply still missing by then is not worth more of the stop's
+time: the exchange is interrupted."""
+
+
+@dataclass(slots=True)
+class _Scope:
+    """A read in progress: its deadline, and whether a stop cut it short."""
+
+    deadline: asyncio.Timeout
+    interrupted: bool = False
+
+    def interrupt(self) -> None:
+        self.interrupted = True
+        self.deadline.reschedule(asyncio.get_running_loop().time())
+
+
 class _ExchangeError(Exception):
-    """One exchange went wrong; the message says how (it becomes part of a DeviceError)."""
+    """One exchange went wrong; the message says how (it becomes part of a DeviceError).
+    ``interrupted``: cut short by a stop, and not to be retried."""
+
+    def __init__(self, message: str, *, interrupted: bool = False, sent: bool = True) -> None:
+        super().__init__(message)
+        self.interrupted = interrupted
+        self.sent = sent
 
 
 @dataclass(slots=True)
@@ -73,6 +106,10 @@ class WireStatistics:
     resyncs: int = 0
     reconnects: int = 0
     discarded_bytes: int = 0
+    stops_at_once: int = 0
+    """Stops written without waiting for the stream to be in step (see ``stop_at_once``)."""
+    interrupted: int = 0
+    """Exchanges cut short by a stop."""
 
 
 class SynScanWire:
@@ -104,6 +141,12 @@ class SynScanWire:
         self._needs_resync = False
         self._next_echo = 0
         self._holder: asyncio.Task[object] | None = None
+        self._io = asyncio.Lock()
+        """Held while a task uses the link (one recovery and exchange, or a stop's write)."""
+        self._reading: _Scope | None = None
+        """The scope of the read in progress, which a stop may cut short."""
+        self._reading_since = 0.0
+        self._stops_waiting = 0
         self.last_write_at = 0.0
         """Event-loop time at which the last command started to leave (times guide pulses)."""
         self.last_answer_s = -float("inf")
@@ -172,17 +215,77 @@ class SynScanWire:
     ) -> AnyReply:
         failure: _ExchangeError | None = None
         for _attempt in range(2):
-            await self._recover_if_needed(command, failure)
             try:
-                return await self._exchange(command, meanwhile)
+                async with self._io:
+                    await self._recover_if_needed(command, failure)
+                    return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
                 self.statistics.failures += 1
-                self._needs_resync = True
+                self._needs_resync |= error.sent
+                if error.interrupted:  # a stop went out meanwhile: re-sending could undo it
+                    raise DeviceError(str(error)) from None
                 logger.info("%s: %s; recovering", self.name, error)
                 if failure is not None:
                     raise DeviceError(f"{failure}; after recovering, again: {error}") from None
                 failure = error
         raise AssertionError("unreachable")  # pragma: no cover
+
+    async def stop_at_once(self, commands: Sequence[AnyCommand]) -> bool:
+        """Take the link for a stop ahead of everything queued; if the stream is out of step (or
+        the link closed, or an exchange had to be interrupted), write ``commands`` at once, back
+        to back, without reading their replies, and return True. Return False when the stream
+        is in step: the caller's ordinary exchanges (``ask``) then carry the stop, next in line.
+
+        Either way the stop is unconfirmed until ordinary exchanges have had its replies; the
+        stream is left marked for resynchronisation after a blind write. Raises DeviceError
+        when the link cannot be (re)opened or written.
+        """
+        loop = asyncio.get_running_loop()
+        self._stops_waiting += 1
+        try:
+            interrupted = False
+            while True:
+                reading = self._reading
+                if reading is not None and (
+                    self._needs_resync or loop.time() - self._reading_since >= STOP_GRACE_S
+                ):
+                    reading.interrupt()  # the reader fails with "a stop went first"
+                    interrupted = True
+                try:
+                    async with asyncio.timeout(STOP_GRACE_S / 4.0):
+                        await self._io.acquire()
+                    break
+                except TimeoutError:
+                    continue  # still busy: look again whether it is reading by now
+            try:
+                if not interrupted and not self._needs_resync and self.is_open:
+                    return False
+                self._needs_resync = True
+                if not self.is_open:
+                    await self._reopen()
+                link = self._link
+                assert link is not None
+                data = b"".join(encode_command(command) for command in commands)
+                self.statistics.stops_at_once += 1
+                self.statistics.bytes_sent += len(data)
+                self.last_write_at = loop.time()
+                try:
+                    await link.write(data)
+                except LinkClosedError as error:
+                    await self.close()
+                    raise DeviceError(
+                        f"{self.name} closed while a stop was written: {error}"
+                    ) from None
+                logger.info(
+                    "%s: stop written at once: %s",
+                    self.name,
+                    ", ".join(command.describe() for command in commands),
+                )
+                return True
+            finally:
+                self._io.release()
+        finally:
+            self._stops_waiting -= 1
 
     async def _recover_if_needed(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
         if self.is_open and not self._needs_resync:
@@ -216,15 +319,23 @@ class SynScanWire:
         self.statistics.resyncs += 1
         dropped = self._codec.reset()
         try:
-            dropped += await link.drain_input(_DRAIN_QUIET_S, max_seconds=self.timeout_s)
+            async with self._interruptible() as scope:
+                dropped += await link.drain_input(_DRAIN_QUIET_S, max_seconds=self.timeout_s)
         except LinkClosedError as error:
             await self.close()
             raise DeviceError(f"{why}, and {self.name} closed: {error}") from None
+        except TimeoutError:
+            if not scope.interrupted:  # pragma: no cover - the scope has no deadline of its own
+                raise
+            self.statistics.interrupted += 1
+            raise DeviceError(f"{why}; resynchronising was interrupted by a stop") from None
         self._discard(dropped)
         value = self._echo_value()
         try:
             reply = await self._exchange(Echo(value), patient=True)
         except _ExchangeError as error:
+            if error.interrupted:
+                raise DeviceError(f"{why}; resynchronising: {error}") from None
             raise DeviceError(
                 f"{why}; resynchronising failed: {error} — is the hand control switched on and "
                 "connected?"
@@ -253,6 +364,10 @@ class SynScanWire:
         link = self._link
         if link is None or link.closed:
             raise _ExchangeError(f"{self.name} is closed")
+        if self._stops_waiting:
+            raise _ExchangeError(
+                f"{command.describe()!r} not sent: a stop goes first", interrupted=True, sent=False
+            )
         data = self._codec.send(command)
         self.statistics.exchanges += 1
         self.statistics.bytes_sent += len(data)
@@ -262,12 +377,18 @@ class SynScanWire:
             await link.write(data)
             if meanwhile is not None:
                 meanwhile()
-            async with asyncio.timeout(self.timeout_s) as deadline:
-                reply = await self._read_reply(link, deadline if patient else None)
+            async with self._interruptible(self.timeout_s) as scope:
+                reply = await self._read_reply(link, scope.deadline if patient else None)
             completed = True
             self.last_answer_s = time.monotonic()
             return reply
         except TimeoutError:
+            if scope.interrupted:
+                self.statistics.interrupted += 1
+                raise _ExchangeError(
+                    f"the reply to {command.describe()!r} was abandoned: a stop went first",
+                    interrupted=True,
+                ) from None
             raise _ExchangeError(
                 f"no reply to {command.describe()!r} within {self.timeout_s:g} s on {self.name}"
             ) from None
@@ -291,12 +412,27 @@ class SynScanWire:
                 self._codec.receive_data(data)
             elif isinstance(event, UnexpectedData):
                 self._discard(event.data)
-                if deadline is not None:
+                if deadline is not None and not self._stops_waiting:
                     deadline.reschedule(min(loop.time() + self.timeout_s, give_up_at))
             elif isinstance(event, MalformedReply):
                 raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
             else:
                 return event
+
+    @asynccontextmanager
+    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[_Scope]:
+        """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
+        either way ``TimeoutError`` leaves the block, and ``scope.interrupted`` tells which."""
+        loop = asyncio.get_running_loop()
+        async with asyncio.timeout(seconds) as deadline:
+            scope = _Scope(deadline)
+            self._reading, self._reading_since = scope, loop.time()
+            try:
+                if self._stops_waiting and self._needs_resync:
+                    scope.interrupt()
+                yield scope
+            finally:
+                self._reading = None
 
     def _discard(self, data: bytes) -> None:
         if data:
