@@ -11,6 +11,7 @@ path) and of one guard judgement.
 
     .venv/bin/python -m bench.safety_sun            # rates 0.5 .. 3.34 °/s, then the costs
     .venv/bin/python -m bench.safety_sun --quick    # one rate (the smoke test)
+    .venv/bin/python -m bench.safety_sun --noisy    # full speed, 5/15/30 % of replies spoiled
 """
 
 from __future__ import annotations
@@ -20,15 +21,17 @@ import asyncio
 import contextlib
 import logging
 import math
+import statistics
 import time
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
 from scopelink.astro import PierSide, Site
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.mount import Limits, MountAxis
+from scopelink.mount import Limits, MountAxis, MountError
 from scopelink.mount.sun import SunZone
 from scopelink.mount.types import AlignmentMode
+from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, SimClock, SimulatedMount
 
@@ -64,7 +67,11 @@ def _azimuth_at_distance(distance_deg: float) -> float:
     return low % 360.0
 
 
-async def run_once(rate_deg_s: float, lead_deg: float = 3.0) -> Result:
+async def run_once(
+    rate_deg_s: float, lead_deg: float = 3.0, noise: tuple[FaultKind, float, int] | None = None
+) -> Result:
+    """One run at ``rate_deg_s``; ``noise`` (fault kind, probability, seed) garbles or drops
+    that share of the device's replies once the driver is connected (the spec's 5 s timeout)."""
     start_distance = RADIUS_DEG + lead_deg + rate_deg_s * 1.5
     clock = SimClock.accelerated(500.0, NOON)
     sim = SimulatedMount(
@@ -76,7 +83,8 @@ async def run_once(rate_deg_s: float, lead_deg: float = 3.0) -> Result:
     await sim.abort()
     clock.set_rate(1.0)
     closest = math.inf
-    async with SynScanEmulator(sim, SynScanConfig(model=165)) as device:
+    faults = FaultInjector(seed=noise[2] if noise else 0)
+    async with SynScanEmulator(sim, SynScanConfig(model=165), faults=faults) as device:
         host, port = await device.on_tcp("127.0.0.1", 0)
         mount = SynScanMount(
             f"tcp://{host}:{port}",
@@ -85,8 +93,11 @@ async def run_once(rate_deg_s: float, lead_deg: float = 3.0) -> Result:
             limits=Limits(horizon_deg=0.0, sun_avoidance_deg=RADIUS_DEG),
         )
         await mount.connect()
+        if noise is not None:
+            faults.add(Fault(noise[0], times=None, probability=noise[1]))
         try:
-            await mount.move_axis(MountAxis.PRIMARY, rate_deg_s)
+            with contextlib.suppress(MountError):  # a failed start is owed a stop: still guarded
+                await mount.move_axis(MountAxis.PRIMARY, rate_deg_s)
             last_az, still = math.nan, 0
             deadline = time.monotonic() + 60.0
             while still < 10 and time.monotonic() < deadline:
@@ -98,6 +109,7 @@ async def run_once(rate_deg_s: float, lead_deg: float = 3.0) -> Result:
                 last_az = az
             stops = mount.guard.stops
         finally:
+            faults.clear()
             with contextlib.suppress(Exception):
                 await mount.abort()
             await mount.disconnect()
@@ -132,11 +144,36 @@ async def _main(rates: tuple[float, ...]) -> list[Result]:
     return [await run_once(rate) for rate in rates]
 
 
+NOISE_LEVELS = (0.05, 0.15, 0.30)
+
+
+async def noisy(trials: int) -> None:
+    """Full speed towards the Sun with a share of the replies garbled or lost: the worst and
+    median clearance per level over ``trials`` seeds."""
+    print("| replies | share | worst clearance° | median clearance° | inside |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    for kind in (FaultKind.MALFORMED, FaultKind.DROP):
+        for share in NOISE_LEVELS:
+            runs = [await run_once(3.34, noise=(kind, share, seed)) for seed in range(trials)]
+            clearances = sorted(r.clearance_deg for r in runs)
+            inside = sum(1 for c in clearances if c < 0.0)
+            print(
+                f"| {kind.value} | {share:.0%} | {clearances[0]:+.2f} | "
+                f"{statistics.median(clearances):+.2f} | {inside} |"
+            )
+
+
 def main(argv: list[str] | None = None) -> list[Result]:
     parser = argparse.ArgumentParser(prog="python -m bench.safety_sun", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="one rate (2°/s), no cost figures")
+    parser.add_argument("--noisy", action="store_true", help="full speed on a noisy link")
+    parser.add_argument("--trials", type=int, default=5, help="seeds per noise level (--noisy)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
+    logging.getLogger("scopelink").setLevel(logging.CRITICAL)
+    if args.noisy:
+        asyncio.run(noisy(args.trials))
+        return []
     rates = (2.0,) if args.quick else RATES_DEG_S
     results = asyncio.run(_main(rates))
     print("| rate °/s | start distance° | closest° | clearance° | guard stops |")

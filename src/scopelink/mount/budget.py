@@ -15,6 +15,8 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING
 
+from scopelink.mount.errors import LimitError
+from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
 
 if TYPE_CHECKING:
@@ -288,7 +290,50 @@ def blind_danger(
             f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
             f"the configured limit of {limits.max_altitude_deg:.2f}° ({unseen})"
         )
-    return None
+    return _blind_sun_danger(
+        mount, settings, motions, reading, unseen_s=unseen_s, what=what, unseen=unseen
+    )
+
+
+def sky_travel_deg(motions: list[Unseen], braking_deg_s2: float) -> float:
+    """The farthest the rate motions may carry the tube across the sky unseen, braking included
+    (an axis turning by an angle moves the tube by at most that angle on the sky; the axes'
+    travels add up at worst)."""
+    return sum(
+        m.speed_deg_s * m.moving_s + m.speed_deg_s**2 / (2.0 * braking_deg_s2) for m in motions
+    )
+
+
+def _blind_sun_danger(
+    mount: Mount,
+    settings: GuardSettings,
+    motions: list[Unseen],
+    reading: Reading,
+    *,
+    unseen_s: float,
+    what: str,
+    unseen: str,
+) -> str | None:
+    """Why unseen rate motions must stop before they could reach the Sun avoidance zone, or
+    None. The direction of the unseen travel is not known, so any direction counts; inside the
+    zone's margin already, the readings judge (a motion heading out must be allowed to)."""
+    if not motions:
+        return None  # tracking follows the stars: the Sun closes in at most 0.5°/h (a thin Moon)
+    try:
+        zone = mount.sun_zone()
+    except LimitError:
+        return None  # no Sun can be placed: the reading-based check stops every motion
+    if zone is None:
+        return None
+    distance = zone.distance_deg(reading.alt_deg, reading.az_deg, later_s=unseen_s)
+    room = distance - zone.radius_deg - settings.margin_deg
+    if room <= 0.0 or sky_travel_deg(motions, settings.braking_deg_s2) < room:
+        return None
+    return (
+        f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
+        f"{reading.az_deg % 360.0:.1f}°), {distance:.1f}° from the Sun: it could reach the "
+        f"{zone.radius_deg:g}° Sun avoidance zone ({SUN_SETTING}) ({unseen})"
+    )
 
 
 def has_ceiling(limits: Limits) -> bool:
