@@ -389,8 +389,11 @@ async def _start_servers(
     if plan.synscan is not None or plan.synscan_pty is not None:
         config = SynScanConfig(model=synscan_model_code(mount))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
-        # dead_man: a phone app that drops must not leave the mount slewing.
-        emulator = SynScanEmulator(mount, config, wire=None, access=policy, dead_man=True)
+        # dead_man: a phone app that drops must not leave the mount slewing. No motor
+        # passthrough positioning: it would move an axis past every limit check.
+        emulator = SynScanEmulator(
+            mount, config, wire=None, access=policy, dead_man=True, axis_passthrough=False
+        )
         synscan = await stack.enter_async_context(emulator)
         if plan.synscan is not None:
             bound_host, port = await synscan.on_tcp(host, plan.synscan)

@@ -135,9 +135,16 @@ class SynScanHandControl:
     Call :meth:`power_on` once before the first command.
     """
 
-    def __init__(self, mount: Mount, config: SynScanConfig | None = None) -> None:
+    def __init__(
+        self, mount: Mount, config: SynScanConfig | None = None, *, axis_passthrough: bool = True
+    ) -> None:
         self.mount = mount
         self.config = config or SynScanConfig()
+        self.axis_passthrough = axis_passthrough
+        """Whether "slow goto" and "set axis position" reach a mount that offers them (the
+        device emulator's simulated mount). A bridge (``scopelink serve``) turns them off: they
+        move or redefine an axis counter past every check of the Mount API (horizon, Sun,
+        ``limits.max_sync_deg``), and it answers them as over a real device."""
         self.aligned = self.config.aligned
         self.clock_offset = timedelta(0)
         """How far the hand control's clock is ahead of the mount's (set by ``H``)."""
@@ -395,7 +402,7 @@ class SynScanHandControl:
     async def _axis_position(
         self, command: SlowGoto | SetAxisPosition, axis: MountAxis
     ) -> AnyReply:
-        if not isinstance(self.mount, AxisPositioning):
+        if not (self.axis_passthrough and isinstance(self.mount, AxisPositioning)):
             return self._unanswerable_passthrough(command)
         position = (command.degrees + 180.0) % 360.0 - 180.0
         if isinstance(command, SlowGoto):

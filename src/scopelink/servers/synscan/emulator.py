@@ -29,7 +29,9 @@ class SynScanEmulator(HostedDevice):
     ``wire`` paces replies at a serial line's speed (9600 8N1 by default; None sends at once).
     ``faults`` is the injector tests and the command line drive. ``access`` limits who connects
     over TCP and how fast, and makes it read-only; ``dead_man`` stops a rate slew a client
-    started when its link goes (a bridge for phone apps; a hand control on a cable cannot notice).
+    started when its link goes (a bridge for phone apps; a hand control on a cable cannot notice);
+    ``axis_passthrough=False`` (a bridge) answers the motor passthrough "slow goto" and "set axis
+    position" as over a real device, since they would move an axis past every limit check.
     """
 
     def __init__(
@@ -41,9 +43,10 @@ class SynScanEmulator(HostedDevice):
         wire: WireSpeed | None = SERIAL_9600_8N1,
         access: AccessPolicy | None = None,
         dead_man: bool = False,
+        axis_passthrough: bool = True,
     ) -> None:
         control = AccessControl(access, "SynScan")
-        self.hand_control = SynScanHandControl(mount, config)
+        self.hand_control = SynScanHandControl(mount, config, axis_passthrough=axis_passthrough)
         self.server = SynScanServer(self.hand_control, faults, access=control, dead_man=dead_man)
         super().__init__(self.server.serve, wire=wire, access=control)
 
