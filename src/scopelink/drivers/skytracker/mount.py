@@ -337,6 +337,7 @@ class SkyTrackerMount(Mount):
         line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
         self._line = line
         self._held.clear()
+        self._cancel_pulses()  # a new line presses no arrow: no pulse is under way on it
         self._rest_mode = None
         self._below_horizon_alarm = False
         try:
