@@ -1,0 +1,118 @@
+"""The vectorised J2000/apparent -> observed path equals the per-position ERFA reference path.
+
+Many positions at one instant go through ERFA's ldsun/ab, one matrix for the Earth rotation and
+the refraction's Newton iteration with a closed-form slope (``horizontal._observed_from_vectors``);
+one position goes through ``erfa.atciqz`` + ``erfa.atioq`` and the scalar refraction. The two must
+agree to far below a milliarcsecond, everywhere on the sky and through the horizon blend.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+import numpy.typing as npt
+import pytest
+
+from scopelink.astro._arrays import FloatArray
+from scopelink.astro.horizontal import apparent_to_observed, j2000_to_observed, observed_to_j2000
+from scopelink.astro.refraction import RefractionModel
+from scopelink.astro.site import Site
+
+MICROARCSEC_DEG = 1e-6 / 3600.0
+SITES = [
+    Site(51.4779, -0.0015, 46.0),
+    Site(-31.2734, 149.0664, 1165.0, temperature_c=-5.0, relative_humidity=0.9),
+    Site(78.2, 15.6, 10.0, pressure_hpa=0.0),
+    Site(-89.99, 139.27, 2835.0, temperature_c=-55.0),
+]
+WHEN = datetime(2026, 11, 22, 22, 0, 13, 250_000, tzinfo=UTC)
+
+
+def _sky(count: int, seed: int) -> tuple[FloatArray, FloatArray]:
+    rng = np.random.default_rng(seed)
+    return rng.uniform(0.0, 24.0, count), np.degrees(np.arcsin(rng.uniform(-1.0, 1.0, count)))
+
+
+def _separation_deg(
+    alt1: npt.ArrayLike, az1: npt.ArrayLike, alt2: npt.ArrayLike, az2: npt.ArrayLike
+) -> FloatArray:
+    """Great-circle distance, in degrees, between two arrays of (alt, az) directions."""
+    a1, a2 = np.radians(np.asarray(alt1)), np.radians(np.asarray(alt2))
+    daz = np.radians(np.asarray(az1) - np.asarray(az2))
+    x = np.cos(a2) * np.sin(daz)
+    y = np.cos(a1) * np.sin(a2) - np.sin(a1) * np.cos(a2) * np.cos(daz)
+    z = np.sin(a1) * np.sin(a2) + np.cos(a1) * np.cos(a2) * np.cos(daz)
+    separation: FloatArray = np.degrees(np.arctan2(np.hypot(x, y), z))
+    return separation
+
+
+Convert = Callable[[float, float, datetime, Site], tuple[float, float]]
+
+
+def _one_by_one(
+    convert: Convert, ra: npt.ArrayLike, dec: npt.ArrayLike, when: datetime, site: Site
+) -> tuple[FloatArray, FloatArray]:
+    pairs = [
+        convert(float(r), float(d), when, site)
+        for r, d in zip(np.asarray(ra), np.asarray(dec), strict=True)
+    ]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+
+
+@pytest.mark.parametrize("site", SITES, ids=lambda s: f"lat{s.latitude_deg:+.0f}")
+@pytest.mark.parametrize("convert", [j2000_to_observed, apparent_to_observed])
+def test_vector_path_equals_the_per_position_reference(site: Site, convert: Convert) -> None:
+    ra, dec = _sky(600, 14)
+    alt, az = convert(ra, dec, WHEN, site)  # type: ignore[arg-type]
+    ref_alt, ref_az = _one_by_one(convert, ra, dec, WHEN, site)
+    assert np.all(np.abs(alt - ref_alt) < MICROARCSEC_DEG)
+    assert np.all(_separation_deg(alt, az, ref_alt, ref_az) < MICROARCSEC_DEG)
+
+
+def test_vector_path_through_the_horizon_blend() -> None:
+    """Dense positions from -2 to +8 degrees of altitude: Bennett, the 5-6 degree blend, ERFA."""
+    site = SITES[0]
+    grid_alt, grid_az = np.meshgrid(np.linspace(-2.0, 8.0, 401), [15.0, 160.0, 290.0])
+    ra, dec = observed_to_j2000(grid_alt.ravel(), grid_az.ravel(), WHEN, site)
+    alt, az = j2000_to_observed(ra, dec, WHEN, site)
+    ref_alt, ref_az = _one_by_one(j2000_to_observed, ra, dec, WHEN, site)
+    assert np.all(np.abs(alt - grid_alt.ravel()) < 1e-6)
+    assert np.all(np.abs(alt - ref_alt) < MICROARCSEC_DEG)
+    assert np.all(_separation_deg(alt, az, ref_alt, ref_az) < MICROARCSEC_DEG)
+
+
+def test_shapes_and_broadcasting_are_kept() -> None:
+    ra, dec = _sky(60, 3)
+    alt, az = np.asarray(j2000_to_observed(ra.reshape(6, 10), dec.reshape(6, 10), WHEN, SITES[1]))
+    flat_alt, flat_az = j2000_to_observed(ra, dec, WHEN, SITES[1])
+    assert alt.shape == az.shape == (6, 10)
+    np.testing.assert_allclose(alt.ravel(), flat_alt, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(az.ravel(), flat_az, rtol=0.0, atol=1e-12)
+    one_dec_alt, _ = j2000_to_observed(ra, 12.5, WHEN, SITES[1])
+    ref_alt, _ = _one_by_one(j2000_to_observed, ra, np.full_like(ra, 12.5), WHEN, SITES[1])
+    assert np.all(np.abs(one_dec_alt - ref_alt) < MICROARCSEC_DEG)
+
+
+def test_many_instants_still_agree_with_one_instant_each() -> None:
+    """Positions at their own instants (the reference path) equal each instant done alone."""
+    ra, dec = _sky(5, 8)
+    instants = [WHEN + timedelta(minutes=17 * i) for i in range(5)]
+    jd1 = np.array([2440587.5 + (t.timestamp() // 86400) for t in instants])
+    jd2 = np.array([(t.timestamp() % 86400) / 86400.0 for t in instants])
+    alt = np.asarray(j2000_to_observed(ra, dec, (jd1, jd2), SITES[0])[0])
+    for i, t in enumerate(instants):
+        single = np.asarray(j2000_to_observed(ra[i : i + 1], dec[i : i + 1], t, SITES[0])[0])
+        assert math.isclose(float(alt[i]), float(single[0]), abs_tol=MICROARCSEC_DEG)
+
+
+@pytest.mark.parametrize("site", SITES, ids=lambda s: f"lat{s.latitude_deg:+.0f}")
+def test_newton_refraction_equals_the_scalar_fixed_point(site: Site) -> None:
+    model = RefractionModel.for_site(site)
+    true = np.concatenate([np.linspace(-5.0, 12.0, 3401), np.linspace(12.0, 90.0, 400)])
+    fast = model.refract(true)
+    reference = np.array([model.refract(float(t)) for t in true])
+    assert np.all(np.abs(fast - reference) < MICROARCSEC_DEG)
+    assert np.all(np.abs(model.unrefract(fast) - true) < 1e-11)
