@@ -116,3 +116,43 @@ def test_newton_refraction_equals_the_scalar_fixed_point(site: Site) -> None:
     reference = np.array([model.refract(float(t)) for t in true])
     assert np.all(np.abs(fast - reference) < MICROARCSEC_DEG)
     assert np.all(np.abs(model.unrefract(fast) - true) < 1e-11)
+
+
+def test_a_geocentric_context_reused_within_a_second_matches_a_fresh_one() -> None:
+    """j2000_to_apparent for one instant reuses erfa.apci13 within 1 s: 1e-5 arcsec at most."""
+    from scopelink.astro import frames
+
+    rng = np.random.default_rng(5)
+    for seconds in (0.0, 0.013, 0.5, 0.999):
+        when = WHEN + timedelta(seconds=seconds)
+        ra, dec = float(rng.uniform(0, 24)), float(rng.uniform(-89, 89))
+        frames._last_geocentric = None
+        frames.j2000_to_apparent(ra, dec, WHEN)  # the context is computed here
+        reused = frames.j2000_to_apparent(ra, dec, when)
+        frames._last_geocentric = None
+        fresh = frames.j2000_to_apparent(ra, dec, when)
+        assert abs(reused[1] - fresh[1]) * 3600 < 1e-5
+        assert abs(reused[0] - fresh[0]) * 15 * 3600 * math.cos(math.radians(dec)) < 1e-5
+        back = frames.apparent_to_j2000(*reused, when)
+        assert abs(back[1] - dec) * 3600 < 1e-5
+
+
+def test_a_datetime_gives_erfa_dtf2d_julian_date_bit_for_bit() -> None:
+    """The cached-day conversion of a datetime equals erfa.dtf2d, leap-second days included."""
+    import erfa
+
+    from scopelink.astro.timescales import utc_pair
+
+    rng = np.random.default_rng(9)
+    days = [datetime(2016, 12, 31, tzinfo=UTC), datetime(2015, 6, 30, tzinfo=UTC), WHEN]
+    for start in days:
+        for offset in rng.uniform(0.0, 86399.999, 300):
+            moment = start.replace(hour=0, minute=0, second=0, microsecond=0) + timedelta(
+                seconds=float(offset)
+            )
+            seconds = moment.second + moment.microsecond * 1e-6
+            expected = erfa.dtf2d(
+                "UTC", moment.year, moment.month, moment.day, moment.hour, moment.minute, seconds
+            )
+            jd1, jd2 = utc_pair(moment)
+            assert (float(jd1), float(jd2)) == (float(expected[0]), float(expected[1]))

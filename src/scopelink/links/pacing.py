@@ -24,6 +24,12 @@ CONTINUATION_SLACK_SECONDS = 0.005
 RESPONSE_BACKDATE_SECONDS = 0.005
 
 
+MAX_BATCH_SECONDS = 0.1
+"""The most a paced link may hold bytes back to hand them over together (see ``batch_s``)."""
+
+_DUE_EPSILON = 1e-6
+
+
 class PacedLink(Link):
     """A link whose writes leave one byte every ``bits_per_byte / baudrate`` seconds.
 
@@ -33,18 +39,30 @@ class PacedLink(Link):
     arrived and no earlier than the previous write left the line, so a request/response loop
     between two paced ends never runs faster than the real line (an unpaced peer's request takes
     no line time). Reads pass straight through. Closing it closes the inner link.
+
+    ``batch_s`` > 0 hands bytes over at most once per ``batch_s`` within a write, all those due
+    by then together, and the write's last byte exactly when due: no byte ever early, none more
+    than ``batch_s`` late. It is what a PC sees behind a UART FIFO or a USB-serial adapter (an
+    FTDI adapter's latency timer is 16 ms), and it spares the event loop a wake-up per byte. 0
+    (the default) hands each byte over when its last bit would leave the line: for a device
+    that must not see two bytes closer together than the line spaces them.
     """
 
-    def __init__(self, inner: Link, baudrate: int, bits_per_byte: int) -> None:
+    def __init__(
+        self, inner: Link, baudrate: int, bits_per_byte: int, *, batch_s: float = 0.0
+    ) -> None:
         if baudrate <= 0 or bits_per_byte <= 0:
             raise ValueError(
                 f"baudrate and bits_per_byte must be positive: {baudrate}, {bits_per_byte}"
             )
+        if not 0.0 <= batch_s <= MAX_BATCH_SECONDS:
+            raise ValueError(f"batch_s must be in [0, {MAX_BATCH_SECONDS}] seconds: {batch_s}")
         super().__init__(inner.name)
         self.inner = inner
         self.baudrate = baudrate
         self.bits_per_byte = bits_per_byte
         self.byte_seconds = bits_per_byte / baudrate
+        self.batch_s = batch_s
         self._line_free_at = -math.inf
         self._input_at = -math.inf
         self._written_at = -math.inf
@@ -72,25 +90,37 @@ class PacedLink(Link):
     async def _write_all(self, data: bytes) -> None:
         async with self._write_lock:
             start = self._start_of(time.monotonic())
+            total = len(data)
+            last_at = start + total * self.byte_seconds
+            handed_at = start
             sent = 0
-            while sent < len(data):
-                due = min(len(data), math.floor((time.monotonic() - start) / self.byte_seconds))
+            while sent < total:
+                now = time.monotonic()
+                # The epsilon (a nanosecond's worth) keeps a wake-up that lands on a byte's due
+                # time by the clock from being judged a hair early by the division's rounding.
+                due = min(total, math.floor((now - start) / self.byte_seconds + _DUE_EPSILON))
                 if due > sent:
                     await self.inner._write_all(data[sent:due])
                     sent = due
-                else:
-                    next_due_at = start + (sent + 1) * self.byte_seconds
-                    await asyncio.sleep(next_due_at - time.monotonic())
-            self._line_free_at = start + len(data) * self.byte_seconds
+                    handed_at = now
+                    continue
+                wake_at = start + (sent + 1) * self.byte_seconds
+                if self.batch_s:
+                    wake_at = min(max(wake_at, handed_at + self.batch_s), last_at)
+                await asyncio.sleep(wake_at - now)
+            self._line_free_at = last_at
             self._written_at = time.monotonic()
 
     async def _close_transport(self) -> None:
         await self.inner.close()
 
 
-def paced(link: Link, baudrate: int = 9600, bits_per_byte: int = 10) -> PacedLink:
-    """Wrap ``link`` so writes leave at ``baudrate``; 8N1 is 10 bits per byte, 8N2 is 11."""
-    return PacedLink(link, baudrate, bits_per_byte)
+def paced(
+    link: Link, baudrate: int = 9600, bits_per_byte: int = 10, *, batch_s: float = 0.0
+) -> PacedLink:
+    """Wrap ``link`` so writes leave at ``baudrate``; 8N1 is 10 bits per byte, 8N2 is 11.
+    ``batch_s`` groups bytes into hand-overs at most that often (see :class:`PacedLink`)."""
+    return PacedLink(link, baudrate, bits_per_byte, batch_s=batch_s)
 
 
 def precise_event_loop() -> asyncio.AbstractEventLoop:
