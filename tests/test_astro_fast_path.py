@@ -156,3 +156,39 @@ def test_a_datetime_gives_erfa_dtf2d_julian_date_bit_for_bit() -> None:
             )
             jd1, jd2 = utc_pair(moment)
             assert (float(jd1), float(jd2)) == (float(expected[0]), float(expected[1]))
+
+
+def test_a_reused_observer_context_has_aper13s_earth_rotation_exactly() -> None:
+    """The reused context's local ERA (updated in place) equals erfa.aper13's, bit for bit."""
+    import erfa
+
+    from scopelink.astro import horizontal
+    from scopelink.astro.timescales import utc_pair
+
+    site = SITES[1]
+    vars(horizontal)["_last_observer"] = None
+    horizontal._observer(WHEN, site, 0.2)
+    cached = horizontal._last_observer
+    assert cached is not None
+    base = cached.astrom.copy()
+    for step in range(0, 2000, 7):
+        moment = WHEN + timedelta(milliseconds=4.9 * step)
+        astrom, _ = horizontal._observer(moment, site, 0.2)
+        ut1 = erfa.utcut1(*utc_pair(moment), 0.2)
+        assert astrom["eral"] == erfa.aper13(*ut1, base.copy())["eral"]
+
+
+def test_single_value_wrapping_equals_the_array_arithmetic() -> None:
+    from scopelink.astro.angles import wrap_degrees, wrap_hour_angle
+    from scopelink.astro.frames import radec_public
+
+    rng = np.random.default_rng(11)
+    values = np.concatenate([rng.uniform(-1000.0, 1000.0, 500), [-1e-17, 0.0, 360.0, -360.0]])
+    for value in values:
+        assert wrap_degrees(float(value)) == float(np.asarray(wrap_degrees(np.array([value])))[0])
+        assert wrap_hour_angle(float(value)) == float(
+            np.asarray(wrap_hour_angle(np.array([value])))[0]
+        )
+        one = radec_public(float(value) / 100.0, float(value) / 1000.0)
+        ra, dec = radec_public(np.array([value / 100.0]), np.array([value / 1000.0]))
+        assert one == (float(np.asarray(ra)[0]), float(np.asarray(dec)[0]))

@@ -181,3 +181,54 @@ def test_the_precise_loop_keeps_a_paced_exchange_close_to_the_line() -> None:
         elapsed = runner.run(measure())
     line_time = rounds * 19 * byte_seconds
     assert line_time - 1e-3 <= elapsed < line_time * 1.15
+
+
+async def test_a_batched_write_hands_bytes_over_in_groups_never_early_last_on_time() -> None:
+    """batch_s=16 ms: a 100-ms write arrives in at most 8 groups (not 96 single bytes), no byte
+    before its time on the line, the last exactly when the line would have carried it."""
+    byte_seconds = 10 / BAUD
+    count = 96
+    async with memory_link_pair() as (sender, receiver):
+        line = paced(sender, BAUD, 10, batch_s=0.016)
+        arrivals: list[tuple[float, int]] = []
+        reader = asyncio.create_task(receive(receiver, count, arrivals))
+        started = time.monotonic()
+        await line.write(bytes(count))
+        written = time.monotonic()
+        await asyncio.wait_for(reader, 5.0)
+    expected = count * byte_seconds
+    assert written - started == pytest.approx(expected, rel=0.02)
+    assert arrivals[-1][0] - started == pytest.approx(expected, rel=0.02)
+    # Hand-overs are at least 16 ms apart, the final one aside: ceil(100 / 16) + 1 at most.
+    assert 2 <= len(arrivals) <= 8, arrivals
+    for arrived_at, so_far in arrivals:
+        assert arrived_at - started >= so_far * byte_seconds - 1e-4
+
+
+async def test_a_batched_request_response_loop_never_beats_the_line() -> None:
+    """The SynScan emulator's wire (replies batched every 16 ms): a poll still takes its 19
+    byte-times, as on the unbatched line."""
+    byte_seconds = 10 / BAUD
+    rounds = 20
+    async with memory_link_pair() as (pc, device):
+        elapsed = await exchange_loop(
+            paced(pc, BAUD, 10), paced(device, BAUD, 10, batch_s=0.016), rounds
+        )
+    line_time = rounds * 19 * byte_seconds
+    assert elapsed >= line_time - 1e-3
+    assert elapsed < line_time * 1.25
+
+
+def test_the_batch_is_bounded() -> None:
+    sender, _ = memory_pair()
+    with pytest.raises(ValueError, match="batch_s"):
+        paced(sender, BAUD, 10, batch_s=-0.001)
+    with pytest.raises(ValueError, match="batch_s"):
+        paced(sender, BAUD, 10, batch_s=0.5)
+
+
+def test_the_synscan_emulator_wire_batches_like_a_usb_serial_adapter() -> None:
+    from scopelink.servers.hosting import SERIAL_9600_8N1, USB_SERIAL_BATCH_S
+
+    assert (SERIAL_9600_8N1.baudrate, SERIAL_9600_8N1.bits_per_byte) == (9600, 10)
+    assert SERIAL_9600_8N1.batch_s == USB_SERIAL_BATCH_S == 0.016

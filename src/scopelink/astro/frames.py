@@ -42,10 +42,12 @@ def radec_public(
     ra_rad: npt.ArrayLike, dec_rad: npt.ArrayLike
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """Radians as (RA hours in [0, 24), Dec degrees), floats for single positions."""
-    if isinstance(ra_rad, float) and isinstance(dec_rad, float):  # np.float64 too
+    ra: object = ra_rad
+    dec: object = dec_rad
+    if isinstance(ra, float) and isinstance(dec, float):  # np.float64 too
         # np.mod's and np.degrees' arithmetic in Python floats (the same doubles).
-        one = (float(ra_rad) / _RADIANS_PER_HOUR) % 24.0
-        return (0.0 if one >= 24.0 else one), math.degrees(float(dec_rad))
+        one = (float(ra) / _RADIANS_PER_HOUR) % 24.0
+        return (0.0 if one >= 24.0 else one), math.degrees(float(dec))
     hours = np.mod(as_float_array(ra_rad) / _RADIANS_PER_HOUR, 24.0)
     hours = np.where(hours >= 24.0, 0.0, hours)
     return scalar_or_array(hours), scalar_or_array(np.degrees(as_float_array(dec_rad)))
