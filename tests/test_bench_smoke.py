@@ -16,6 +16,11 @@ def test_quick_benchmark_prints_its_tables() -> None:
     assert any("mounts, 9600 paced" in line for line in lines), result.stdout
     assert any(line.strip().startswith("1e+04") for line in lines), result.stdout
     assert any(line.startswith("largest factor") for line in lines), result.stdout
+    assert any("load average" in line for line in lines), result.stdout
+    goals = [line for line in lines if line.startswith("goal ")]
+    # Both goals of issue #14 part 3, each with its verdict.
+    assert len(goals) == 2, result.stdout
+    assert all(line.split(": ")[1].split()[0] in ("PASS", "MISS") for line in goals), goals
 
 
 @pytest.mark.timeout(60)
