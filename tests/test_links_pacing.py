@@ -232,3 +232,32 @@ def test_the_synscan_emulator_wire_batches_like_a_usb_serial_adapter() -> None:
 
     assert (SERIAL_9600_8N1.baudrate, SERIAL_9600_8N1.bits_per_byte) == (9600, 10)
     assert SERIAL_9600_8N1.batch_s == USB_SERIAL_BATCH_S == 0.016
+
+
+async def test_a_late_reader_loses_no_line_time_over_a_memory_pair() -> None:
+    """A device whose reader gets round to the request ~2 ms after it arrived (a busy event loop
+    with 100 emulators) still answers on the line's schedule: the paced peer says when the line
+    carried the request, and the reply starts then, not when it was read (within 5 ms)."""
+    byte_seconds = 10 / BAUD
+    rounds = 30
+    async with memory_link_pair() as (pc, device):
+        client, server = paced(pc, BAUD, 10), paced(device, BAUD, 10)
+
+        async def answer_late() -> None:
+            for _ in range(rounds):
+                await server.read_exactly(1)
+                await server.write(b"0" * 17 + b"#")
+                # Busy elsewhere: the next request (1.04 ms away) is read ~2 ms after it came.
+                await asyncio.sleep(0.003)
+
+        responder = asyncio.create_task(answer_late())
+        started = time.monotonic()
+        for _ in range(rounds):
+            await client.write(b"e")
+            await client.read_exactly(18)
+        elapsed = time.monotonic() - started
+        await responder
+    line_time = rounds * 19 * byte_seconds
+    assert elapsed >= line_time - 1e-3
+    # 2 ms lost per round would be 10 % of the line time.
+    assert elapsed < line_time * 1.05

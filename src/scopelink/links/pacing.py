@@ -12,6 +12,7 @@ import selectors
 import time
 
 from scopelink.links.base import Link
+from scopelink.links.memory import MemoryLink
 
 # A write starting within this long after the previous one's last byte continues its schedule:
 # it absorbs the event loop's timer overshoot (about 1 ms) so back-to-back writes do not drift.
@@ -65,18 +66,25 @@ class PacedLink(Link):
         self.batch_s = batch_s
         self._line_free_at = -math.inf
         self._input_at = -math.inf
-        self._written_at = -math.inf
+        self._input_unanswered = False
+        """Input was read since the last write began: the next write answers it."""
         self._write_lock = asyncio.Lock()
 
     async def _read_some(self, max_bytes: int) -> bytes:
         # The inner link's hooks, not its public methods: the trace is logged once, by this link.
         data = await self.inner._read_some(max_bytes)
-        self._input_at = time.monotonic()
+        # When the bytes arrived, not when this coroutine got round to reading them: over a
+        # memory pair, when the peer's pacer says the line carried them (loop latency is not
+        # line time, as for a reply's own processing below).
+        now = time.monotonic()
+        inner = self.inner
+        self._input_at = min(now, inner.arrived_at) if isinstance(inner, MemoryLink) else now
+        self._input_unanswered = True
         return data
 
     def _start_of(self, now: float) -> float:
         """When the first bit of a write requested ``now`` goes on the line."""
-        if self._input_at > self._written_at:
+        if self._input_unanswered:
             # A response: it cannot start before its request arrived, nor while the previous
             # write is still on the line; credit for an idle line before the request is none.
             answered_at = (
@@ -90,6 +98,7 @@ class PacedLink(Link):
     async def _write_all(self, data: bytes) -> None:
         async with self._write_lock:
             start = self._start_of(time.monotonic())
+            self._input_unanswered = False
             total = len(data)
             last_at = start + total * self.byte_seconds
             handed_at = start
@@ -100,7 +109,7 @@ class PacedLink(Link):
                 # time by the clock from being judged a hair early by the division's rounding.
                 due = min(total, math.floor((now - start) / self.byte_seconds + _DUE_EPSILON))
                 if due > sent:
-                    await self.inner._write_all(data[sent:due])
+                    await self._hand_over(data[sent:due], start + due * self.byte_seconds)
                     sent = due
                     handed_at = now
                     continue
@@ -109,7 +118,12 @@ class PacedLink(Link):
                     wake_at = min(max(wake_at, handed_at + self.batch_s), last_at)
                 await asyncio.sleep(wake_at - now)
             self._line_free_at = last_at
-            self._written_at = time.monotonic()
+
+    async def _hand_over(self, chunk: bytes, carried_at: float) -> None:
+        if isinstance(self.inner, MemoryLink):
+            self.inner.hand_over(chunk, carried_at)
+        else:
+            await self.inner._write_all(chunk)
 
     async def _close_transport(self) -> None:
         await self.inner.close()
