@@ -53,7 +53,7 @@ class Sizes:
     """single-position calls per repeat"""
 
 
-FULL = Sizes(positions=10_000, repeats=7, calls=200)
+FULL = Sizes(positions=10_000, repeats=15, calls=200)
 QUICK = Sizes(positions=1_000, repeats=2, calls=10)
 
 
