@@ -261,3 +261,24 @@ async def test_a_late_reader_loses_no_line_time_over_a_memory_pair() -> None:
     assert elapsed >= line_time - 1e-3
     # 2 ms lost per round would be 10 % of the line time.
     assert elapsed < line_time * 1.05
+
+
+def test_the_docs_state_the_batching_and_reuse_defaults_the_code_uses() -> None:
+    """Docs and code agree on the new defaults: the emulator wire's batch, its bound, and the
+    astrometry context reuse windows."""
+    from pathlib import Path
+
+    from scopelink.astro import frames, horizontal
+    from scopelink.links.pacing import MAX_BATCH_SECONDS
+    from scopelink.servers.hosting import USB_SERIAL_BATCH_S
+
+    docs = Path(__file__).resolve().parent.parent / "docs"
+    links = (docs / "links.md").read_text()
+    emulators = (docs / "emulators.md").read_text()
+    astronomy = (docs / "astronomy.md").read_text()
+    batch_ms = f"{USB_SERIAL_BATCH_S * 1000:g} ms"
+    assert f"default 0, at most {MAX_BATCH_SECONDS:g} s" in links
+    assert batch_ms in links
+    assert f"every {batch_ms}" in emulators
+    assert f"within **{frames._REUSE_WITHIN_DAYS * 86400:g} s**" in astronomy
+    assert f"within {horizontal._REUSE_WITHIN_DAYS * 86400:g} s of the last" in astronomy
