@@ -159,7 +159,8 @@ def test_a_datetime_gives_erfa_dtf2d_julian_date_bit_for_bit() -> None:
 
 
 def test_a_reused_observer_context_has_aper13s_earth_rotation_exactly() -> None:
-    """The reused context's local ERA (updated in place) equals erfa.aper13's, bit for bit."""
+    """The reused context's local ERA (era00 + longitude) equals erfa.aper13's, bit for bit, and
+    the cached context itself is never changed (a worker thread may be using it)."""
     import erfa
 
     from scopelink.astro import horizontal
@@ -176,6 +177,7 @@ def test_a_reused_observer_context_has_aper13s_earth_rotation_exactly() -> None:
         astrom, _ = horizontal._observer(moment, site, 0.2)
         ut1 = erfa.utcut1(*utc_pair(moment), 0.2)
         assert astrom["eral"] == erfa.aper13(*ut1, base.copy())["eral"]
+        assert cached.astrom["eral"] == base["eral"]
 
 
 def test_single_value_wrapping_equals_the_array_arithmetic() -> None:

@@ -75,9 +75,9 @@ def _observer(t: TimeLike, site: Site, ut1_minus_utc_s: float) -> tuple[Any, Flo
             ut11, ut12, status = erfa.ufunc.utcut1(utc1, utc2, ut1_minus_utc_s)
             if status:
                 ut11, ut12 = erfa.utcut1(utc1, utc2, ut1_minus_utc_s)  # its warning or error
-            # erfa.aper13's one change, in place (callers use the context at once, in turn):
-            # the local Earth rotation angle, ERA(UT1) + longitude.
-            astrom = cached.astrom
+            # erfa.aper13's one change, the local Earth rotation angle ERA(UT1) + longitude, on
+            # a copy: the dashboard's sky view converts in a worker thread meanwhile.
+            astrom = cached.astrom.copy()
             astrom["eral"] = erfa.ufunc.era00(ut11, ut12) + astrom["along"]
             return astrom, cached.equation_of_origins
         astrom, equation_of_origins = _observer_now(utc1, utc2, site, ut1_minus_utc_s)
