@@ -194,3 +194,14 @@ def test_single_value_wrapping_equals_the_array_arithmetic() -> None:
         one = radec_public(float(value) / 100.0, float(value) / 1000.0)
         ra, dec = radec_public(np.array([value / 100.0]), np.array([value / 1000.0]))
         assert one == (float(np.asarray(ra)[0]), float(np.asarray(dec)[0]))
+
+
+def test_one_hour_angle_to_altaz_equals_erfa_hd2ae_bit_for_bit() -> None:
+    from scopelink.astro.horizontal import hadec_to_altaz
+
+    rng = np.random.default_rng(21)
+    for ha, dec, lat in rng.uniform([-12.0, -90.0, -90.0], [12.0, 90.0, 90.0], (3000, 3)):
+        one = hadec_to_altaz(float(ha), float(dec), float(lat))
+        alt, az = hadec_to_altaz(np.array([ha]), np.array([dec]), np.array([lat]))
+        assert one == (float(np.asarray(alt)[0]), float(np.asarray(az)[0]))
+    assert hadec_to_altaz(0.0, 90.0, 90.0) == hadec_to_altaz(np.zeros(1), [90.0], [90.0])
