@@ -39,7 +39,9 @@ class PacedLink(Link):
     A write that answers input read since the previous write starts no earlier than that input
     arrived and no earlier than the previous write left the line, so a request/response loop
     between two paced ends never runs faster than the real line (an unpaced peer's request takes
-    no line time). Reads pass straight through. Closing it closes the inner link.
+    no line time). Input counts as arrived when it was read, or, over a memory pair, when the
+    peer's pacer says the line carried it (so a busy event loop's latency is not line time either).
+    Reads pass straight through. Closing it closes the inner link.
 
     ``batch_s`` > 0 hands bytes over at most once per ``batch_s`` within a write, all those due
     by then together, and the write's last byte exactly when due: no byte ever early, none more
