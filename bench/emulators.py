@@ -1,16 +1,21 @@
 """Emulator benchmarks: CPU per emulated mount, 100 mounts in one process, time acceleration.
 
-Run ``.venv/bin/python -m bench.emulators`` (about a minute) or with ``--quick`` (a few seconds,
-smaller counts, what the smoke test runs). Every figure is printed as a ratio against the wire
-limit or against a peer measured in the same run, so the numbers travel between machines.
-See ``docs/benchmarks.md``.
+Run ``.venv/bin/python -m bench.emulators`` (about three minutes) or with ``--quick`` (a few
+seconds, smaller counts, what the smoke test runs). Every figure is printed as a ratio against the
+wire limit or against a run measured in the same process, so the numbers travel between machines.
+Every row is the best of N rounds (the round whose slowest client came closest to the wire limit;
+for timings the fastest; for pointing errors the *worst* round, so exactness is not flattered).
+The report starts with the date, load average and commit, and ends with one PASS/MISS line per
+goal, each checking every client or factor it speaks for. See ``docs/benchmarks.md``.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import math
 import os
+import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -102,6 +107,15 @@ class PollRun:
     @property
     def cpu_per_poll_us(self) -> float:
         return 1e6 * self.cpu_s / max(1, sum(self.polls))
+
+
+async def best_poll_run(
+    label: str, mounts: int, seconds: float, wire: WireSpeed | None, rounds: int
+) -> PollRun:
+    """The best of ``rounds`` runs: the one whose slowest client polled fastest (then the least
+    CPU), i.e. the round least disturbed by whatever else the machine was doing."""
+    runs = [await poll_mounts(label, mounts, seconds, wire) for _ in range(rounds)]
+    return max(runs, key=lambda run: (min(run.polls_per_s), -run.cpu_s))
 
 
 async def poll_mounts(label: str, mounts: int, seconds: float, wire: WireSpeed | None) -> PollRun:
@@ -249,22 +263,43 @@ async def accelerate(factor: float, scenario: Scenario) -> AccelerationRun:
     return AccelerationRun(factor, real, slip, pointing_error, drift, replay_error)
 
 
-def reading_cost_s(repeats: int = 200) -> float:
-    """CPU seconds of one ``j2000_at`` (the astrometry behind every ``e`` reply)."""
+def reading_cost_s(rounds: int, repeats: int = 200) -> float:
+    """CPU seconds of one ``j2000_at`` (the astrometry behind every ``e`` reply), best round.
+    Successive readings 0.02 s apart, as a client polling at the wire limit asks for them."""
     mount = SimulatedMount(EQ6, site=SITE, clock=SimClock.stepped(START))
-    before = time.process_time()
-    for index in range(repeats):
-        mount.j2000_at(float(index))
-    return (time.process_time() - before) / repeats
+    best = math.inf
+    for round_index in range(rounds):
+        before = time.process_time()
+        for index in range(repeats):
+            mount.j2000_at(round_index * 60.0 + index * 0.02)
+        best = min(best, (time.process_time() - before) / repeats)
+    return best
 
 
-async def goto_planning_s() -> float:
-    """Real seconds one goto takes to plan (the clock runs on meanwhile when accelerated)."""
-    mount = SimulatedMount(EQ6, site=SITE, clock=SimClock.stepped(START))
-    await mount.connect()
-    before = time.monotonic()
-    await mount.goto_equatorial(*TARGET_B)
-    return time.monotonic() - before
+async def goto_planning_s(rounds: int) -> float:
+    """Real seconds one goto takes to plan (the clock runs on meanwhile when accelerated), best
+    of ``rounds`` fresh mounts."""
+    best = math.inf
+    for _ in range(rounds):
+        mount = SimulatedMount(EQ6, site=SITE, clock=SimClock.stepped(START))
+        await mount.connect()
+        before = time.monotonic()
+        await mount.goto_equatorial(*TARGET_B)
+        best = min(best, time.monotonic() - before)
+    return best
+
+
+async def accelerate_rounds(factor: float, scenario: Scenario, rounds: int) -> AccelerationRun:
+    """``rounds`` runs at ``factor``: the fastest real time, and the worst of every error."""
+    runs = [await accelerate(factor, scenario) for _ in range(rounds)]
+    return AccelerationRun(
+        factor,
+        min(run.real_s for run in runs),
+        max(run.slip_s for run in runs),
+        max(run.pointing_error_arcsec for run in runs),
+        max(run.drift_arcsec for run in runs),
+        max(run.replay_error_arcsec for run in runs),
+    )
 
 
 # --- report ------------------------------------------------------------------------------------
@@ -277,6 +312,7 @@ class Sizes:
     many_seconds: float
     scenario: Scenario
     factors: tuple[float, ...]
+    rounds: int
 
 
 FULL = Sizes(
@@ -285,6 +321,7 @@ FULL = Sizes(
     many_seconds=15.0,
     scenario=Scenario(second_goto_s=600.0, end_s=7200.0, samples=25),
     factors=(1e2, 1e3, 1e4, 1e5, 1e6, 1e7),
+    rounds=3,
 )
 QUICK = Sizes(
     poll_seconds=0.5,
@@ -292,7 +329,34 @@ QUICK = Sizes(
     many_seconds=1.0,
     scenario=Scenario(second_goto_s=600.0, end_s=3600.0, samples=5),
     factors=(1e4, 1e7),
+    rounds=2,
 )
+
+GOAL_SHARE_OF_WIRE = 0.95
+"""Issue #14 part 3: every client of the many paced emulators at >= 95 % of the wire limit..."""
+GOAL_CORES = 1.0
+"""... with the whole process (emulators and their clients) on at most one core."""
+
+
+def _provenance() -> list[str]:
+    def git(*args: str) -> str:
+        try:
+            done = subprocess.run(["git", *args], capture_output=True, text=True, check=True)
+        except (OSError, subprocess.CalledProcessError):
+            return "unknown"
+        return done.stdout.strip()
+
+    dirty = "+uncommitted changes" if git("status", "--porcelain", "--", "src", "bench") else ""
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    return [
+        f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, "
+        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, load average {load}",
+        f"commit {git('rev-parse', '--short', 'HEAD')}{dirty}",
+    ]
+
+
+def _verdict(met: bool) -> str:
+    return "PASS" if met else "MISS"
 
 
 def _describe_run(run: PollRun, one_mount: PollRun | None) -> str:
@@ -308,34 +372,38 @@ def _describe_run(run: PollRun, one_mount: PollRun | None) -> str:
 
 async def main(sizes: Sizes) -> None:
     print(f"scopelink emulator benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
-    print(
-        f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, "
-        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC"
-    )
+    for line in _provenance():
+        print(line)
     print(f"wire limit for e at 9600 8N1: 9600 / ((1 + 18) * 10) = {WIRE_LIMIT:.2f} polls/s")
     print()
-    print("1-2. SynScan emulators on memory links, each polled with e as fast as replies come")
+    print(
+        "1-2. SynScan emulators on memory links, each polled with e as fast as replies come "
+        f"(best of {sizes.rounds} rounds)"
+    )
     print(
         f"{'run':<26}{'mounts':>6}{'polls/s':>10}{'min/wire':>10}{'cpu/s':>9}"
         f"{'cpu/mount':>10}{'us/poll':>9}{'vs 1 mnt':>9}"
     )
-    unpaced = await poll_mounts("1 mount, unpaced", 1, sizes.poll_seconds, None)
+    unpaced = await best_poll_run("1 mount, unpaced", 1, sizes.poll_seconds, None, sizes.rounds)
     print(_describe_run(unpaced, None))
-    one = await poll_mounts("1 mount, 9600 paced", 1, sizes.poll_seconds, SERIAL_9600_8N1)
+    one = await best_poll_run(
+        "1 mount, 9600 paced", 1, sizes.poll_seconds, SERIAL_9600_8N1, sizes.rounds
+    )
     print(_describe_run(one, None))
-    many = await poll_mounts(
+    many = await best_poll_run(
         f"{sizes.many_mounts} mounts, 9600 paced",
         sizes.many_mounts,
         sizes.many_seconds,
         SERIAL_9600_8N1,
+        sizes.rounds,
     )
     print(_describe_run(many, one))
-    astrometry_us = 1e6 * reading_cost_s()
+    astrometry_us = 1e6 * reading_cost_s(sizes.rounds)
     print(
         f"one J2000 reading of the simulated mount: {astrometry_us:.0f} us "
         f"= {astrometry_us / unpaced.cpu_per_poll_us:.2f} of an unpaced poll's CPU"
     )
-    at_rate = sum(rate >= 0.95 * WIRE_LIMIT for rate in many.polls_per_s)
+    at_rate = sum(rate >= GOAL_SHARE_OF_WIRE * WIRE_LIMIT for rate in many.polls_per_s)
     print(
         f"clients at >= 95 % of the wire limit: {at_rate}/{many.mounts}; "
         f"unpaced one mount runs {sum(unpaced.polls_per_s) / WIRE_LIMIT:.0f}x the wire limit"
@@ -357,7 +425,7 @@ async def main(sizes: Sizes) -> None:
     largest_exact: float | None = None
     still_exact = True
     for factor in sizes.factors:
-        run = await accelerate(factor, sizes.scenario)
+        run = await accelerate_rounds(factor, sizes.scenario, sizes.rounds)
         still_exact = still_exact and run.exact
         if still_exact:
             largest_exact = factor
@@ -368,7 +436,20 @@ async def main(sizes: Sizes) -> None:
         )
     exact_text = "none" if largest_exact is None else f"{largest_exact:.0e}"
     print(f"largest factor with every factor up to it exact: {exact_text}")
-    print(f"goto planning: {1e3 * await goto_planning_s():.0f} ms of real time per goto")
+    planning_ms = 1e3 * await goto_planning_s(sizes.rounds)
+    print(f"goto planning: {planning_ms:.0f} ms of real time per goto")
+    print()
+    slowest = min(many.polls_per_s) / WIRE_LIMIT
+    print(
+        f"goal {many.mounts} paced emulators, every client >= {GOAL_SHARE_OF_WIRE:.0%} of the "
+        f"wire limit: {_verdict(at_rate == many.mounts)} ({at_rate}/{many.mounts}, "
+        f"slowest {slowest:.3f})"
+    )
+    print(
+        f"goal {many.mounts} paced emulators on <= {GOAL_CORES:g} core: "
+        f"{_verdict(many.cpu_share <= GOAL_CORES)} ({many.cpu_share:.3f} core, emulators and "
+        "clients together)"
+    )
 
 
 def run() -> None:

@@ -181,3 +181,95 @@ def test_the_precise_loop_keeps_a_paced_exchange_close_to_the_line() -> None:
         elapsed = runner.run(measure())
     line_time = rounds * 19 * byte_seconds
     assert line_time - 1e-3 <= elapsed < line_time * 1.15
+
+
+async def test_a_batched_write_hands_bytes_over_in_groups_never_early_last_on_time() -> None:
+    """batch_s=16 ms: a 100-ms write arrives in at most 8 groups (not 96 single bytes), no byte
+    before its time on the line, the last exactly when the line would have carried it."""
+    byte_seconds = 10 / BAUD
+    count = 96
+    async with memory_link_pair() as (sender, receiver):
+        line = paced(sender, BAUD, 10, batch_s=0.016)
+        arrivals: list[tuple[float, int]] = []
+        reader = asyncio.create_task(receive(receiver, count, arrivals))
+        started = time.monotonic()
+        await line.write(bytes(count))
+        written = time.monotonic()
+        await asyncio.wait_for(reader, 5.0)
+    expected = count * byte_seconds
+    assert written - started == pytest.approx(expected, rel=0.02)
+    assert arrivals[-1][0] - started == pytest.approx(expected, rel=0.02)
+    # Hand-overs are at least 16 ms apart, the final one aside: ceil(100 / 16) + 1 at most.
+    assert 2 <= len(arrivals) <= 8, arrivals
+    for arrived_at, so_far in arrivals:
+        assert arrived_at - started >= so_far * byte_seconds - 1e-4
+
+
+async def test_a_batched_request_response_loop_never_beats_the_line() -> None:
+    """The SynScan emulator's wire (replies batched every 16 ms): a poll still takes its 19
+    byte-times, as on the unbatched line."""
+    byte_seconds = 10 / BAUD
+    rounds = 20
+    async with memory_link_pair() as (pc, device):
+        elapsed = await exchange_loop(
+            paced(pc, BAUD, 10), paced(device, BAUD, 10, batch_s=0.016), rounds
+        )
+    line_time = rounds * 19 * byte_seconds
+    assert elapsed >= line_time - 1e-3
+    assert elapsed < line_time * 1.25
+
+
+def test_the_batch_is_bounded() -> None:
+    sender, _ = memory_pair()
+    with pytest.raises(ValueError, match="batch_s"):
+        paced(sender, BAUD, 10, batch_s=-0.001)
+    with pytest.raises(ValueError, match="batch_s"):
+        paced(sender, BAUD, 10, batch_s=0.5)
+
+
+def test_the_synscan_emulator_wire_batches_like_a_usb_serial_adapter() -> None:
+    from scopelink.servers.hosting import SERIAL_9600_8N1, USB_SERIAL_BATCH_S
+
+    assert (SERIAL_9600_8N1.baudrate, SERIAL_9600_8N1.bits_per_byte) == (9600, 10)
+    assert SERIAL_9600_8N1.batch_s == USB_SERIAL_BATCH_S == 0.016
+
+
+async def test_a_late_reader_loses_no_line_time_over_a_memory_pair() -> None:
+    """A device whose reader gets round to a request after it arrived (a busy event loop with 100
+    emulators) answers on the line's schedule: the paced peer says when the line carried the
+    request, and a reply written within 5 ms of that starts then, not when the request was read."""
+    async with memory_link_pair() as (pc, device):
+        client, server = paced(pc, BAUD, 10), paced(device, BAUD, 10)
+        await client.write(b"e")
+        carried_at = client._line_free_at  # when the line finished carrying the 'e'
+        await asyncio.sleep(0.003)  # busy elsewhere
+        read_at = time.monotonic()
+        assert await server.read_exactly(1) == b"e"
+    assert read_at - carried_at >= 0.003
+    # The request counts as arrived when the line carried it, not when it was read...
+    assert server._input_at == carried_at
+    # ... so a reply asked for 2 ms later still starts right then (a device with no latency),
+    # and one asked for after 5 ms starts when asked (the program's delay is then real).
+    assert server._start_of(carried_at + 0.002) == carried_at
+    assert server._start_of(carried_at + 0.006) == carried_at + 0.006
+
+
+def test_the_docs_state_the_batching_and_reuse_defaults_the_code_uses() -> None:
+    """Docs and code agree on the new defaults: the emulator wire's batch, its bound, and the
+    astrometry context reuse windows."""
+    from pathlib import Path
+
+    from scopelink.astro import frames, horizontal
+    from scopelink.links.pacing import MAX_BATCH_SECONDS
+    from scopelink.servers.hosting import USB_SERIAL_BATCH_S
+
+    docs = Path(__file__).resolve().parent.parent / "docs"
+    links = (docs / "links.md").read_text()
+    emulators = (docs / "emulators.md").read_text()
+    astronomy = (docs / "astronomy.md").read_text()
+    batch_ms = f"{USB_SERIAL_BATCH_S * 1000:g} ms"
+    assert f"default 0, at most {MAX_BATCH_SECONDS:g} s" in links
+    assert batch_ms in links
+    assert f"every {batch_ms}" in emulators
+    assert f"within **{frames._REUSE_WITHIN_DAYS * 86400:g} s**" in astronomy
+    assert f"within {horizontal._REUSE_WITHIN_DAYS * 86400:g} s of the last" in astronomy

@@ -27,6 +27,11 @@ SexagesimalStyle = Literal["units", "colons", "spaces"]
 
 
 def _wrap(value: npt.ArrayLike, period: float, low: float) -> FloatOrArray:
+    one: object = value
+    if isinstance(one, float):  # np.float64 too
+        # One value (a poll's): Python's float modulo is np.mod's arithmetic, a tenth the cost.
+        folded = (float(one) - low) % period
+        return (0.0 if folded >= period else folded) + low
     shifted = np.mod(as_float_array(value) - low, period)
     # np.mod can return exactly `period` for tiny negative inputs; fold it back into range.
     shifted = np.where(shifted >= period, 0.0, shifted)

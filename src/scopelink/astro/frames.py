@@ -12,14 +12,16 @@ only, no nutation and no aberration): what a precession-only client means by "of
 
 from __future__ import annotations
 
-from typing import overload
+import math
+from datetime import datetime
+from typing import Any, overload
 
 import erfa
 import numpy as np
 import numpy.typing as npt
 
 from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
-from scopelink.astro.timescales import ScalarTime, TimeLike, tt_pair
+from scopelink.astro.timescales import ScalarTime, TimeLike, tt_pair, utc_pair
 
 __all__ = [
     "apparent_to_j2000",
@@ -40,9 +42,45 @@ def radec_public(
     ra_rad: npt.ArrayLike, dec_rad: npt.ArrayLike
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """Radians as (RA hours in [0, 24), Dec degrees), floats for single positions."""
+    ra: object = ra_rad
+    dec: object = dec_rad
+    if isinstance(ra, float) and isinstance(dec, float):  # np.float64 too
+        # np.mod's and np.degrees' arithmetic in Python floats (the same doubles).
+        one = (float(ra) / _RADIANS_PER_HOUR) % 24.0
+        return (0.0 if one >= 24.0 else one), math.degrees(float(dec))
     hours = np.mod(as_float_array(ra_rad) / _RADIANS_PER_HOUR, 24.0)
     hours = np.where(hours >= 24.0, 0.0, hours)
     return scalar_or_array(hours), scalar_or_array(np.degrees(as_float_array(dec_rad)))
+
+
+_REUSE_WITHIN_DAYS = 1.0 / 86400.0
+"""A geocentric context (``erfa.apci13``: precession-nutation, the Earth's position and velocity)
+serves instants up to 1 s away unchanged: in 1 s precession moves 2e-6 arcsec, nutation 1e-6,
+annual aberration 4e-6, far below the 0.077 arcsec of the finest SynScan unit. It has no Earth
+rotation in it, so one entry serves every site."""
+
+_last_geocentric: tuple[tuple[bool, float], Any, FloatArray] | None = None
+
+
+def _geocentric(t: TimeLike) -> tuple[Any, FloatArray]:
+    """``erfa.apci13`` at ``t``, reused for one instant within 1 s of the previous one."""
+    global _last_geocentric  # noqa: PLW0603 - a one-entry cache of the most recent instant
+    # The cache's key: a datetime's UTC (cheap: its TT costs 20 us), anything else's TT.
+    jd1, jd2 = utc_pair(t) if isinstance(t, datetime) else tt_pair(t)
+    if np.ndim(jd1) != 0:
+        astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+        return astrom, as_float_array(equation_of_origins)
+    key = (isinstance(t, datetime), float(jd1) + float(jd2))
+    cached = _last_geocentric
+    if (
+        cached is not None
+        and cached[0][0] == key[0]
+        and abs(key[1] - cached[0][1]) <= _REUSE_WITHIN_DAYS
+    ):
+        return cached[1], cached[2]
+    astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+    _last_geocentric = (key, astrom, as_float_array(equation_of_origins))
+    return astrom, _last_geocentric[2]
 
 
 @overload
@@ -55,7 +93,7 @@ def j2000_to_apparent(
     ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """J2000 (ICRS) RA/Dec -> apparent RA/Dec of date (true equator and equinox)."""
-    astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+    astrom, equation_of_origins = _geocentric(t)
     ra, dec = radec_radians(ra_hours, dec_deg)
     cirs_ra, cirs_dec = erfa.atciqz(ra, dec, astrom)
     return radec_public(cirs_ra - equation_of_origins, cirs_dec)
@@ -71,7 +109,7 @@ def apparent_to_j2000(
     ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """Apparent RA/Dec of date (true equator and equinox) -> J2000 (ICRS) RA/Dec."""
-    astrom, equation_of_origins = erfa.apci13(*tt_pair(t))
+    astrom, equation_of_origins = _geocentric(t)
     ra, dec = radec_radians(ra_hours, dec_deg)
     icrs_ra, icrs_dec = erfa.aticq(ra + equation_of_origins, dec, astrom)
     return radec_public(icrs_ra, icrs_dec)

@@ -124,17 +124,58 @@ class RefractionModel:
             return np.asarray(self._refract_scalar(float(true_alt_deg)))  # type: ignore[arg-type]
         true = as_float_array(true_alt_deg)
         observed = true + self.amount_deg(true)
-        # Newton on g(h) = h - R(h) - true, with g' from a small difference: R is smooth and
-        # |R'| < 0.5, so it converges in a few steps where the plain fixed point h = true + R(h)
-        # needs ~20 near the horizon (every element waits for the slowest).
+        # Below LOWEST_MODELLED_DEG the refraction is constant, so there true + R is exact.
+        flat = observed.reshape(-1)
+        goal = true.reshape(-1)
+        floor = self.amount_scalar_deg(LOWEST_MODELLED_DEG)
+        todo = np.flatnonzero(goal + floor >= LOWEST_MODELLED_DEG)
+        # Newton on g(h) = h - R(h) - true with R' in closed form: R is smooth and |R'| < 0.5,
+        # so it converges in a few steps where the plain fixed point h = true + R(h) needs ~20
+        # near the horizon. Each step works only on the elements still moving by more than
+        # 1e-12 degrees.
         for _ in range(_MAX_ITERATIONS):
-            refraction = self.amount_deg(observed)
-            slope = (self.amount_deg(observed + _SLOPE_STEP_DEG) - refraction) / _SLOPE_STEP_DEG
-            step = (observed - refraction - true) / (1.0 - slope)
-            observed = observed - step
-            if not np.any(np.abs(step) > _CONVERGED_DEG):
+            if todo.size == 0:
                 break
+            guess = flat[todo]
+            refraction, slope = self._amount_and_slope(guess)
+            step = (guess - refraction - goal[todo]) / (1.0 - slope)
+            flat[todo] = guess - step
+            todo = todo[np.abs(step) > _CONVERGED_DEG]
         return observed
+
+    def _amount_and_slope(self, altitude: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:meth:`amount_deg` (the same expressions) and its derivative dR/dh, for Newton."""
+        x = np.minimum(
+            np.maximum((altitude - BLEND_LOW_DEG) / (BLEND_HIGH_DEG - BLEND_LOW_DEG), 0.0), 1.0
+        )
+        weight = x * x * (3.0 - 2.0 * x)
+        weight_slope = 6.0 * x * (1.0 - x) / (BLEND_HIGH_DEG - BLEND_LOW_DEG)
+        erfa_altitude = np.radians(np.minimum(np.maximum(altitude, BLEND_LOW_DEG), 90.0))
+        tan_z = np.cos(erfa_altitude) / np.sin(erfa_altitude)
+        tan_z2 = tan_z * tan_z
+        erfa_rad = (self.a_rad + self.b_rad * tan_z2) * tan_z
+        # d/dh of the degrees of f(tan z), tan z = cot h: -(A + 3B tan^2 z)(1 + tan^2 z).
+        inside_erfa = (altitude > BLEND_LOW_DEG) & (altitude < 90.0)
+        erfa_slope = -(self.a_rad + 3.0 * self.b_rad * tan_z2) * (1.0 + tan_z2) * inside_erfa
+        horizon_altitude = np.minimum(np.maximum(altitude, LOWEST_MODELLED_DEG), BLEND_HIGH_DEG)
+        offset = horizon_altitude + 4.4
+        cot = 1.0 / np.tan(np.radians(horizon_altitude + 7.31 / offset))
+        horizon_deg = self.horizon_scale * cot / 60.0
+        inside_horizon = (altitude > LOWEST_MODELLED_DEG) & (altitude < BLEND_HIGH_DEG)
+        horizon_slope = (
+            -self.horizon_scale
+            / 60.0
+            * (1.0 + cot * cot)
+            * np.radians(1.0 - 7.31 / (offset * offset))
+        ) * inside_horizon
+        erfa_deg = np.degrees(erfa_rad)
+        amount = weight * erfa_deg + (1.0 - weight) * horizon_deg
+        slope = (
+            weight_slope * (erfa_deg - horizon_deg)
+            + weight * erfa_slope
+            + (1.0 - weight) * horizon_slope
+        )
+        return amount, slope
 
     def _refract_scalar(self, true: float) -> float:
         observed = true + self.amount_scalar_deg(true)

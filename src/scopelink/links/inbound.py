@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import math
+import time
 
 from scopelink.links.base import LinkClosedError
 
@@ -18,11 +20,15 @@ class InboundBuffer:
         self._data = bytearray()
         self._changed = asyncio.Event()
         self._end_reason: str | None = None
+        self.arrived_at = -math.inf
+        """``time.monotonic()`` when the latest bytes arrived (the producer says, or when fed)."""
 
-    def feed(self, data: bytes) -> None:
-        """Append received bytes; ignored after the end of the stream."""
+    def feed(self, data: bytes, arrived_at: float | None = None) -> None:
+        """Append received bytes; ignored after the end of the stream. ``arrived_at`` is when
+        they arrived if the producer knows better than now (a paced peer: when due on the line)."""
         if self._end_reason is None and data:
             self._data += data
+            self.arrived_at = time.monotonic() if arrived_at is None else arrived_at
             self._changed.set()
 
     def feed_end(self, reason: str) -> None:

@@ -17,11 +17,21 @@ class MemoryLink(Link):
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
 
+    @property
+    def arrived_at(self) -> float:
+        """``time.monotonic()`` when the bytes last read arrived (see :meth:`hand_over`)."""
+        return self._inbound.arrived_at
+
     async def _write_all(self, data: bytes) -> None:
+        self.hand_over(data)
+
+    def hand_over(self, data: bytes, arrived_at: float | None = None) -> None:
+        """Give ``data`` to the other end now, saying it arrived at ``arrived_at`` (default now):
+        a pacer hands bytes over when it gets to it and says when the line carried them."""
         peer = self._peer
         if peer is None or peer.closed:
             raise LinkClosedError(f"{self.name}: the other end is closed")
-        peer._inbound.feed(data)
+        peer._inbound.feed(data, arrived_at)
 
     async def _close_transport(self) -> None:
         self._inbound.feed_end(f"{self.name} is closed")

@@ -26,25 +26,33 @@ from scopelink.links import (
 )
 from scopelink.servers.access import AccessControl, Refusal
 
-__all__ = ["SERIAL_9600_8N1", "HostedDevice", "WireSpeed"]
+__all__ = ["SERIAL_9600_8N1", "USB_SERIAL_BATCH_S", "HostedDevice", "WireSpeed"]
 
 logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, slots=True)
 class WireSpeed:
-    """The line a device's replies leave at: ``baudrate`` and bits per byte (8N1 is 10)."""
+    """The line a device's replies leave at: ``baudrate`` and bits per byte (8N1 is 10);
+    ``batch_s`` hands the bytes of a reply over in groups at most that often (the last one on
+    time, none early; see :class:`~scopelink.links.PacedLink`), 0 one by one."""
 
     baudrate: int = 9600
     bits_per_byte: int = 10
+    batch_s: float = 0.0
 
     def __post_init__(self) -> None:
         if self.baudrate <= 0 or self.bits_per_byte <= 0:
             raise ValueError(f"baud rate and bits per byte must be positive: {self}")
 
 
-SERIAL_9600_8N1 = WireSpeed()
-"""The SynScan and Sky Tracker line: 9600 baud, 8 data bits, no parity, 1 stop bit."""
+USB_SERIAL_BATCH_S = 0.016
+"""How often an emulator hands a reply's bytes over: an FTDI USB-serial adapter's default
+latency timer, what most PCs see of a hand control's bytes (a reply's last byte on time)."""
+
+SERIAL_9600_8N1 = WireSpeed(batch_s=USB_SERIAL_BATCH_S)
+"""The SynScan and Sky Tracker line: 9600 baud, 8 data bits, no parity, 1 stop bit; replies
+handed over every 16 ms (:data:`USB_SERIAL_BATCH_S`), never early."""
 
 
 class HostedDevice:
@@ -74,7 +82,9 @@ class HostedDevice:
     def _paced(self, link: Link) -> Link:
         if self._wire is None:
             return link
-        return paced(link, self._wire.baudrate, self._wire.bits_per_byte)
+        return paced(
+            link, self._wire.baudrate, self._wire.bits_per_byte, batch_s=self._wire.batch_s
+        )
 
     async def on_pty(self, symlink: str | None = None) -> str:
         """Serve a new pseudo-terminal; returns the path a client opens."""

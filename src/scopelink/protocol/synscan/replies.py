@@ -7,8 +7,10 @@ the bytes arrive, so a wrong reply is noticed at its first wrong byte."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Final
 
 from scopelink.protocol.synscan import angles
 from scopelink.protocol.synscan.angles import HASH
@@ -317,7 +319,19 @@ def _flag_check(*flag_indices: int) -> _ByteCheck:
     return check
 
 
+_WHOLE_POSITION: Final = {
+    precise: re.compile(rb"([0-9A-Fa-f]{%d}),([0-9A-Fa-f]{%d})#" % (width, width))
+    for precise, width in ((True, angles.hex_width(True)), (False, angles.hex_width(False)))
+}
+"""A complete, well-formed position reply at the start of a buffer (what nearly every poll gets);
+anything else is scanned byte by byte, for the exact mismatch or how much is still missing."""
+
+
 def _scan_position(buffer: bytes | bytearray, frame: Frame, precise: bool) -> ScanResult:
+    whole = _WHOLE_POSITION[precise].match(buffer)
+    if whole is not None:
+        first, second = whole.groups()
+        return Complete(Position(frame, int(first, 16), int(second, 16), precise), whole.end())
     width = angles.hex_width(precise)
 
     def check(index: int, value: int) -> str | None:
