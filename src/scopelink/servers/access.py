@@ -192,6 +192,8 @@ class Refusal:
 
     reason: str
     forbidden: bool
+    total: bool = False
+    """Refused by the server's total connection limit (not the address's own)."""
 
 
 @dataclass(eq=False, slots=True)
@@ -284,7 +286,8 @@ class AccessControl:
             self.refused_connections += 1
             limit = policy.max_connections
             logger.info("%s: connection from %s refused: %d open", self.name, host, limit)
-            return Refusal(f"{self.name} has {policy.max_connections} connections open", False)
+            reason = f"{self.name} has {policy.max_connections} connections open"
+            return Refusal(reason, forbidden=False, total=True)
         if self._per_host.get(host, 0) >= policy.max_connections_per_client:
             self.refused_connections += 1
             limit = policy.max_connections_per_client
