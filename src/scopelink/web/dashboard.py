@@ -178,6 +178,7 @@ class Dashboard:
         access: AccessPolicy | None = None,
         allowed_hosts: tuple[str, ...] = (),
         pairing_token: str | None = None,
+        pairing_exempts_loopback: bool = True,
     ) -> None:
         if not 0 <= port <= 65535:
             raise ValueError(f"port {port} must lie in [0, 65535]")
@@ -193,6 +194,8 @@ class Dashboard:
         self.pairing_token = pairing_token or None
         """What other machines' browsers must present to command the mount (None: not needed,
         the dashboard is on loopback only)."""
+        self._loopback_exempt = pairing_exempts_loopback
+        """A browser on this machine needs no token (tests turn this off to see a refusal)."""
         self._requested_port = port
         protocol = _trace_protocol(mount, trace)
         self.traffic = None if protocol is None else TrafficMonitor(protocol, traffic_lines)
@@ -246,7 +249,7 @@ class Dashboard:
         """Whether ``request`` may command the mount: no token needed (loopback-only dashboard,
         or a browser on this machine), or it carries the token (cookie or header)."""
         token = self.pairing_token
-        if token is None or _is_loopback(request.remote):
+        if token is None or (self._loopback_exempt and _is_loopback(request.remote)):
             return True
         presented = request.cookies.get(self._cookie) or request.headers.get(PAIRING_HEADER) or ""
         return hmac.compare_digest(presented.encode(), token.encode())
@@ -271,8 +274,8 @@ class Dashboard:
         given = request.query.get("token", "")
         if token is None or not hmac.compare_digest(given.encode(), token.encode()):
             return _forbidden("wrong pairing token: use the link 'scopelink serve' printed")
-        response = web.HTTPSeeOther("/")
-        response.set_cookie(
+        redirect = web.HTTPSeeOther("/")
+        redirect.set_cookie(
             self._cookie,
             token,
             httponly=True,
@@ -280,7 +283,7 @@ class Dashboard:
             path="/",
             max_age=PAIRING_DAYS * 86400,
         )
-        return response
+        raise redirect
 
     @property
     def pairing_url(self) -> str | None:
