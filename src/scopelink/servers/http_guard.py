@@ -261,7 +261,13 @@ class GuardedRequestHandler(RequestHandler):
         exc: BaseException | None = None,
         message: str | None = None,
     ) -> web.StreamResponse:
-        """aiohttp's parser errors, with the size statuses a client can act on."""
+        """aiohttp's parser errors, with the size statuses a client can act on; a client that
+        went away (a closed or reloaded page) is not an error, and gets no traceback."""
+        if isinstance(exc, ConnectionError):
+            logger.debug("HTTP client %s went away: %s", request.remote, exc)
+            gone = web.Response(status=400, text="connection lost")
+            gone.force_close()
+            return gone
         if isinstance(exc, LineTooLong):
             limit = exc.args[1] if len(exc.args) > 1 else None
             status = 414 if limit == MAX_REQUEST_LINE_BYTES else 431

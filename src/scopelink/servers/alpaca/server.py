@@ -41,7 +41,7 @@ from scopelink.servers.alpaca.telescope import Member, TelescopeConfig, Telescop
 from scopelink.servers.hosts import HostAllowList
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedServer, HttpGuard
 
-__all__ = ["ALPACA_PORT", "MAX_REQUEST_BYTES", "AlpacaServer"]
+__all__ = ["ALPACA_PORT", "MAX_REQUEST_BYTES", "AlpacaServer", "StateDirError"]
 
 logger = logging.getLogger(__name__)
 
@@ -60,6 +60,28 @@ _SETUP_PAGE_HEADERS = (
 )
 _READ_ONLY_PUTS = frozenset({"connected", "connect", "disconnect"})
 """PUTs a read-only server still takes: they open or close the client's session, not the mount."""
+
+
+class StateDirError(Exception):
+    """The state directory cannot hold the Alpaca UniqueID (the message says why and what to
+    do)."""
+
+
+def _load_unique_id(state_dir: Path) -> str:
+    try:
+        return load_or_create_unique_id(state_dir)
+    except ValueError as error:  # a corrupt file: the message names it and the fix
+        raise StateDirError(str(error)) from None
+    except (NotADirectoryError, FileExistsError):
+        raise StateDirError(
+            f"the Alpaca state directory {state_dir} (or a folder above it) is a file: move that "
+            "file away, or name another directory with --state-dir DIR"
+        ) from None
+    except OSError as error:
+        raise StateDirError(
+            f"cannot keep the Alpaca UniqueID in {state_dir}: {error.strerror or error}; "
+            "name a writable directory with --state-dir DIR"
+        ) from None
 
 
 def _json_value(value: object) -> str:
@@ -135,7 +157,7 @@ class AlpacaServer:
     # --- lifecycle -------------------------------------------------------------------------------
 
     async def start(self) -> None:
-        self.unique_id = load_or_create_unique_id(self.state_dir)
+        self.unique_id = _load_unique_id(self.state_dir)
         # Reads are answered from mount.state: keep the mount's poller running while we serve.
         await self._stack.enter_async_context(self.mount.watching())
         # aiohttp's low-level server, guarded (http_guard.py), with our own dispatch: no router
