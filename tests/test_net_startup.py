@@ -119,11 +119,9 @@ async def test_a_page_closed_mid_request_is_not_logged_as_an_error(
             for _ in range(20):
                 reader, writer = await asyncio.open_connection("127.0.0.1", served.port)
                 writer.write(
-                    (
-                        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
-                        "Connection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
-                        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
-                    ).encode()
+                    b"GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
+                    b"Connection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+                    b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
                 )
                 await writer.drain()
                 writer.transport.abort()  # a reload: the socket is reset, replies unread
