@@ -99,6 +99,12 @@ class AccessPolicy:
     server_burst: int = 100
     max_delay_s: float = 1.0
     """HTTP: the longest a request is held for its token before the answer is 429."""
+    idle_timeout_s: float = 180.0
+    """A connection that sends nothing for this long is closed (every TCP server but
+    Stellarium, whose clients speak only to command a goto): three polls of a planetarium that
+    polls once a minute."""
+    header_timeout_s: float = 10.0
+    """HTTP: from the first byte of a request head to its end; a slower head is cut off."""
 
     def __post_init__(self) -> None:
         if self.max_connections < 1 or self.max_connections_per_client < 1:
@@ -109,6 +115,8 @@ class AccessPolicy:
             raise ValueError("the bursts must be at least 1")
         if self.max_delay_s < 0.0:
             raise ValueError("the maximum delay cannot be negative")
+        if not (self.idle_timeout_s > 0.0 and self.header_timeout_s > 0.0):
+            raise ValueError("the timeouts must be positive")
 
     def allows(self, host: str) -> bool:
         """Whether a client at ``host`` (an IP address text) may connect at all."""

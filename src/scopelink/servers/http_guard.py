@@ -8,8 +8,9 @@ LAN (and to web pages through DNS rebinding) also needs, per connection, before 
   request head) is closed to make room, so slow or idle clients cannot lock others out;
 - **sizes**: request line ≤ :data:`MAX_REQUEST_LINE_BYTES` (414), the whole head ≤
   :data:`MAX_HEADER_BYTES` beyond it (431), answered as soon as the limit is crossed;
-- **time**: a request head must arrive within :data:`HEADER_TIMEOUT_S` of its first byte, and
-  a connection with no request for :data:`IDLE_TIMEOUT_S` is closed (aiohttp's keep-alive).
+- **time**: a request head must arrive within the policy's ``header_timeout_s`` of its first
+  byte, and a connection with no request for its ``idle_timeout_s`` is closed (aiohttp's
+  keep-alive timeout).
 
 The bodies' limit (:data:`MAX_BODY_BYTES`, 413) is the handlers' (they read the body); the
 ``Host`` allow-list (421) too, since it needs the parsed header.
@@ -28,8 +29,6 @@ from aiohttp.web_protocol import RequestHandler
 from scopelink.servers.access import AccessControl, Client, Refusal
 
 __all__ = [
-    "HEADER_TIMEOUT_S",
-    "IDLE_TIMEOUT_S",
     "MAX_BODY_BYTES",
     "MAX_HEADER_BYTES",
     "MAX_REQUEST_LINE_BYTES",
@@ -47,11 +46,6 @@ MAX_HEADER_BYTES = 16 * 1024
 """All header lines of one request together: more is answered 431."""
 MAX_BODY_BYTES = 64 * 1024
 """One request body: more is answered 413 (real Alpaca requests are < 1 KiB)."""
-HEADER_TIMEOUT_S = 10.0
-"""From the first byte of a request head to its end; a slower head closes the connection."""
-IDLE_TIMEOUT_S = 180.0
-"""A connection with no request for this long is closed: three polls of a planetarium that
-polls once a minute."""
 _TURN_AWAY_GRACE_S = 2.0
 """How long a refused connection may stay open for its client to read the refusal."""
 _HEAD_SLACK_BYTES = 4
@@ -75,16 +69,11 @@ def plain_reply(status: int, message: str, headers: tuple[tuple[str, str], ...] 
 class HttpGuard:
     """One HTTP server's admission control and limits (shared by all its connections)."""
 
-    def __init__(
-        self,
-        access: AccessControl,
-        *,
-        header_timeout_s: float = HEADER_TIMEOUT_S,
-        idle_timeout_s: float = IDLE_TIMEOUT_S,
-    ) -> None:
+    def __init__(self, access: AccessControl) -> None:
         self.access = access
-        self.header_timeout_s = header_timeout_s
-        self.idle_timeout_s = idle_timeout_s
+        self.header_timeout_s = access.policy.header_timeout_s
+        self.idle_timeout_s = access.policy.idle_timeout_s
+        """Read when the server starts (aiohttp's keep-alive timeout)."""
         self.connections: dict[GuardedRequestHandler, None] = {}
         """Admitted connections, oldest first."""
         self.evicted = 0
@@ -132,7 +121,7 @@ class GuardedRequestHandler(RequestHandler):
         self._handled = 0
         self._busy = False
         self._head_bytes = 0
-        self._line_done = False
+        self._line_bytes: int | None = None
         self._head_timer: asyncio.TimerHandle | None = None
 
     # --- admission --------------------------------------------------------------------------
@@ -203,22 +192,21 @@ class GuardedRequestHandler(RequestHandler):
                     self._guard.header_timeout_s, self._head_too_slow
                 )
             self._head_bytes += len(data)
-            if not self._line_done and b"\n" in data:
-                self._line_done = True
-                line_end = self._head_bytes - len(data) + data.index(b"\n")
-                if line_end > MAX_REQUEST_LINE_BYTES + 1:
-                    self._oversized(414, f"request lines are limited to {MAX_REQUEST_LINE_BYTES}")
-                    return
-            if not self._line_done and self._head_bytes > MAX_REQUEST_LINE_BYTES + 2:
-                self._oversized(414, f"request lines are limited to {MAX_REQUEST_LINE_BYTES}")
+            if self._line_bytes is None and b"\n" in data:
+                self._line_bytes = self._head_bytes - len(data) + data.index(b"\n") + 1
+            line = self._line_bytes if self._line_bytes is not None else self._head_bytes
+            if line > MAX_REQUEST_LINE_BYTES + 2:  # the line and its CRLF
+                self._oversized(414, f"request lines are limited to {MAX_REQUEST_LINE_BYTES} bytes")
                 return
         super().data_received(data)
         if self._request_count != parsed_before:
             self._head_bytes = 0
-            self._line_done = False
+            self._line_bytes = None
             self._cancel_head_timer()
-        elif counting and self._head_bytes > (
-            MAX_REQUEST_LINE_BYTES + MAX_HEADER_BYTES + _HEAD_SLACK_BYTES
+        elif (
+            counting
+            and self._line_bytes is not None
+            and self._head_bytes - self._line_bytes > MAX_HEADER_BYTES + _HEAD_SLACK_BYTES
         ):
             self._oversized(431, f"request headers are limited to {MAX_HEADER_BYTES} bytes")
 
