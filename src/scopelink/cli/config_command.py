@@ -38,8 +38,8 @@ synscan = 11880
 # read_only = true                  # servers show the mount but refuse every command
 # allow = ["192.168.1.0/24"]        # client networks admitted besides this machine
 # max_connections = 64              # per server; max_connections_per_client = 16
-# requests_per_second = 50          # per client address (excess waits, HTTP: 429)
-# server_requests_per_second = 100  # per server, all clients together
+# requests_per_second = 250         # per client address (excess waits, HTTP: 429)
+# server_requests_per_second = 500  # per server, all clients together
 """
 
 _EXAMPLES = f"""\

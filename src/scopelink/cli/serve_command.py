@@ -136,26 +136,29 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--max-connections",
         type=int,
         metavar="N",
-        help="connections at once per server (default 64)",
+        help=f"connections at once per server (default {DEFAULT_POLICY.max_connections})",
     )
     access.add_argument(
         "--max-client-connections",
         type=int,
         metavar="N",
-        help="connections at once per server from one address (default 16)",
+        help="connections at once per server from one address (default "
+        f"{DEFAULT_POLICY.max_connections_per_client})",
     )
     access.add_argument(
         "--rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per client address (default 50; the excess "
-        "waits, HTTP answers 429 beyond a second's wait)",
+        help="commands or requests per second per client address (default "
+        f"{DEFAULT_POLICY.requests_per_s:g}; the excess waits, HTTP answers 429 with Retry-After "
+        f"beyond a {DEFAULT_POLICY.max_delay_s:g} s wait)",
     )
     access.add_argument(
         "--server-rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per server from all clients (default 100)",
+        help="commands or requests per second per server from all clients (default "
+        f"{DEFAULT_POLICY.server_requests_per_s:g})",
     )
     net.add_argument(
         "--lx200-pty",
