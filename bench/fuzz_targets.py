@@ -46,7 +46,12 @@ from scopelink.servers.alpaca.errors import AlpacaError, BadRequest
 from scopelink.servers.alpaca.http import AlpacaHttpFront, HttpReply, HttpRequest
 from scopelink.servers.alpaca.params import UINT32_MAX, Params, parse_transaction_id
 from scopelink.servers.hosts import HostAllowList
-from scopelink.servers.http_guard import GuardedRequestHandler, GuardedServer, HttpGuard
+from scopelink.servers.http_guard import (
+    GuardedAppRunner,
+    GuardedRequestHandler,
+    GuardedServer,
+    HttpGuard,
+)
 from scopelink.servers.lx200.device import LX200Handset
 from scopelink.servers.skytracker.commander import SkyCommander
 from scopelink.servers.skytracker.emulator import commander_for
@@ -668,38 +673,100 @@ def check_alpaca_http(data: bytes, rng: random.Random) -> None:
     expect(statuses[-1] == 200 and not crashes, f"valid requests answered {statuses}, {crashes}")
 
 
-def _serve(stream: bytes, rng: random.Random) -> bytes:
-    return _event_loop().run_until_complete(_serve_on_loop(stream, rng))
-
-
-async def _serve_on_loop(stream: bytes, rng: random.Random) -> bytes:
-    """The real guarded aiohttp connection handler with the real Alpaca HTTP front, on a
-    transport that records what it writes."""
-    transport = _Transport()
+def _alpaca_server() -> GuardedServer:
     front = AlpacaHttpFront(
         _echo_params, AccessControl(), HostAllowList("127.0.0.1", ("x",)), _HTTP_MAX_BODY
     )
-    server = GuardedServer(front, guard=HttpGuard(AccessControl()), access_log=None)
+    return GuardedServer(front, guard=HttpGuard(AccessControl()), access_log=None)
+
+
+def _serve(
+    stream: bytes, rng: random.Random, make_server: Callable[[], GuardedServer] = _alpaca_server
+) -> bytes:
+    return _event_loop().run_until_complete(_serve_on_loop(stream, rng, make_server))
+
+
+async def _serve_on_loop(
+    stream: bytes, rng: random.Random, make_server: Callable[[], GuardedServer]
+) -> bytes:
+    """The real guarded aiohttp connection handler (Alpaca's front, or the dashboard's app), on
+    a transport that records what it writes. Afterwards nothing of the connection is left in the
+    guard: memory stays bounded however many inputs run."""
+    transport = _Transport()
+    server = make_server()
     connection = server()
-    assert isinstance(connection, GuardedRequestHandler)
     connection.connection_made(transport)
-    for chunk in chunks(stream, rng):
-        if transport.closed:
-            break
-        connection.data_received(chunk)
+    try:
+        for chunk in chunks(stream, rng):
+            if transport.closed:
+                break
+            connection.data_received(chunk)
+            await _settle(connection, transport)
         await _settle(connection, transport)
-    await _settle(connection, transport)
-    connection.connection_lost(None)
-    await asyncio.sleep(0)
+    finally:
+        connection.connection_lost(None)
+        await asyncio.sleep(0)
+    expect(not server.guard.connections, "a closed connection stayed registered")
     return bytes(transport.written)
+
+
+_DASHBOARD_REQUESTS = (
+    b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n\r\n",
+    b"GET /api/search?q=M31 HTTP/1.1\r\nHost: localhost\r\nAccept: */*\r\n\r\n",
+    b"POST /api/tracking HTTP/1.1\r\nHost: 127.0.0.1\r\nOrigin: http://127.0.0.1\r\n"
+    b'Content-Type: application/json\r\nContent-Length: 20\r\n\r\n{"mode": "sidereal"}',
+    b"POST /api/abort HTTP/1.1\r\nHost: [::1]:8080\r\nContent-Type: application/json\r\n"
+    b"Transfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n\r\n",
+    b"GET /api/access HTTP/1.1\r\nHost: 127.0.0.1\r\nCookie: a=b\r\n\r\n",
+)
+
+
+def check_dashboard_http(data: bytes, rng: random.Random) -> None:
+    """Raw bytes into the dashboard's guarded aiohttp stack (its real application: Host and
+    Origin checks, access, pairing, API): replies well formed, no 500, no crash logged; then
+    valid pipelined requests get one 2xx each."""
+    crashes: list[dict[str, object]] = []
+    _event_loop().set_exception_handler(lambda _, context: crashes.append(context))
+    _set_up_dashboard()
+    statuses = _statuses(_serve(data, rng, _dashboard_server))
+    expect(not crashes, f"the event loop saw {crashes!r}")
+    expect(500 not in statuses, "a request reached 'internal server error'")
+    valid = [rng.choice(_DASHBOARD_REQUESTS) for _ in range(rng.randint(1, 3))]
+    statuses = _statuses(_serve(b"".join(valid), rng, _dashboard_server))
+    expect(len(statuses) == len(valid), f"valid requests answered {statuses}")
+    expect(all(s in (200, 409) for s in statuses), f"valid requests answered {statuses}")
+
+
+_DASHBOARD: list[GuardedServer] = []
+
+
+def _dashboard_server() -> GuardedServer:
+    """One dashboard application for every input (set up by :func:`_set_up_dashboard`)."""
+    return _DASHBOARD[0]
+
+
+def _set_up_dashboard() -> None:
+    if _DASHBOARD:
+        return
+    from scopelink.sim import EQ6, SimulatedMount
+    from scopelink.web import Dashboard
+
+    dashboard = Dashboard(SimulatedMount(EQ6, site=Site(50.0, 10.0)), port=0, trace=False)
+    runner = GuardedAppRunner(dashboard.build_app(), dashboard.guard, access_log=None)
+    _event_loop().run_until_complete(runner.setup())
+    assert isinstance(runner.server, GuardedServer)
+    _DASHBOARD.append(runner.server)
+
+
+_STATUS_LINE = re.compile(rb"HTTP/\d\.\d \d{3} ")
 
 
 def _statuses(written: bytes) -> list[int]:
     statuses = []
     rest = written
     while rest:
-        # aiohttp answers a request line it cannot read in HTTP/1.0
-        expect(rest[:9] in (b"HTTP/1.1 ", b"HTTP/1.0 "), f"not an HTTP reply: {rest[:40]!r}")
+        # aiohttp answers in the request's version (HTTP/1.0 for a line it cannot read)
+        expect(_STATUS_LINE.match(rest) is not None, f"not an HTTP reply: {rest[:40]!r}")
         status = int(rest[9:12])
         statuses.append(status)
         head_end = rest.index(b"\r\n\r\n") + 4
@@ -1039,6 +1106,13 @@ TARGETS: tuple[Target, ...] = (
         b"=&%+.eE-0123456789",
     ),
     Target("alpaca-http", _HTTP_REQUESTS, check_alpaca_http, b"\r\n: /?=&%0", max_size=1024),
+    Target(
+        "dashboard-http",
+        _DASHBOARD_REQUESTS,
+        check_dashboard_http,
+        b'\r\n: /?=&%0{}"[]',
+        max_size=1024,
+    ),
     Target(
         "dashboard-params",
         (
