@@ -19,6 +19,7 @@ The invariants, per parser (docs/reliability-fuzzing.md has the table):
 from __future__ import annotations
 
 import asyncio
+import logging
 import os
 import random
 import re
@@ -662,8 +663,10 @@ def check_alpaca_http(data: bytes, rng: random.Random) -> None:
     then valid pipelined requests on a fresh connection get one 200 each (after any 100)."""
     crashes: list[dict[str, object]] = []
     _event_loop().set_exception_handler(lambda _, context: crashes.append(context))
+    _HTTP_ERRORS.clear()
     statuses = _statuses(_serve(data, rng))
     expect(not crashes, f"the event loop saw {crashes!r}")
+    expect(not _HTTP_ERRORS, f"logged as errors: {_HTTP_ERRORS[:3]}")
     expect(500 not in statuses, "a request reached 'internal server error'")
     valid = [rng.choice(_HTTP_REQUESTS[:-1]) for _ in range(rng.randint(1, 3))]
     stream = b"".join(valid)
@@ -728,8 +731,10 @@ def check_dashboard_http(data: bytes, rng: random.Random) -> None:
     crashes: list[dict[str, object]] = []
     _event_loop().set_exception_handler(lambda _, context: crashes.append(context))
     _set_up_dashboard()
+    _HTTP_ERRORS.clear()
     statuses = _statuses(_serve(data, rng, _dashboard_server))
     expect(not crashes, f"the event loop saw {crashes!r}")
+    expect(not _HTTP_ERRORS, f"logged as errors: {_HTTP_ERRORS[:3]}")
     expect(500 not in statuses, "a request reached 'internal server error'")
     valid = [rng.choice(_DASHBOARD_REQUESTS) for _ in range(rng.randint(1, 3))]
     statuses = _statuses(_serve(b"".join(valid), rng, _dashboard_server))
@@ -748,8 +753,13 @@ def _dashboard_server() -> GuardedServer:
 def _set_up_dashboard() -> None:
     if _DASHBOARD:
         return
+    import aiohttp.web_fileresponse
+
     from scopelink.sim import EQ6, SimulatedMount
     from scopelink.web import Dashboard
+
+    # Static files go out by sendfile(2) on a real socket; the recording transport takes writes.
+    aiohttp.web_fileresponse.NOSENDFILE = True  # type: ignore[misc]
 
     dashboard = Dashboard(SimulatedMount(EQ6, site=Site(50.0, 10.0)), port=0, trace=False)
     runner = GuardedAppRunner(dashboard.build_app(), dashboard.guard, access_log=None)
@@ -757,6 +767,17 @@ def _set_up_dashboard() -> None:
     assert isinstance(runner.server, GuardedServer)
     _DASHBOARD.append(runner.server)
 
+
+class _ErrorRecords(logging.Handler):
+    """Collects what the HTTP stack logs as an error (an unhandled exception in a handler)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        _HTTP_ERRORS.append(record.getMessage())
+
+
+_HTTP_ERRORS: list[str] = []
+for _name in ("aiohttp.server", "aiohttp.web", "scopelink.servers", "scopelink.web"):
+    logging.getLogger(_name).addHandler(_ErrorRecords(logging.ERROR))
 
 _STATUS_LINE = re.compile(rb"HTTP/\d\.\d \d{3} ")
 
