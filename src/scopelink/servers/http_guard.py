@@ -48,6 +48,9 @@ MAX_BODY_BYTES = 64 * 1024
 """One request body: more is answered 413 (real Alpaca requests are < 1 KiB)."""
 _TURN_AWAY_GRACE_S = 2.0
 """How long a refused connection may stay open for its client to read the refusal."""
+EVICTABLE_AFTER_S = 1.0
+"""A connection idle (or stuck in a request head) at least this long may be closed to make
+room; a newer one may not, so a crowd arriving at once is refused (503), not churned."""
 _HEAD_SLACK_BYTES = 4
 """The blank line that ends a head."""
 
@@ -123,6 +126,7 @@ class GuardedRequestHandler(RequestHandler):
         self._head_bytes = 0
         self._line_bytes: int | None = None
         self._head_timer: asyncio.TimerHandle | None = None
+        self._idle_since = self._loop.time()
 
     # --- admission --------------------------------------------------------------------------
 
@@ -170,7 +174,9 @@ class GuardedRequestHandler(RequestHandler):
         return self._busy or self._request_count != self._handled
 
     def evictable(self) -> bool:
-        return not self._busy and not self._refused
+        if self._busy or self._refused or self._request_count != self._handled:
+            return False
+        return self._loop.time() - self._idle_since >= EVICTABLE_AFTER_S
 
     def evict(self) -> None:
         logger.info("%s: closing an idle connection to make room", self._guard.access.name)
@@ -241,6 +247,7 @@ class GuardedRequestHandler(RequestHandler):
         finally:
             self._busy = False
             self._handled += 1
+            self._idle_since = self._loop.time()
 
     def handle_error(
         self,
