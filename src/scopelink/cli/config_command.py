@@ -40,6 +40,11 @@ synscan = 11880
 # max_connections = 64              # per server; max_connections_per_client = 16
 # requests_per_second = 250         # per client address (excess waits, HTTP: 429)
 # server_requests_per_second = 500  # per server, all clients together
+# allowed_hosts = ["scope.lan"]     # more Host names the HTTP servers answer to (others: 421)
+# To give Alpaca its own client networks, replace 'alpaca = 11111' above with a table:
+# [servers.alpaca]
+# port = 11111
+# allow = ["192.168.1.0/24"]        # default beyond loopback: the local subnets
 """
 
 _EXAMPLES = f"""\
@@ -174,5 +179,9 @@ def show(config: Config) -> str:
         f"max_connections_per_client = {servers.max_connections_per_client}",
         f"requests_per_second = {servers.requests_per_second}",
         f"server_requests_per_second = {servers.server_requests_per_second}",
+        f"allowed_hosts = {list(servers.allowed_hosts)}",
     ]
+    if servers.alpaca_allow is not None:
+        networks = [str(network) for network in servers.alpaca_allow]
+        lines.append(f"# [servers.alpaca] allow = {networks}")
     return "\n".join(lines) + "\n"
