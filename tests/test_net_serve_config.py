@@ -11,12 +11,14 @@ import pytest
 from scopelink.cli.config import ConfigError, parse_config
 from scopelink.cli.errors import CommandError
 from scopelink.cli.main import build_parser
-from scopelink.cli.serve_command import _qr_lines, plan_from
+from scopelink.cli.serve_command import ServePlan, _qr_lines, plan_from
 from scopelink.servers.access import parse_network
 from scopelink.servers.hosts import local_networks
 
 
-def plan(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, *args: str, config: str = ""):  # type: ignore[no-untyped-def]
+def plan(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, *args: str, config: str = ""
+) -> ServePlan:
     path = tmp_path / "config.toml"
     path.write_text(config, encoding="utf-8")
     monkeypatch.setenv("SCOPELINK_CONFIG", str(path))
