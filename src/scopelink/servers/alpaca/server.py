@@ -62,7 +62,7 @@ _READ_ONLY_PUTS = frozenset({"connected", "connect", "disconnect"})
 """PUTs a read-only server still takes: they open or close the client's session, not the mount."""
 
 
-class StateDirError(Exception):
+class StateDirError(ValueError):
     """The state directory cannot hold the Alpaca UniqueID (the message says why and what to
     do)."""
 
