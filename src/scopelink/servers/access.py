@@ -292,17 +292,18 @@ class AccessControl:
             logger.warning("%s: connection from %s refused (allow-list)", self.name, host)
             return Refusal(f"{host} is not in this server's allow-list", forbidden=True)
         policy = self.policy
+        # The address's own cap first: an address at its cap must not evict others (HTTP).
+        if self._per_host.get(host, 0) >= policy.max_connections_per_client:
+            self.refused_connections += 1
+            limit = policy.max_connections_per_client
+            logger.info("%s: %s refused: %d open from there", self.name, host, limit)
+            return Refusal(f"{host} already has {limit} connections to {self.name}", False)
         if self.open_connections >= policy.max_connections:
             self.refused_connections += 1
             limit = policy.max_connections
             logger.info("%s: connection from %s refused: %d open", self.name, host, limit)
             reason = f"{self.name} has {policy.max_connections} connections open"
             return Refusal(reason, forbidden=False, total=True)
-        if self._per_host.get(host, 0) >= policy.max_connections_per_client:
-            self.refused_connections += 1
-            limit = policy.max_connections_per_client
-            logger.info("%s: %s refused: %d open from there", self.name, host, limit)
-            return Refusal(f"{host} already has {limit} connections to {self.name}", False)
         self.open_connections += 1
         self._per_host[host] = self._per_host.get(host, 0) + 1
         return Client(host, self, self._bucket_of(host))

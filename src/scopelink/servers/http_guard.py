@@ -100,6 +100,7 @@ class HttpGuard:
     def admit(self, host: str | None) -> Client | Refusal:
         admitted = self.access.admit(host)
         if isinstance(admitted, Refusal) and admitted.total and self._evict_one():
+            self.access.refused_connections -= 1  # not refused after all: room was made
             admitted = self.access.admit(host)
         return admitted
 
