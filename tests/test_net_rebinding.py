@@ -167,7 +167,8 @@ def test_the_allow_list_beyond_loopback_holds_the_machines_names_and_addresses()
     assert wide.allows("[::1]:1")
     assert local.allows("127.0.0.2")
     assert not wide.allows("evil.example")
-    assert not wide.allows("0.0.0.0")
+    assert wide.allows("0.0.0.0:8080")  # the printed URL of a wildcard bind
+    assert not local.allows("0.0.0.0")
     assert not wide.allows("[::1")
     assert not wide.allows("")
     assert local.allows(None)  # HTTP/1.0 without Host: browsers always send one

@@ -117,9 +117,9 @@ class HostAllowList:
             hostname = socket.gethostname()
             names.update(_normal(n) for n in (hostname, f"{hostname}.local", socket.getfqdn()))
             names.update(machine_addresses())
+        # A wildcard bind address stays: it is what serve prints, and a browser on this machine
+        # opening it sends it as Host; no page of another site can have it as its own name.
         names.discard("")
-        names.discard("0.0.0.0")
-        names.discard("::")
         self.names = frozenset(names)
 
     def allows(self, host_header: str | None) -> bool:
