@@ -94,7 +94,7 @@ async def test_a_slow_request_head_is_cut_off(tmp_path: Path, kind: str) -> None
         writer.write(f"GET {PATHS[kind]} HTTP/1.1\r\n".encode())
         started = time.monotonic()
         closed = False
-        for n in range(20):  # one header every 0.1 s: never a complete head
+        for n in range(50):  # one header every 0.1 s for up to 5 s: never a complete head
             await asyncio.sleep(0.1)
             try:
                 writer.write(f"X-{n}: y\r\n".encode())
@@ -105,8 +105,8 @@ async def test_a_slow_request_head_is_cut_off(tmp_path: Path, kind: str) -> None
             if reader.at_eof() or reader._buffer:  # type: ignore[attr-defined]
                 closed = True
                 break
-        assert closed, "a head trickled in for 2 s and the connection stayed open"
-        assert time.monotonic() - started < 1.5
+        assert closed, "a head trickled in for 5 s and the connection stayed open"
+        assert time.monotonic() - started >= 0.5  # not before the timeout
         writer.close()
 
 
