@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from scopelink.servers.access import DEFAULT_POLICY
+from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.http_guard import EVICTABLE_AFTER_S
 from scopelink.web import Dashboard
@@ -220,3 +220,39 @@ async def test_memory_returns_near_its_baseline_after_oversized_requests() -> No
     finally:
         process.terminate()
         process.wait(timeout=10)
+
+
+async def test_only_idle_connections_of_other_addresses_make_room_not_an_address_at_its_cap(
+    tmp_path: Path,
+) -> None:
+    policy = AccessPolicy(max_connections=4, max_connections_per_client=2)
+    async with AlpacaServer(
+        sim_mount(), port=0, discovery_port=None, state_dir=tmp_path, access=policy
+    ) as server:
+        port = server.port
+        held = []
+        for source in ("127.0.0.2", "127.0.0.2", "127.0.0.3", "127.0.0.3"):
+            held.append(await asyncio.open_connection("127.0.0.1", port, local_addr=(source, 0)))
+        await asyncio.sleep(EVICTABLE_AFTER_S + 0.2)
+        request = b"GET /management/apiversions HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
+        # 127.0.0.2 at its cap: refused, and nobody is evicted for it
+        reader, writer = await asyncio.open_connection(
+            "127.0.0.1", port, local_addr=("127.0.0.2", 0)
+        )
+        writer.write(request)
+        assert await status_of(reader) == 503
+        writer.close()
+        assert server.guard.evicted == 0
+        # a new address: the connection idle longest (127.0.0.2's first) makes room
+        reader, writer = await asyncio.open_connection(
+            "127.0.0.1", port, local_addr=("127.0.0.4", 0)
+        )
+        writer.write(request)
+        assert await status_of(reader) == 200
+        writer.close()
+        assert server.guard.evicted == 1
+        first_reader, _ = held[0]
+        async with asyncio.timeout(3):
+            assert await first_reader.read() == b""  # the evicted one was closed
+        for _, held_writer in held:
+            held_writer.close()
