@@ -39,6 +39,8 @@ __all__ = ["PAIRING_HEADER", "Dashboard", "static_dir"]
 
 logger = logging.getLogger(__name__)
 
+_WARNED_MISDIRECTED = 10
+"""421s logged as warnings; later ones are debug messages."""
 PAIRING_HEADER = "X-Scopelink-Pairing"
 """A request header that can carry the pairing token instead of the cookie (scripts)."""
 PAIRING_TOKEN_BYTES = 16
@@ -83,11 +85,18 @@ def _host_and_origin(hosts: HostAllowList) -> Middleware:
     """421 for a ``Host`` that is not ours; 403 for requests a page of another site makes
     (``Origin`` must name this very server: one of our hosts, and the request's own)."""
 
+    misdirected = [0]
+
     @web.middleware
     async def same_origin(request: web.Request, handler: Handler) -> web.StreamResponse:
         host = request.headers.get("Host")
         if not hosts.allows(host):
-            logger.warning("dashboard: request for Host %r from %s refused", host, request.remote)
+            misdirected[0] += 1
+            # A rebinding page retries: warn on the first few, not on every one.
+            level = logging.WARNING if misdirected[0] <= _WARNED_MISDIRECTED else logging.DEBUG
+            logger.log(
+                level, "dashboard: request for Host %r from %s refused", host, request.remote
+            )
             return _forbidden(
                 f"this dashboard does not answer to {host!r}: open it by this machine's name or "
                 "address, or list the name in servers.allowed_hosts",
