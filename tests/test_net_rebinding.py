@@ -141,7 +141,12 @@ async def test_a_page_on_another_local_port_is_another_site() -> None:
         port = served.port
         before = (await mount.refresh()).az_deg
         host = f"localhost:{port}"
-        for origin in (f"http://localhost:{port + 1}", "http://evil.example", "null"):
+        for origin in (
+            f"http://localhost:{port + 1}",
+            "http://evil.example",
+            "null",
+            "http://12]]]7.0.0.1",  # not a URL at all (found by fuzzing: it was a 500)
+        ):
             status, _, _ = await exchange(port, post("/api/move", host, MOVE, origin=origin))
             assert status == 403, origin
         await assert_still(mount, before)

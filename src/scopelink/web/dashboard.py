@@ -107,8 +107,11 @@ def _host_and_origin(hosts: HostAllowList) -> Middleware:
         if origin == "null":
             return _forbidden("requests from opaque origins are not allowed")
         if origin is not None:
-            authority = urlsplit(origin).netloc
-            if authority != host or not hosts.allows_origin(authority):
+            try:
+                authority = urlsplit(origin).netloc
+            except ValueError:  # "http://[12..." (found by the dashboard-http fuzz target)
+                authority = None
+            if authority is None or authority != host or not hosts.allows_origin(authority):
                 return _forbidden(f"requests from {origin} are not allowed")
         if request.content_length is not None and request.content_length > MAX_BODY_BYTES:
             return _forbidden(
