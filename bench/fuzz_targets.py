@@ -19,6 +19,7 @@ The invariants, per parser (docs/reliability-fuzzing.md has the table):
 from __future__ import annotations
 
 import asyncio
+import logging
 import os
 import random
 import re
@@ -41,10 +42,18 @@ from scopelink.mount import MountAxis, TrackingMode
 from scopelink.protocol import lx200, skytracker, stellarium, synscan
 from scopelink.protocol.skytracker import commander_messages
 from scopelink.protocol.skytracker import messages as tracker_messages
+from scopelink.servers.access import AccessControl
 from scopelink.servers.alpaca.errors import AlpacaError, BadRequest
-from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
+from scopelink.servers.alpaca.http import AlpacaHttpFront, HttpReply, HttpRequest
 from scopelink.servers.alpaca.params import UINT32_MAX, Params, parse_transaction_id
 from scopelink.servers.alpaca.telescope import TelescopeDevice
+from scopelink.servers.hosts import HostAllowList
+from scopelink.servers.http_guard import (
+    GuardedAppRunner,
+    GuardedRequestHandler,
+    GuardedServer,
+    HttpGuard,
+)
 from scopelink.servers.lx200.device import LX200Handset
 from scopelink.servers.skytracker.commander import SkyCommander
 from scopelink.servers.skytracker.emulator import commander_for
@@ -591,15 +600,16 @@ def check_alpaca_params(data: bytes, rng: random.Random) -> None:
 
 
 class _Transport(asyncio.Transport):
-    """Collects what the connection writes; the target is the HTTP parser, not a socket."""
+    """Collects what the connection writes; the target is the HTTP stack, not a socket."""
 
     def __init__(self) -> None:
         super().__init__()
         self.written = bytearray()
         self.closed = False
+        self.eof = False
 
     def write(self, data: bytes | bytearray | memoryview) -> None:
-        expect(not self.closed, "wrote after close")
+        expect(not self.closed and not self.eof, "wrote after close")
         self.written += data
 
     def close(self) -> None:
@@ -607,6 +617,15 @@ class _Transport(asyncio.Transport):
 
     def is_closing(self) -> bool:
         return self.closed
+
+    def can_write_eof(self) -> bool:
+        return True
+
+    def write_eof(self) -> None:
+        self.eof = True
+
+    def get_extra_info(self, name: str, default: object = None) -> object:
+        return ("127.0.0.1", 50000) if name == "peername" else default
 
     def pause_reading(self) -> None:
         pass
@@ -635,18 +654,20 @@ _HTTP_REQUESTS = (
     b"RightAscension=12.5&Declination=-30&Cl=1",
     b"PUT /api/v1/telescope/0/tracking HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\n"
     b"Transfer-Encoding: chunked\r\n\r\n5\r\nTrack\r\n9\r\ning=False\r\n0\r\n\r\n",
-    b"GET /management/apiversions HTTP/1.1\r\nConnection: keep-alive\r\n\r\n",
+    b"GET /management/apiversions HTTP/1.1\r\nHost: [::1]:11111\r\nConnection: keep-alive\r\n\r\n",
     b"GET /setup HTTP/1.0\r\n\r\n",  # not kept alive: only ever last in a valid stream
 )
 
 
 def check_alpaca_http(data: bytes, rng: random.Random) -> None:
-    """Raw bytes into one HttpConnection: every reply well formed, nothing logged as a crash;
+    """Raw bytes into one guarded aiohttp connection: replies well formed, no crash logged;
     then valid pipelined requests on a fresh connection get one 200 each (after any 100)."""
     crashes: list[dict[str, object]] = []
     _event_loop().set_exception_handler(lambda _, context: crashes.append(context))
+    _HTTP_ERRORS.clear()
     statuses = _statuses(_serve(data, rng))
     expect(not crashes, f"the event loop saw {crashes!r}")
+    expect(not _HTTP_ERRORS, f"logged as errors: {_HTTP_ERRORS[:3]}")
     expect(500 not in statuses, "a request reached 'internal server error'")
     valid = [rng.choice(_HTTP_REQUESTS[:-1]) for _ in range(rng.randint(1, 3))]
     stream = b"".join(valid)
@@ -656,27 +677,118 @@ def check_alpaca_http(data: bytes, rng: random.Random) -> None:
     expect(statuses[-1] == 200 and not crashes, f"valid requests answered {statuses}, {crashes}")
 
 
-def _serve(stream: bytes, rng: random.Random) -> bytes:
-    return _event_loop().run_until_complete(_serve_on_loop(stream, rng))
+def _alpaca_server() -> GuardedServer:
+    front = AlpacaHttpFront(
+        _echo_params, AccessControl(), HostAllowList("127.0.0.1", ("x",)), _HTTP_MAX_BODY
+    )
+    return GuardedServer(front, guard=HttpGuard(AccessControl()), access_log=None)
 
 
-async def _serve_on_loop(stream: bytes, rng: random.Random) -> bytes:
+def _serve(
+    stream: bytes, rng: random.Random, make_server: Callable[[], GuardedServer] = _alpaca_server
+) -> bytes:
+    return _event_loop().run_until_complete(_serve_on_loop(stream, rng, make_server))
+
+
+async def _serve_on_loop(
+    stream: bytes, rng: random.Random, make_server: Callable[[], GuardedServer]
+) -> bytes:
+    """The real guarded aiohttp connection handler (Alpaca's front, or the dashboard's app), on
+    a transport that records what it writes. Afterwards nothing of the connection is left in the
+    guard: memory stays bounded however many inputs run."""
     transport = _Transport()
-    connection = HttpConnection(_echo_params, _HTTP_MAX_BODY, set())
+    server = make_server()
+    connection = server()
     connection.connection_made(transport)
-    for chunk in chunks(stream, rng):
-        connection.data_received(chunk)
-        await _settle(connection)
-    await _settle(connection)
-    connection.connection_lost(None)
+    try:
+        for chunk in chunks(stream, rng):
+            if transport.closed:
+                break
+            connection.data_received(chunk)
+            await _settle(connection, transport)
+        await _settle(connection, transport)
+    finally:
+        connection.connection_lost(None)
+        await asyncio.sleep(0)
+    expect(not server.guard.connections, "a closed connection stayed registered")
     return bytes(transport.written)
+
+
+_DASHBOARD_REQUESTS = (
+    b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n\r\n",
+    b"GET /api/search?q=M31 HTTP/1.1\r\nHost: localhost\r\nAccept: */*\r\n\r\n",
+    b"POST /api/tracking HTTP/1.1\r\nHost: 127.0.0.1\r\nOrigin: http://127.0.0.1\r\n"
+    b'Content-Type: application/json\r\nContent-Length: 20\r\n\r\n{"mode": "sidereal"}',
+    b"POST /api/abort HTTP/1.1\r\nHost: [::1]:8080\r\nContent-Type: application/json\r\n"
+    b"Transfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n\r\n",
+    b"GET /api/access HTTP/1.1\r\nHost: 127.0.0.1\r\nCookie: a=b\r\n\r\n",
+)
+
+
+def check_dashboard_http(data: bytes, rng: random.Random) -> None:
+    """Raw bytes into the dashboard's guarded aiohttp stack (its real application: Host and
+    Origin checks, access, pairing, API): replies well formed, no 500, no crash logged; then
+    valid pipelined requests get one 2xx each."""
+    crashes: list[dict[str, object]] = []
+    _event_loop().set_exception_handler(lambda _, context: crashes.append(context))
+    _set_up_dashboard()
+    _HTTP_ERRORS.clear()
+    statuses = _statuses(_serve(data, rng, _dashboard_server))
+    expect(not crashes, f"the event loop saw {crashes!r}")
+    expect(not _HTTP_ERRORS, f"logged as errors: {_HTTP_ERRORS[:3]}")
+    expect(500 not in statuses, "a request reached 'internal server error'")
+    valid = [rng.choice(_DASHBOARD_REQUESTS) for _ in range(rng.randint(1, 3))]
+    statuses = _statuses(_serve(b"".join(valid), rng, _dashboard_server))
+    expect(len(statuses) == len(valid), f"valid requests answered {statuses}")
+    expect(all(s in (200, 409) for s in statuses), f"valid requests answered {statuses}")
+
+
+_DASHBOARD: list[GuardedServer] = []
+
+
+def _dashboard_server() -> GuardedServer:
+    """One dashboard application for every input (set up by :func:`_set_up_dashboard`)."""
+    return _DASHBOARD[0]
+
+
+def _set_up_dashboard() -> None:
+    if _DASHBOARD:
+        return
+    import aiohttp.web_fileresponse
+
+    from scopelink.sim import EQ6, SimulatedMount
+    from scopelink.web import Dashboard
+
+    # Static files go out by sendfile(2) on a real socket; the recording transport takes writes.
+    aiohttp.web_fileresponse.NOSENDFILE = True  # type: ignore[misc]
+
+    dashboard = Dashboard(SimulatedMount(EQ6, site=Site(50.0, 10.0)), port=0, trace=False)
+    runner = GuardedAppRunner(dashboard.build_app(), dashboard.guard, access_log=None)
+    _event_loop().run_until_complete(runner.setup())
+    assert isinstance(runner.server, GuardedServer)
+    _DASHBOARD.append(runner.server)
+
+
+class _ErrorRecords(logging.Handler):
+    """Collects what the HTTP stack logs as an error (an unhandled exception in a handler)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        _HTTP_ERRORS.append(record.getMessage())
+
+
+_HTTP_ERRORS: list[str] = []
+for _name in ("aiohttp.server", "aiohttp.web", "scopelink.servers", "scopelink.web"):
+    logging.getLogger(_name).addHandler(_ErrorRecords(logging.ERROR))
+
+_STATUS_LINE = re.compile(rb"HTTP/\d\.\d \d{3} ")
 
 
 def _statuses(written: bytes) -> list[int]:
     statuses = []
     rest = written
     while rest:
-        expect(rest.startswith(b"HTTP/1.1 "), f"not an HTTP reply: {rest[:40]!r}")
+        # aiohttp answers in the request's version (HTTP/1.0 for a line it cannot read)
+        expect(_STATUS_LINE.match(rest) is not None, f"not an HTTP reply: {rest[:40]!r}")
         status = int(rest[9:12])
         statuses.append(status)
         head_end = rest.index(b"\r\n\r\n") + 4
@@ -688,12 +800,20 @@ def _statuses(written: bytes) -> list[int]:
     return statuses
 
 
-async def _settle(connection: HttpConnection) -> None:
-    for _ in range(100):
+async def _settle(connection: GuardedRequestHandler, transport: _Transport) -> None:
+    """Let the connection answer what it has: until its output stops growing for a few turns."""
+    quiet = 0
+    size = len(transport.written)
+    for _ in range(2000):
         await asyncio.sleep(0)
-        if not connection.busy:
-            return
-    raise FuzzFailureError("the connection is still busy after 100 loop turns")
+        if len(transport.written) == size:
+            quiet += 1
+            if quiet >= 20:  # a request waiting for the rest of its body stays busy: fine
+                return
+        else:
+            quiet = 0
+            size = len(transport.written)
+    raise FuzzFailureError(f"the connection kept writing for 2000 loop turns ({connection!r})")
 
 
 _LOOP: list[asyncio.AbstractEventLoop] = []
@@ -1080,6 +1200,13 @@ TARGETS: tuple[Target, ...] = (
         b"=&%+.eE-0123456789",
     ),
     Target("alpaca-http", _HTTP_REQUESTS, check_alpaca_http, b"\r\n: /?=&%0", max_size=1024),
+    Target(
+        "dashboard-http",
+        _DASHBOARD_REQUESTS,
+        check_dashboard_http,
+        b'\r\n: /?=&%0{}"[]',
+        max_size=1024,
+    ),
     Target(
         "dashboard-params",
         (

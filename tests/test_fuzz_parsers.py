@@ -183,7 +183,7 @@ async def test_alpaca_server_answers_fuzzed_parameters_without_internal_errors(
                 form = _fuzzed_form(rng)
                 member = server.telescope.members[name]
                 if member.put is None or (member.get is not None and rng.random() < 0.5):
-                    get = f"GET {API}/{name}?{form.decode()} HTTP/1.1\r\nHost: x\r\n\r\n"
+                    get = f"GET {API}/{name}?{form.decode()} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
                     writer.write(get.encode())
                 else:
                     writer.write(_put(f"{API}/{name}", form))
@@ -193,7 +193,7 @@ async def test_alpaca_server_answers_fuzzed_parameters_without_internal_errors(
                     reply = json.loads(body)
                     assert not reply["ErrorMessage"].startswith("internal error"), (name, form)
                     statuses.add((status, reply["ErrorNumber"]))
-            writer.write(f"GET {API}/connected HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+            writer.write(f"GET {API}/connected HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
             status, _, body = await read_reply(reader)
             assert status == 200
             assert json.loads(body)["ErrorNumber"] == 0
@@ -205,7 +205,8 @@ async def test_alpaca_server_answers_fuzzed_parameters_without_internal_errors(
 
 def _put(path: str, body: bytes) -> bytes:
     head = (
-        f"PUT {path} HTTP/1.1\r\nHost: x\r\nContent-Type: application/x-www-form-urlencoded\r\n"
+        f"PUT {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+        "Content-Type: application/x-www-form-urlencoded\r\n"
         f"Content-Length: {len(body)}\r\n\r\n"
     )
     return head.encode() + body

@@ -234,7 +234,7 @@ async def test_alpaca_holds_requests_over_the_rate_then_answers_429(tmp_path: Pa
         assert held >= 0.08  # two requests waited ~50 ms each for their tokens
         # One connection is served in order, so it is only ever paced; several connections
         # from one address at once outrun the rate, and the excess is told when to come back.
-        request = b"GET /management/apiversions HTTP/1.1\r\nHost: x\r\n\r\n"
+        request = b"GET /management/apiversions HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
         others = [await HttpClient.connect(server.port) for _ in range(5)]
         for other in [client, *others]:
             other.writer.write(request * 3)
@@ -482,7 +482,7 @@ async def test_dashboard_live_pages_count_against_the_connection_limits() -> Non
                 await http.ws_connect("/ws")
             assert refused.value.status == 503
             async with http.get("/api/state") as response:
-                assert response.status == 200  # plain requests are not connections held
+                assert response.status == 503  # every connection counts (issue #12)
         finally:
             await first.close()
         await asyncio.sleep(0.1)

@@ -73,6 +73,11 @@ class ServersConfig:
     max_connections_per_client: int = DEFAULT_POLICY.max_connections_per_client
     requests_per_second: float = DEFAULT_POLICY.requests_per_s
     server_requests_per_second: float = DEFAULT_POLICY.server_requests_per_s
+    allowed_hosts: tuple[str, ...] = ()
+    """Extra ``Host`` names the HTTP servers answer to (others get 421: DNS rebinding)."""
+    alpaca_allow: tuple[IPNetwork, ...] | None = None
+    """``[servers.alpaca] allow``: Alpaca's own client networks (None: ``allow``, else the
+    local subnets when listening beyond loopback)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,7 +139,8 @@ _ACCESS_KEYS: Final = (
     "requests_per_second",
     "server_requests_per_second",
 )
-_SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS, *_ACCESS_KEYS)
+_SERVERS_KEYS: Final = ("host", *DEFAULT_SERVER_PORTS, *_ACCESS_KEYS, "allowed_hosts")
+_ALPACA_TABLE_KEYS: Final = ("port", "allow")
 
 
 def _finite(value: int | float) -> float | None:
@@ -276,8 +282,15 @@ class _Reader:
         if not (isinstance(host, str) and host):
             raise self.error("servers.host", f"expected an address like '127.0.0.1', got {host!r}")
         ports: dict[str, int | None] = {}
+        alpaca_allow: tuple[IPNetwork, ...] | None = None
         for name, default in DEFAULT_SERVER_PORTS.items():
             value = table.get(name, default)
+            if name == "alpaca" and isinstance(value, dict):
+                # [servers.alpaca]: port = 11111, allow = ["192.168.1.0/24"]
+                self.known(value, "servers.alpaca.", _ALPACA_TABLE_KEYS)
+                if "allow" in value:
+                    alpaca_allow = self.networks(value["allow"], "servers.alpaca.allow")
+                value = value.get("port", default)
             if value is False:
                 ports[name] = None
             elif isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 65535:
@@ -294,8 +307,29 @@ class _Reader:
             lx200=ports["lx200"],
             stellarium=ports["stellarium"],
             synscan=ports["synscan"],
+            alpaca_allow=alpaca_allow,
+            allowed_hosts=self.host_names(table.get("allowed_hosts", [])),
             **self.access(table),
         )
+
+    def networks(self, value: object, key: str) -> tuple[IPNetwork, ...]:
+        if not (isinstance(value, list) and all(isinstance(item, str) for item in value)):
+            raise self.error(
+                key, f"expected a list of networks like ['192.168.1.0/24'], got {value!r}"
+            )
+        try:
+            return tuple(parse_network(item) for item in value)
+        except ValueError as error:
+            raise self.error(key, str(error)) from None
+
+    def host_names(self, value: object) -> tuple[str, ...]:
+        if not (
+            isinstance(value, list)
+            and all(isinstance(item, str) and item.strip() and " " not in item for item in value)
+        ):
+            expected = "expected a list of host names or addresses like ['scope.lan']"
+            raise self.error("servers.allowed_hosts", f"{expected}, got {value!r}")
+        return tuple(item.strip() for item in value)
 
     def access(self, table: dict[str, Any]) -> dict[str, Any]:
         """The [servers] access keys that are present, checked."""

@@ -39,8 +39,13 @@ synscan = 11880
 # read_only = true                  # servers show the mount but refuse every command
 # allow = ["192.168.1.0/24"]        # client networks admitted besides this machine
 # max_connections = 64              # per server; max_connections_per_client = 16
-# requests_per_second = 50          # per client address (excess waits, HTTP: 429)
-# server_requests_per_second = 100  # per server, all clients together
+# requests_per_second = 250         # per client address (excess waits, HTTP: 429)
+# server_requests_per_second = 500  # per server, all clients together
+# allowed_hosts = ["scope.lan"]     # more Host names the HTTP servers answer to (others: 421)
+# To give Alpaca its own client networks, replace 'alpaca = 11111' above with a table:
+# [servers.alpaca]
+# port = 11111
+# allow = ["192.168.1.0/24"]        # default beyond loopback: the local subnets
 
 # [readings]
 # stale_after_s = 2.0               # an older reading is not served as current (0.2-5 s)
@@ -180,8 +185,10 @@ def show(config: Config) -> str:
         f"max_connections_per_client = {servers.max_connections_per_client}",
         f"requests_per_second = {servers.requests_per_second}",
         f"server_requests_per_second = {servers.server_requests_per_second}",
-        "",
-        "[readings]",
-        f"stale_after_s = {config.stale_after_s}",
+        f"allowed_hosts = {list(servers.allowed_hosts)}",
     ]
+    if servers.alpaca_allow is not None:
+        networks = [str(network) for network in servers.alpaca_allow]
+        lines.append(f"# [servers.alpaca] allow = {networks}")
+    lines += ["", "[readings]", f"stale_after_s = {config.stale_after_s}"]
     return "\n".join(lines) + "\n"

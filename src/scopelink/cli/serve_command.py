@@ -11,12 +11,17 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import ipaddress
+import dataclasses
+import errno
+import io
 import logging
+import socket
 from contextlib import AsyncExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
+
+import segno
 
 from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig
 from scopelink.cli.errors import CommandError
@@ -32,8 +37,10 @@ from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
 from scopelink.protocol.lx200 import SKYFI_PORT
-from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy, parse_network
+from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy, IPNetwork, parse_network
 from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
+from scopelink.servers.alpaca.server import StateDirError
+from scopelink.servers.hosts import bound_beyond_loopback, local_networks
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
@@ -112,29 +119,46 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="admit only clients in this network (repeatable; this machine is always admitted)",
     )
     access.add_argument(
+        "--alpaca-allow",
+        action="append",
+        metavar="CIDR",
+        help="Alpaca only: admit only clients in this network (repeatable; Alpaca clients "
+        "cannot log in; default: --allow, else the local subnets when --host is not loopback)",
+    )
+    access.add_argument(
+        "--allowed-host",
+        action="append",
+        metavar="NAME",
+        help="another name the HTTP servers answer to, e.g. the LAN's DNS name for this machine "
+        "(repeatable; other names get 421: DNS rebinding)",
+    )
+    access.add_argument(
         "--max-connections",
         type=int,
         metavar="N",
-        help="connections at once per server (default 64)",
+        help=f"connections at once per server (default {DEFAULT_POLICY.max_connections})",
     )
     access.add_argument(
         "--max-client-connections",
         type=int,
         metavar="N",
-        help="connections at once per server from one address (default 16)",
+        help="connections at once per server from one address (default "
+        f"{DEFAULT_POLICY.max_connections_per_client})",
     )
     access.add_argument(
         "--rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per client address (default 50; the excess "
-        "waits, HTTP answers 429 beyond a second's wait)",
+        help="commands or requests per second per client address (default "
+        f"{DEFAULT_POLICY.requests_per_s:g}; the excess waits, HTTP answers 429 with Retry-After "
+        f"beyond a {DEFAULT_POLICY.max_delay_s:g} s wait)",
     )
     access.add_argument(
         "--server-rate-limit",
         type=float,
         metavar="PER_S",
-        help="commands or requests per second per server from all clients (default 100)",
+        help="commands or requests per second per server from all clients (default "
+        f"{DEFAULT_POLICY.server_requests_per_s:g})",
     )
     net.add_argument(
         "--lx200-pty",
@@ -185,6 +209,9 @@ class ServePlan:
     lx200_pty: str | None
     synscan_pty: str | None
     access: AccessPolicy = DEFAULT_POLICY
+    alpaca_access: AccessPolicy = DEFAULT_POLICY
+    """The policy with Alpaca's own allow-list (``servers.alpaca.allow``)."""
+    allowed_hosts: tuple[str, ...] = ()
 
     def runs_nothing(self) -> bool:
         listeners = (self.alpaca, self.lx200, self.stellarium, self.synscan, self.dashboard)
@@ -209,8 +236,10 @@ def plan_from(args: argparse.Namespace) -> tuple[DeviceCommand, ServePlan]:
     )
     config = command.config
     servers = config.servers
+    host = args.host or servers.host
+    access = _access_policy(args, servers)
     plan = ServePlan(
-        host=args.host or servers.host,
+        host=host,
         alpaca=_merge_port(args.alpaca_port, servers.alpaca, "alpaca"),
         discovery=_merge_port(args.discovery_port, DISCOVERY_PORT, "discovery"),
         lx200=_merge_port(args.lx200_port, servers.lx200, "lx200"),
@@ -220,7 +249,9 @@ def plan_from(args: argparse.Namespace) -> tuple[DeviceCommand, ServePlan]:
         dashboard=_merge_port(args.dashboard_port, DEFAULT_DASHBOARD_PORT, "dashboard"),
         lx200_pty=args.lx200_pty,
         synscan_pty=args.synscan_pty,
-        access=_access_policy(args, servers),
+        access=access,
+        alpaca_access=_alpaca_policy(args, servers, access, host),
+        allowed_hosts=tuple(args.allowed_host or ()) + servers.allowed_hosts,
     )
     if plan.runs_nothing():
         raise CommandError("no server to run", "leave at least one port on (not -1) or add a pty")
@@ -252,6 +283,23 @@ def _access_policy(args: argparse.Namespace, servers: ServersConfig) -> AccessPo
         raise CommandError(str(error), "limits are whole numbers >= 1, the rate > 0") from None
 
 
+def _alpaca_policy(
+    args: argparse.Namespace, servers: ServersConfig, policy: AccessPolicy, host: str
+) -> AccessPolicy:
+    """Alpaca's clients cannot authenticate: beyond loopback it admits only the local subnets
+    unless told otherwise (``--alpaca-allow``, ``[servers.alpaca] allow``, or ``--allow``)."""
+    try:
+        flagged = tuple(parse_network(c) for c in args.alpaca_allow) if args.alpaca_allow else None
+    except ValueError as error:
+        raise CommandError(f"--alpaca-allow: {error}") from None
+    allow: tuple[IPNetwork, ...] | None = flagged if flagged is not None else servers.alpaca_allow
+    if allow is None:
+        allow = policy.allow
+        if not allow and bound_beyond_loopback(host):
+            allow = local_networks()
+    return dataclasses.replace(policy, allow=allow)
+
+
 def _or(flag: _Limit | None, configured: _Limit) -> _Limit:
     return configured if flag is None else flag
 
@@ -263,11 +311,32 @@ def run(args: argparse.Namespace) -> int:
     return asyncio.run(_serve(command, plan, args))
 
 
-def _exposes_beyond_this_machine(host: str) -> bool:
-    try:
-        return not ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return host != "localhost"
+def _listen_error(host: str, error: OSError) -> tuple[str, str]:
+    """What went wrong opening a server's socket, and what to do about it."""
+    reason = error.strerror or str(error)
+    if error.errno == errno.EADDRNOTAVAIL:
+        return (
+            f"cannot listen on {host}: this machine has no such address",
+            "--host takes 127.0.0.1 (this machine only), 0.0.0.0 (every network) or one of "
+            "this machine's own addresses ('ip addr' lists them)",
+        )
+    if error.errno == errno.EADDRINUSE:
+        return (
+            f"cannot listen on {host}: a port is already in use ({reason})",
+            "is another program (or another scopelink serve) using that port? -1 turns a "
+            "server off, 0 picks a free port",
+        )
+    if error.errno in (errno.EACCES, errno.EPERM):
+        return (
+            f"cannot listen on {host}: permission denied",
+            "ports below 1024 need privileges: pick a port above 1024",
+        )
+    if isinstance(error, socket.gaierror):
+        return (
+            f"cannot listen on {host}: no such host name ({reason})",
+            "--host takes an address such as 127.0.0.1 or 0.0.0.0, or this machine's name",
+        )
+    return (f"cannot listen on {host}: {reason}", "-1 turns a server off, 0 picks a free port")
 
 
 def synscan_model_code(mount: Mount) -> int:
@@ -317,7 +386,7 @@ async def open_device_patiently(command: DeviceCommand) -> Mount:
 
 async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
     mount = await open_device_patiently(command)
-    if _exposes_beyond_this_machine(plan.host):
+    if bound_beyond_loopback(plan.host):
         _log.warning("servers listen on %s: the mount can be driven from other machines", plan.host)
     try:
         async with until_stopped() as stop, AsyncExitStack() as stack:
@@ -333,13 +402,12 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
                 print(f"  {line}", flush=True)
             print("Ctrl-C stops.", flush=True)
             await stop.wait()
+    except StateDirError as error:
+        raise CommandError(str(error)) from None
     except LinkError as error:
         raise CommandError(str(error), "is another program using that port?") from None
     except OSError as error:
-        raise CommandError(
-            f"cannot listen on {plan.host}: {error}",
-            "is another program using that port? -1 turns a server off, 0 picks a free port",
-        ) from None
+        raise CommandError(*_listen_error(plan.host, error)) from None
     except MountError as error:
         raise mount_error(error) from None
     finally:
@@ -364,10 +432,14 @@ async def _start_servers(
             port=plan.alpaca,
             discovery_port=plan.discovery,
             state_dir=args.state_dir,
-            access=policy,
+            access=plan.alpaca_access,
+            allowed_hosts=plan.allowed_hosts,
         )
         await stack.enter_async_context(alpaca)
         lines.append(f"Alpaca      http://{host}:{alpaca.port}/  (telescope/0)")
+        if plan.alpaca_access.allow != policy.allow:
+            networks = ", ".join(str(n) for n in plan.alpaca_access.allow) or "none"
+            lines.append(f"Alpaca      clients: {networks} + loopback")
         if alpaca.discovery_port is not None:
             lines.append(f"Alpaca      discovery udp {host}:{alpaca.discovery_port}")
     if plan.lx200 is not None or plan.lx200_pty is not None:
@@ -409,7 +481,25 @@ async def _start_servers(
         except ValueError:
             driver_protocol = None  # the simulator has no link of its own
         trace = protocol_by_port(decoded, driver_protocol)
-        dashboard = Dashboard(mount, host, plan.dashboard, trace=trace, access=policy)
+        dashboard = Dashboard(
+            mount,
+            host,
+            plan.dashboard,
+            trace=trace,
+            access=policy,
+            allowed_hosts=plan.allowed_hosts,
+        )
         await stack.enter_async_context(dashboard)
         lines.append(f"Dashboard   {dashboard.url}")
+        pairing = dashboard.pairing_url
+        if pairing is not None:
+            lines.append(f"Dashboard   pairing link for other machines (controls): {pairing}")
+            lines.extend(_qr_lines(pairing))
     return lines
+
+
+def _qr_lines(url: str) -> list[str]:
+    """The pairing link as a QR code a phone can scan from the terminal (segno: half blocks)."""
+    out = io.StringIO()
+    segno.make(url, error="l").terminal(out=out, compact=True, border=2)
+    return out.getvalue().rstrip("\n").split("\n")

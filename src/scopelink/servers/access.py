@@ -88,17 +88,25 @@ class AccessPolicy:
     max_connections: int = 64
     """Connections at once per server (NINA uses 1-4, SkySafari 1, Stellarium 1)."""
     max_connections_per_client: int = 16
-    requests_per_s: float = 50.0
-    """Sustained commands or requests per second per client address (NINA polls ~10-30/s,
-    SkySafari and Stellarium a few)."""
-    burst: int = 100
-    server_requests_per_s: float = 100.0
+    requests_per_s: float = 250.0
+    """Sustained commands or requests per second per client address: a client polling 20
+    properties at 10 Hz (NINA with a busy sequence: 200/s) is never delayed; SkySafari and
+    Stellarium send a few."""
+    burst: int = 500
+    server_requests_per_s: float = 500.0
     """Sustained commands or requests per second per server, from all clients together: what
     keeps a crowd of clients from taking the event loop from the mount's poller
-    (``bench/security_flood.py``: 450 flooding connections leave it ~96 % of its rate)."""
-    server_burst: int = 100
-    max_delay_s: float = 1.0
-    """HTTP: the longest a request is held for its token before the answer is 429."""
+    (``bench/security_flood.py`` measures what the poller keeps under a flood)."""
+    server_burst: int = 500
+    max_delay_s: float = 0.25
+    """HTTP: the longest a request is held for its token before the answer is 429 with
+    ``Retry-After``: a short hold absorbs jitter, beyond it the client is told, not queued."""
+    idle_timeout_s: float = 180.0
+    """A connection that sends nothing for this long is closed (every TCP server but
+    Stellarium, whose clients speak only to command a goto): three polls of a planetarium that
+    polls once a minute."""
+    header_timeout_s: float = 10.0
+    """HTTP: from the first byte of a request head to its end; a slower head is cut off."""
 
     def __post_init__(self) -> None:
         if self.max_connections < 1 or self.max_connections_per_client < 1:
@@ -109,6 +117,8 @@ class AccessPolicy:
             raise ValueError("the bursts must be at least 1")
         if self.max_delay_s < 0.0:
             raise ValueError("the maximum delay cannot be negative")
+        if not (self.idle_timeout_s > 0.0 and self.header_timeout_s > 0.0):
+            raise ValueError("the timeouts must be positive")
 
     def allows(self, host: str) -> bool:
         """Whether a client at ``host`` (an IP address text) may connect at all."""
@@ -192,6 +202,8 @@ class Refusal:
 
     reason: str
     forbidden: bool
+    total: bool = False
+    """Refused by the server's total connection limit (not the address's own)."""
 
 
 @dataclass(eq=False, slots=True)
@@ -280,16 +292,18 @@ class AccessControl:
             logger.warning("%s: connection from %s refused (allow-list)", self.name, host)
             return Refusal(f"{host} is not in this server's allow-list", forbidden=True)
         policy = self.policy
-        if self.open_connections >= policy.max_connections:
-            self.refused_connections += 1
-            limit = policy.max_connections
-            logger.info("%s: connection from %s refused: %d open", self.name, host, limit)
-            return Refusal(f"{self.name} has {policy.max_connections} connections open", False)
+        # The address's own cap first: an address at its cap must not evict others (HTTP).
         if self._per_host.get(host, 0) >= policy.max_connections_per_client:
             self.refused_connections += 1
             limit = policy.max_connections_per_client
             logger.info("%s: %s refused: %d open from there", self.name, host, limit)
             return Refusal(f"{host} already has {limit} connections to {self.name}", False)
+        if self.open_connections >= policy.max_connections:
+            self.refused_connections += 1
+            limit = policy.max_connections
+            logger.info("%s: connection from %s refused: %d open", self.name, host, limit)
+            reason = f"{self.name} has {policy.max_connections} connections open"
+            return Refusal(reason, forbidden=False, total=True)
         self.open_connections += 1
         self._per_host[host] = self._per_host.get(host, 0) + 1
         return Client(host, self, self._bucket_of(host))

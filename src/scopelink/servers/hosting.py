@@ -154,4 +154,32 @@ class HostedDevice:
         async with self.access.session(getattr(link, "peer_host", None)) as client:
             if isinstance(client, Refusal):
                 return  # no protocol here has a refusal message: the connection just closes
-            await self._handler(self._paced(link))
+            idle_s = self.access.policy.idle_timeout_s
+            await self._handler(self._paced(IdleClosingLink(link, idle_s)))
+
+
+class IdleClosingLink(Link):
+    """A network client's link that ends when the client sends nothing for ``idle_s``: a
+    vanished phone or a forgotten connection must not hold a slot (and its dead-man) forever.
+    Reads pass straight through; the trace is logged once, by this link."""
+
+    def __init__(self, inner: Link, idle_s: float) -> None:
+        super().__init__(inner.name)
+        self.inner = inner
+        self.idle_s = idle_s
+        self.peer_host = getattr(inner, "peer_host", None)
+
+    async def _read_some(self, max_bytes: int) -> bytes:
+        try:
+            async with asyncio.timeout(self.idle_s):
+                return await self.inner._read_some(max_bytes)
+        except TimeoutError:
+            logger.info("%s: nothing received for %g s: closing", self.name, self.idle_s)
+            await self.inner.close()
+            raise LinkClosedError(f"{self.name}: idle for {self.idle_s:g} s, closed") from None
+
+    async def _write_all(self, data: bytes) -> None:
+        await self.inner._write_all(data)
+
+    async def _close_transport(self) -> None:
+        await self.inner.close()

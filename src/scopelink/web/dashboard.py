@@ -2,15 +2,21 @@
 
 ``/`` is the page, ``/static/`` its script and style (package data, served by aiohttp's static
 route, which refuses paths outside the folder), ``/api/`` the JSON commands and ``/ws`` the live
-updates. Requests from another site's page are refused (``Origin`` must match ``Host``), and
-every response forbids framing and foreign scripts.
+updates. Requests for a ``Host`` that is not this machine's are answered 421 (DNS rebinding),
+requests from another site's page 403 (``Origin`` must be this server), and every response
+forbids framing and foreign scripts. Bound beyond loopback, commands from other machines need
+the pairing token ``scopelink serve`` prints (``/pair?token=...`` sets it as a cookie); reads
+stay open.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import hmac
+import ipaddress
 import logging
+import secrets
 from importlib import resources
 from pathlib import Path
 from types import TracebackType
@@ -22,14 +28,25 @@ from aiohttp.typedefs import Middleware
 
 from scopelink.decode import Protocol
 from scopelink.mount import Mount
-from scopelink.servers.access import AccessControl, AccessPolicy, Refusal, retry_after
+from scopelink.servers.access import AccessControl, AccessPolicy, retry_after
+from scopelink.servers.hosts import HostAllowList, machine_addresses
+from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
 
-__all__ = ["Dashboard", "static_dir"]
+__all__ = ["PAIRING_HEADER", "Dashboard", "static_dir"]
 
 logger = logging.getLogger(__name__)
+
+_WARNED_MISDIRECTED = 10
+"""421s logged as warnings; later ones are debug messages."""
+PAIRING_HEADER = "X-Scopelink-Pairing"
+"""A request header that can carry the pairing token instead of the cookie (scripts)."""
+PAIRING_TOKEN_BYTES = 16
+"""128 random bits: not guessable at any request rate the limits allow."""
+PAIRING_DAYS = 30
+"""How long a paired browser stays paired (the token changes with every start of serve)."""
 
 _SECURITY_HEADERS = {
     "Content-Security-Policy": (
@@ -60,28 +77,66 @@ def _trace_protocol(
         return Protocol.SYNSCAN
 
 
-@web.middleware
-async def _same_origin(request: web.Request, handler: Handler) -> web.StreamResponse:
-    """Refuse requests a page of another site makes (cross-site WebSocket or form posts)."""
-    origin = request.headers.get("Origin")
-    if origin is not None and origin != "null" and urlsplit(origin).netloc != request.host:
-        return web.json_response(
-            {"error": f"requests from {origin} are not allowed", "kind": "Forbidden"}, status=403
-        )
-    if origin == "null":
-        return web.json_response(
-            {"error": "requests from opaque origins are not allowed", "kind": "Forbidden"},
-            status=403,
-        )
-    response = await handler(request)
-    response.headers.update(_SECURITY_HEADERS)
-    return response
+def _forbidden(message: str, kind: str = "Forbidden", status: int = 403) -> web.Response:
+    return web.json_response({"error": message, "kind": kind}, status=status)
+
+
+def _host_and_origin(hosts: HostAllowList) -> Middleware:
+    """421 for a ``Host`` that is not ours; 403 for requests a page of another site makes
+    (``Origin`` must name this very server: one of our hosts, and the request's own)."""
+
+    misdirected = [0]
+
+    @web.middleware
+    async def same_origin(request: web.Request, handler: Handler) -> web.StreamResponse:
+        host = request.headers.get("Host")
+        if not hosts.allows(host):
+            misdirected[0] += 1
+            # A rebinding page retries: warn on the first few, not on every one.
+            level = logging.WARNING if misdirected[0] <= _WARNED_MISDIRECTED else logging.DEBUG
+            logger.log(
+                level, "dashboard: request for Host %r from %s refused", host, request.remote
+            )
+            return _forbidden(
+                f"this dashboard does not answer to {host!r}: open it by this machine's name or "
+                "address, or list the name in servers.allowed_hosts",
+                "MisdirectedRequest",
+                421,
+            )
+        origin = request.headers.get("Origin")
+        if origin == "null":
+            return _forbidden("requests from opaque origins are not allowed")
+        if origin is not None:
+            try:
+                authority = urlsplit(origin).netloc
+            except ValueError:  # "http://[12..." (found by the dashboard-http fuzz target)
+                authority = None
+            if authority is None or authority != host or not hosts.allows_origin(authority):
+                return _forbidden(f"requests from {origin} are not allowed")
+        if request.content_length is not None and request.content_length > MAX_BODY_BYTES:
+            return _forbidden(
+                f"request bodies are limited to {MAX_BODY_BYTES} bytes", "TooLarge", 413
+            )
+        response = await handler(request)
+        response.headers.update(_SECURITY_HEADERS)
+        return response
+
+    return same_origin
+
+
+def _is_loopback(peer: str | None) -> bool:
+    if peer is None:
+        return True
+    try:
+        return ipaddress.ip_address(peer.split("%", 1)[0]).is_loopback
+    except ValueError:
+        return False
 
 
 def _access_middleware(control: AccessControl) -> Middleware:
-    """The allow-list (403), read-only (403 on every POST), the request rate (held up to the
-    policy's ``max_delay_s``, then 429 with Retry-After) and the connection limits for the
-    live pages' WebSockets (503)."""
+    """The allow-list (403), read-only (403 on every POST) and the request rate (held up to the
+    policy's ``max_delay_s``, then 429 with Retry-After). Connection limits (503) are the
+    guard's (``servers/http_guard.py``), applied when a connection is made."""
 
     @web.middleware
     async def access(request: web.Request, handler: Handler) -> web.StreamResponse:
@@ -103,18 +158,8 @@ def _access_middleware(control: AccessControl) -> Middleware:
             )
         if wait:
             await asyncio.sleep(wait)
-        if request.path != "/ws":
-            return await handler(request)
-        # A live page holds its WebSocket open: those count against the connection limits.
-        admitted = control.admit(host)
-        if isinstance(admitted, Refusal):
-            return web.json_response(
-                {"error": admitted.reason, "kind": "Busy"}, status=503, headers={"Retry-After": "1"}
-            )
-        try:
-            return await handler(request)
-        finally:
-            admitted.release()
+        # Connections (a live page's WebSocket among them) were counted when they were made.
+        return await handler(request)
 
     return access
 
@@ -143,6 +188,9 @@ class Dashboard:
         update_interval_s: float = 0.25,
         traffic_lines: int = DEFAULT_CAPACITY,
         access: AccessPolicy | None = None,
+        allowed_hosts: tuple[str, ...] = (),
+        pairing_token: str | None = None,
+        pairing_exempts_loopback: bool = True,
     ) -> None:
         if not 0 <= port <= 65535:
             raise ValueError(f"port {port} must lie in [0, 65535]")
@@ -151,6 +199,15 @@ class Dashboard:
         self.mount = mount
         self.host = host
         self.access = AccessControl(access, "dashboard")
+        self.guard = HttpGuard(self.access)
+        self.hosts = HostAllowList(host, allowed_hosts)
+        if pairing_token is None and self.hosts.beyond_loopback:
+            pairing_token = secrets.token_urlsafe(PAIRING_TOKEN_BYTES)
+        self.pairing_token = pairing_token or None
+        """What other machines' browsers must present to command the mount (None: not needed,
+        the dashboard is on loopback only)."""
+        self._loopback_exempt = pairing_exempts_loopback
+        """A browser on this machine needs no token (tests turn this off to see a refusal)."""
         self._requested_port = port
         protocol = _trace_protocol(mount, trace)
         self.traffic = None if protocol is None else TrafficMonitor(protocol, traffic_lines)
@@ -163,7 +220,13 @@ class Dashboard:
     def build_app(self) -> web.Application:
         """The aiohttp application (also usable with aiohttp's test client)."""
         app = web.Application(
-            middlewares=[_same_origin, _access_middleware(self.access), error_middleware]
+            middlewares=[
+                _host_and_origin(self.hosts),
+                _access_middleware(self.access),
+                self._pairing_middleware(),
+                error_middleware,
+            ],
+            client_max_size=MAX_BODY_BYTES,
         )
         index = static_dir() / "index.html"
 
@@ -175,6 +238,7 @@ class Dashboard:
 
         app.router.add_get("/", page)
         app.router.add_get("/api/access", access)
+        app.router.add_get("/pair", self._pair)
         app.router.add_get("/ws", self.hub.handle)
         add_api_routes(app, self.mount)
         app.router.add_static("/static/", static_dir(), follow_symlinks=False)
@@ -187,6 +251,66 @@ class Dashboard:
             raise RuntimeError("the dashboard is not running")
         return self._port
 
+    # --- pairing ------------------------------------------------------------------------------
+
+    @property
+    def _cookie(self) -> str:
+        return f"scopelink_pair_{self._port or self._requested_port}"
+
+    def _paired(self, request: web.Request) -> bool:
+        """Whether ``request`` may command the mount: no token needed (loopback-only dashboard,
+        or a browser on this machine), or it carries the token (cookie or header)."""
+        token = self.pairing_token
+        if token is None or (self._loopback_exempt and _is_loopback(request.remote)):
+            return True
+        presented = request.cookies.get(self._cookie) or request.headers.get(PAIRING_HEADER) or ""
+        return hmac.compare_digest(presented.encode(), token.encode())
+
+    def _pairing_middleware(self) -> Middleware:
+        @web.middleware
+        async def pairing(request: web.Request, handler: Handler) -> web.StreamResponse:
+            if request.method in ("GET", "HEAD") or self._paired(request):
+                return await handler(request)
+            return _forbidden(
+                "this dashboard's controls need pairing: open the pairing link (or scan the QR "
+                "code) that 'scopelink serve' printed",
+                "NotPaired",
+                401,
+            )
+
+        return pairing
+
+    async def _pair(self, request: web.Request) -> web.StreamResponse:
+        """``/pair?token=T``: remember the token in this browser, then show the dashboard."""
+        token = self.pairing_token
+        given = request.query.get("token", "")
+        if token is None or not hmac.compare_digest(given.encode(), token.encode()):
+            return _forbidden("wrong pairing token: use the link 'scopelink serve' printed")
+        redirect = web.HTTPSeeOther("/")
+        redirect.set_cookie(
+            self._cookie,
+            token,
+            httponly=True,
+            samesite="Strict",
+            path="/",
+            max_age=PAIRING_DAYS * 86400,
+        )
+        raise redirect
+
+    @property
+    def pairing_url(self) -> str | None:
+        """The link (and QR code) ``serve`` prints for phones and other machines."""
+        if self.pairing_token is None:
+            return None
+        host = self.host
+        if host in ("0.0.0.0", "::", ""):
+            addresses = sorted(
+                a for a in machine_addresses() if ":" not in a and not a.startswith("127.")
+            )
+            host = addresses[0] if addresses else host
+        shown = f"[{host}]" if ":" in host else host
+        return f"http://{shown}:{self.port}/pair?token={self.pairing_token}"
+
     @property
     def url(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
@@ -197,7 +321,9 @@ class Dashboard:
             raise RuntimeError("the dashboard is already running")
         if self.traffic is not None:
             self._tracing.enter_context(self.traffic.attached())
-        runner = web.AppRunner(self.build_app(), access_log=None, handle_signals=False)
+        runner = GuardedAppRunner(
+            self.build_app(), self.guard, access_log=None, handle_signals=False
+        )
         await runner.setup()
         site = web.TCPSite(runner, self.host, self._requested_port)
         try:

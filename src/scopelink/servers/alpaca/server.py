@@ -33,18 +33,20 @@ from scopelink.servers.alpaca.errors import (
     ErrorNumber,
     from_mount_error,
 )
-from scopelink.servers.alpaca.http import HttpConnection, HttpReply, HttpRequest
+from scopelink.servers.alpaca.http import AlpacaHttpFront, HttpReply, HttpRequest
 from scopelink.servers.alpaca.identity import default_state_dir, load_or_create_unique_id
 from scopelink.servers.alpaca.params import Params, parse_transaction_id
 from scopelink.servers.alpaca.setup_page import render_setup_page
 from scopelink.servers.alpaca.telescope import Member, TelescopeConfig, TelescopeDevice
+from scopelink.servers.hosts import HostAllowList
+from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedServer, HttpGuard
 
-__all__ = ["ALPACA_PORT", "MAX_REQUEST_BYTES", "AlpacaServer"]
+__all__ = ["ALPACA_PORT", "MAX_REQUEST_BYTES", "AlpacaServer", "StateDirError"]
 
 logger = logging.getLogger(__name__)
 
 ALPACA_PORT = 11111
-MAX_REQUEST_BYTES = 64 * 1024
+MAX_REQUEST_BYTES = MAX_BODY_BYTES
 """Largest request body accepted (HTTP 413 above it); real Alpaca requests are < 1 KiB."""
 _API_PREFIX = "/api/v1/"
 _DEVICE_TYPE = "telescope"
@@ -58,6 +60,28 @@ _SETUP_PAGE_HEADERS = (
 )
 _READ_ONLY_PUTS = frozenset({"connected", "connect", "disconnect"})
 """PUTs a read-only server still takes: they open or close the client's session, not the mount."""
+
+
+class StateDirError(ValueError):
+    """The state directory cannot hold the Alpaca UniqueID (the message says why and what to
+    do)."""
+
+
+def _load_unique_id(state_dir: Path) -> str:
+    try:
+        return load_or_create_unique_id(state_dir)
+    except ValueError as error:  # a corrupt file: the message names it and the fix
+        raise StateDirError(str(error)) from None
+    except (NotADirectoryError, FileExistsError):
+        raise StateDirError(
+            f"the Alpaca state directory {state_dir} (or a folder above it) is a file: move that "
+            "file away, or name another directory with --state-dir DIR"
+        ) from None
+    except OSError as error:
+        raise StateDirError(
+            f"cannot keep the Alpaca UniqueID in {state_dir}: {error.strerror or error}; "
+            "name a writable directory with --state-dir DIR"
+        ) from None
 
 
 def _json_value(value: object) -> str:
@@ -97,6 +121,7 @@ class AlpacaServer:
         config: TelescopeConfig | None = None,
         max_request_bytes: int = MAX_REQUEST_BYTES,
         access: AccessPolicy | None = None,
+        allowed_hosts: tuple[str, ...] = (),
     ) -> None:
         self.mount = mount
         self.host = host
@@ -109,8 +134,11 @@ class AlpacaServer:
         self.unique_id = ""
         self._max_request_bytes = max_request_bytes
         self.access = AccessControl(access, "Alpaca")
+        self.guard = HttpGuard(self.access)
+        self.hosts = HostAllowList(host, allowed_hosts)
+        """The ``Host`` names answered (others get 421: DNS rebinding)."""
         self._transactions = itertools.count(1)
-        self._connections: set[HttpConnection] = set()
+        self._http: GuardedServer | None = None
         self._listener: asyncio.Server | None = None
         self._pages: dict[str, Callable[[HttpRequest], Awaitable[HttpReply]]] = {
             "/management/apiversions": self._api_versions,
@@ -129,18 +157,16 @@ class AlpacaServer:
     # --- lifecycle -------------------------------------------------------------------------------
 
     async def start(self) -> None:
-        self.unique_id = load_or_create_unique_id(self.state_dir)
+        self.unique_id = _load_unique_id(self.state_dir)
         # Reads are answered from mount.state: keep the mount's poller running while we serve.
         await self._stack.enter_async_context(self.mount.watching())
-        # A lean HTTP layer (http.py) with our own dispatch: no framework on the path of the
-        # property reads clients poll many times a second.
+        # aiohttp's low-level server, guarded (http_guard.py), with our own dispatch: no router
+        # or middleware on the path of the property reads clients poll many times a second.
         loop = asyncio.get_running_loop()
-        limit = self._max_request_bytes
+        front = AlpacaHttpFront(self._handle, self.access, self.hosts, self._max_request_bytes)
+        self._http = GuardedServer(front, guard=self.guard, access_log=None)
         self._listener = await loop.create_server(
-            lambda: HttpConnection(self._handle, limit, self._connections, self.access),
-            self.host,
-            self.port,
-            reuse_address=True,
+            self._http, self.host, self.port, reuse_address=True
         )
         self.port = int(self._listener.sockets[0].getsockname()[1])
         if self.discovery_port is not None:
@@ -158,7 +184,9 @@ class AlpacaServer:
         if self._listener is not None:
             self._listener.close()
             # Idle keep-alive connections close now; a synchronous slew in progress gets 1 s.
-            await asyncio.gather(*(c.finish(1.0) for c in list(self._connections)))
+            if self._http is not None:
+                self._http.pre_shutdown()  # wakes idle connections so that they close now
+                await self._http.shutdown(1.0)
             await self._listener.wait_closed()
             self._listener = None
         await self.telescope.close()
