@@ -106,8 +106,10 @@ def test_the_traffic_panel_keeps_nothing_per_byte_of_a_live_link(
 
         return run
 
-    # the warm-up also fills the codec's bounded caches (flat after ~2,500 exchanges)
-    assert _traced_growth(exchanges(2_500), exchanges(2_000)) < 5_000  # was ~80 kB
+    # The warm-up also fills the codec's bounded caches (flat after ~2,500 exchanges). A few kB
+    # come and go with the interpreter's own small caches (up to ~7 kB seen, whatever the
+    # count), so the work is long enough for a leak of 1 byte per exchange to stand out.
+    assert _traced_growth(exchanges(2_500), exchanges(10_000)) < 10_000  # was ~400 kB
 
 
 def test_the_traffic_panel_forgets_links_of_clients_long_gone() -> None:
