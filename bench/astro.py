@@ -23,9 +23,6 @@ astropy is a test dependency; it runs offline with its bundled Earth-orientation
 from __future__ import annotations
 
 import argparse
-import os
-import platform
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -35,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from bench.provenance import provenance as common_provenance
 from scopelink.astro import Site, j2000_to_observed
 
 SITE = Site(51.4779, -0.0015, 46.0)
@@ -155,22 +153,11 @@ def single_rows(sizes: Sizes, peer: Astropy) -> tuple[float, float, float]:
 
 
 def provenance() -> list[str]:
-    def git(*args: str) -> str:
-        try:
-            done = subprocess.run(["git", *args], capture_output=True, text=True, check=True)
-        except (OSError, subprocess.CalledProcessError):
-            return "unknown"
-        return done.stdout.strip()
-
     import astropy
     import erfa
 
-    dirty = "+uncommitted changes" if git("status", "--porcelain", "--", "src", "bench") else ""
-    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     return [
-        f"date {datetime.now(UTC):%Y-%m-%d %H:%M} UTC, "
-        f"load average {load} on {os.cpu_count()} cores",
-        f"commit {git('rev-parse', '--short', 'HEAD')}{dirty}, Python {platform.python_version()}",
+        *common_provenance(),
         f"peer astropy {astropy.__version__} (pin {PEER_PIN}), pyerfa {erfa.__version__}, "
         f"numpy {np.__version__}",
     ]

@@ -14,14 +14,12 @@ from __future__ import annotations
 import argparse
 import asyncio
 import math
-import os
-import subprocess
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
+from bench.provenance import provenance
 from scopelink.astro import Site, angular_separation_deg
 from scopelink.links import Link, paced, precise_event_loop
 from scopelink.protocol.synscan import (
@@ -338,23 +336,6 @@ GOAL_CORES = 1.0
 """... with the whole process (emulators and their clients) on at most one core."""
 
 
-def _provenance() -> list[str]:
-    def git(*args: str) -> str:
-        try:
-            done = subprocess.run(["git", *args], capture_output=True, text=True, check=True)
-        except (OSError, subprocess.CalledProcessError):
-            return "unknown"
-        return done.stdout.strip()
-
-    dirty = "+uncommitted changes" if git("status", "--porcelain", "--", "src", "bench") else ""
-    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    return [
-        f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, "
-        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, load average {load}",
-        f"commit {git('rev-parse', '--short', 'HEAD')}{dirty}",
-    ]
-
-
 def _verdict(met: bool) -> str:
     return "PASS" if met else "MISS"
 
@@ -372,7 +353,7 @@ def _describe_run(run: PollRun, one_mount: PollRun | None) -> str:
 
 async def main(sizes: Sizes) -> None:
     print(f"scopelink emulator benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
-    for line in _provenance():
+    for line in provenance():
         print(line)
     print(f"wire limit for e at 9600 8N1: 9600 / ((1 + 18) * 10) = {WIRE_LIMIT:.2f} polls/s")
     print()
