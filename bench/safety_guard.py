@@ -25,7 +25,6 @@ import argparse
 import asyncio
 import contextlib
 import logging
-import math
 import statistics
 import tempfile
 from collections.abc import AsyncIterator
@@ -73,6 +72,24 @@ class Result:
         return self.lowest_alt_deg - HORIZON_DEG
 
 
+async def watch_until_rest(
+    sim: SimulatedMount, *, rest_s: float, limit_s: float
+) -> tuple[float, float]:
+    """The lowest true altitude of ``sim`` (sampled every 2 ms) until it has not moved for
+    ``rest_s`` (or ``limit_s`` have passed), and the altitude it rests at."""
+    loop = asyncio.get_running_loop()
+    began = still_since = loop.time()
+    previous = lowest = sim.observed_at(sim.elapsed())[0]
+    while loop.time() - still_since < rest_s and loop.time() - began < limit_s:
+        await asyncio.sleep(0.002)
+        alt = sim.observed_at(sim.elapsed())[0]
+        lowest = min(lowest, alt)
+        if abs(alt - previous) > 1e-6:
+            still_since = loop.time()
+        previous = alt
+    return lowest, previous
+
+
 async def run_once(rate_deg_s: float, lead_deg: float = 2.0) -> Result:
     # Start where the motion needs a few seconds to reach the horizon, braking included.
     start_alt = HORIZON_DEG + lead_deg + rate_deg_s * 1.5
@@ -85,7 +102,6 @@ async def run_once(rate_deg_s: float, lead_deg: float = 2.0) -> Result:
     await sim.wait_for_slew(timeout_s=30.0)
     await sim.abort()
     clock.set_rate(1.0)
-    lowest = math.inf
     async with SynScanEmulator(sim) as emulator:
         host, port = await emulator.on_tcp("127.0.0.1", 0)
         mount = SynScanMount(
@@ -99,15 +115,7 @@ async def run_once(rate_deg_s: float, lead_deg: float = 2.0) -> Result:
         began = loop.time()
         polls_before = mount.poller.polls
         await mount.move_axis(MountAxis.PRIMARY, rate_deg_s)
-        still_since = loop.time()
-        previous = sim.observed_at(sim.elapsed())[0]
-        while loop.time() - still_since < 0.3 and loop.time() - began < 60.0:
-            await asyncio.sleep(0.002)
-            alt = sim.observed_at(sim.elapsed())[0]
-            lowest = min(lowest, alt)
-            if abs(alt - previous) > 1e-6:
-                still_since = loop.time()
-            previous = alt
+        lowest, _ = await watch_until_rest(sim, rest_s=0.3, limit_s=60.0)
         polls = mount.poller.polls - polls_before
         stops = mount.guard.stops
         with contextlib.suppress(Exception):
@@ -178,17 +186,7 @@ async def noisy_skytracker(
 
 async def lowest_until_rest(sim: SimulatedMount, timeout_s: float = 20.0) -> float:
     """The lowest true altitude until the mount has rested for 0.5 s."""
-    loop = asyncio.get_running_loop()
-    lowest = math.inf
-    began = still_since = loop.time()
-    previous = sim.observed_at(sim.elapsed())[0]
-    while loop.time() - still_since < 0.5 and loop.time() - began < timeout_s:
-        await asyncio.sleep(0.002)
-        alt = sim.observed_at(sim.elapsed())[0]
-        lowest = min(lowest, alt)
-        if abs(alt - previous) > 1e-6:
-            still_since = loop.time()
-        previous = alt
+    lowest, _ = await watch_until_rest(sim, rest_s=0.5, limit_s=timeout_s)
     return lowest
 
 
@@ -290,23 +288,15 @@ async def noisy_trial(
 ) -> Trial:
     """Full speed down from ``alt_deg`` (the altitude axis, -3.34°/s); the lowest true altitude
     until the mount has rested for 0.5 s (the device's own -10° horizon ends the worst case)."""
-    lowest = math.inf
     rig = noisy_rig(kind, probability, seed, timeout_s=timeout_s, alt_deg=alt_deg)
     async with rig as (mount, sim, faults):
         loop = asyncio.get_running_loop()
         rate = mount.capabilities.max_axis_rate_deg_s
         with contextlib.suppress(MountError):  # a failed start is owed a stop: still guarded
             await mount.move_axis(MountAxis.SECONDARY, -rate)
-        began = still_since = loop.time()
-        previous = sim.observed_at(sim.elapsed())[0]
-        while loop.time() - still_since < 0.5 and loop.time() - began < 30.0:
-            await asyncio.sleep(0.002)
-            alt = sim.observed_at(sim.elapsed())[0]
-            lowest = min(lowest, alt)
-            if abs(alt - previous) > 1e-6:
-                still_since = loop.time()
-            previous = alt
-        return Trial(lowest, previous, mount.guard.stops, len(faults.fired), loop.time() - began)
+        began = loop.time()
+        lowest, rest = await watch_until_rest(sim, rest_s=0.5, limit_s=30.0)
+        return Trial(lowest, rest, mount.guard.stops, len(faults.fired), loop.time() - began)
 
 
 async def noisy(trials: int) -> dict[tuple[FaultKind, float], list[Trial]]:
