@@ -17,7 +17,6 @@ from pathlib import Path
 from scopelink.astro import Site
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.mount import MountAxis
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount

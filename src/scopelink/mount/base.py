@@ -283,10 +283,7 @@ class Mount(ABC):
             return True
         state = self.state
         return (
-            state.slewing
-            or state.pulse_guiding
-            or self._parking
-            or bool(self._guard.rate_motions)
+            state.slewing or state.pulse_guiding or self._parking or bool(self._guard.rate_motions)
         )
 
     def _line_bytes(self) -> tuple[int, int]:
