@@ -72,7 +72,8 @@ full-rate readings; a slower one, idle-rate readings no older than ``idle_poll_s
 DEMAND_HOLD_RANGE_S = (0.1, 60.0)
 DEFAULT_MAX_POLL_BAUD = 9600
 """The poller never moves more bytes a second (either way) than a 9600-baud line carries."""
-MAX_POLL_BAUD_RANGE = (300, 1_000_000)
+MAX_POLL_BAUD_RANGE = (2400, 1_000_000)
+"""Below 2400 baud a SynScan full read would take a quarter of a second of line time."""
 BITS_PER_BYTE = 10
 """A byte on an 8N1 line: start bit, 8 data bits, stop bit."""
 
@@ -323,7 +324,10 @@ class StatePoller:
             self.polls += 1
             sent_now, received_now = self._line_bytes()
             moved = max(sent_now - sent, received_now - received, 0)
-            self.line_period_s = moved / self.policy.max_bytes_per_s
+            # Never longer than the idle period: a reconnect's identification (~100 bytes) must
+            # not leave the reading stale before the next poll.
+            idle_s = self._idle_period_s()
+            self.line_period_s = min(moved / self.policy.max_bytes_per_s, idle_s)
             if self._watchers > 0:
                 await self._rest(started, max(self.interval_s, self.line_period_s))
 
