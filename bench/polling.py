@@ -16,7 +16,14 @@ serve <= 0.10 core and the device link <= the maximum rate (960 B/s the busier w
 without a client; the 10 Hz reader's readings no older than its period. Every row's goal is
 checked and printed; the exit status is 1 when one is missed.
 
+Part 6, ``--memory``: ``scopelink serve`` in front of the paced SynScan emulator with a dashboard
+page open throughout, a 10 Hz Alpaca reader, and, to accelerate, a page reload (``/``, a new
+WebSocket, its hello and two updates) every 2 s: RSS (``/proc/PID/status`` VmRSS) sampled every
+5 s. Goal: no sample after the first minute more than 20 MiB above the first minute's highest, and
+the growth rate after the first minute (least squares) projected to an hour within 20 MiB too.
+
     .venv/bin/python -m bench.polling            # 20 s windows
+    .venv/bin/python -m bench.polling --memory --minutes 10
     .venv/bin/python -m bench.polling --quick    # two SynScan rows, 2 s windows (smoke test)
 """
 
@@ -38,7 +45,9 @@ from pathlib import Path
 
 import aiohttp
 
-from scopelink.astro import Site
+from scopelink.astro import Site, j2000_to_observed
+from scopelink.astro.catalog import lookup
+from scopelink.cli.config import GREENWICH
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
@@ -243,6 +252,56 @@ async def measure(driver: str, paced: bool, client: str, window_s: float, home: 
         await _stop(emulator)
 
 
+def _away_from_sun() -> tuple[float, float]:
+    """Altitude 60° opposite the Sun's azimuth at Greenwich now (never refused by day)."""
+    site = GREENWICH  # serve's site without a settings file
+    now = datetime.now(UTC)
+    sun = lookup("Sun", now, site)
+    _, az = j2000_to_observed(sun.ra_hours, sun.dec_deg, now, site)
+    return 60.0, (az + 180.0) % 360.0
+
+
+async def measure_goto(home: Path) -> tuple[float, float, float]:
+    """``scopelink goto --altaz`` against the unpaced SynScan emulator: (CPU cores, seconds,
+    busier-direction bytes per second on the link) over the whole command."""
+    emulator = await _scopelink(home, "emulate", "synscan", "--tcp", "127.0.0.1:0", "--no-pacing")
+    relay: Relay | None = None
+    try:
+        printed = await _read_until(emulator, r"listening on")
+        found = re.search(r"127\.0\.0\.1:(\d+)", printed)
+        assert found is not None
+        relay = Relay(int(found.group(1)))
+        port = await relay.start()
+        alt, az = _away_from_sun()
+        loop = asyncio.get_running_loop()
+        started = loop.time()
+        goto = await _scopelink(
+            home,
+            "goto",
+            "--altaz",
+            f"{alt:.1f}",
+            f"{az:.1f}",
+            "-d",
+            f"synscan:tcp://127.0.0.1:{port}",
+        )
+        cpu = 0.0
+        while goto.returncode is None:
+            with contextlib.suppress(OSError, IndexError):
+                cpu = cpu_s(goto.pid)
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(0.2):
+                    await goto.wait()
+        elapsed = loop.time() - started
+        if goto.returncode != 0:
+            raise RuntimeError(f"scopelink goto exited with {goto.returncode}")
+        busier = max(relay.to_device, relay.from_device) / elapsed
+        return cpu / elapsed, elapsed, busier
+    finally:
+        if relay is not None:
+            await relay.close()
+        await _stop(emulator)
+
+
 async def reader_ages(seconds: float) -> tuple[float, float]:
     """(worst age, mean poll period) in seconds for a 10 Hz reader of the SynScan driver."""
     site = Site(latitude_deg=48.0, longitude_deg=11.0)
@@ -267,6 +326,110 @@ async def reader_ages(seconds: float) -> tuple[float, float]:
         finally:
             await driver.disconnect()
     return worst, period
+
+
+def rss_mib(pid: int) -> float:
+    status = Path(f"/proc/{pid}/status").read_text()
+    found = re.search(r"^VmRSS:\s+(\d+) kB", status, re.MULTILINE)
+    return int(found.group(1)) / 1024 if found else 0.0
+
+
+async def _page(http: aiohttp.ClientSession, base: str, updates: int | None) -> None:
+    """A dashboard page: ``/``, then its WebSocket (hello, then ``updates`` updates, or all)."""
+    async with http.get(f"{base}/") as response:
+        await response.read()
+    async with http.ws_connect(f"{base}/ws") as ws:
+        seen = -1
+        async for _ in ws:
+            seen += 1
+            if updates is not None and seen >= updates:
+                break
+
+
+async def _reloads(http: aiohttp.ClientSession, base: str) -> None:
+    while True:
+        await _page(http, base, 2)
+        await asyncio.sleep(2.0)
+
+
+async def memory(minutes: float) -> int:
+    """Part 6: serve's RSS with the dashboard open (see the module's docstring)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        home = Path(tmp)
+        emulator = await _scopelink(home, "emulate", "synscan", "--tcp", "127.0.0.1:0")
+        serve: asyncio.subprocess.Process | None = None
+        tasks: list[asyncio.Task[None]] = []
+        samples: list[tuple[float, float]] = []
+        try:
+            printed = await _read_until(emulator, r"listening on")
+            found = re.search(r"127\.0\.0\.1:(\d+)", printed)
+            assert found is not None
+            serve = await _scopelink(
+                home,
+                "serve",
+                "--device",
+                f"synscan:tcp://127.0.0.1:{found.group(1)}",
+                "--alpaca-port=0",
+                "--discovery-port=-1",
+                "--lx200-port=-1",
+                "--skyfi-port=-1",
+                "--stellarium-port=-1",
+                "--synscan-port=-1",
+                "--dashboard-port=0",
+            )
+            printed = await _read_until(serve, r"^Ctrl-C stops\.$")
+            alpaca = re.search(r"Alpaca\s+http://127\.0\.0\.1:(\d+)", printed)
+            dashboard = re.search(r"Dashboard\s+http://127\.0\.0\.1:(\d+)", printed)
+            assert alpaca is not None
+            assert dashboard is not None
+            base = f"http://127.0.0.1:{dashboard.group(1)}"
+            async with aiohttp.ClientSession() as http:
+                tasks = [
+                    asyncio.create_task(_page(http, base, None)),
+                    asyncio.create_task(_reloads(http, base)),
+                    asyncio.create_task(_alpaca_reader(int(alpaca.group(1)), READER_PERIOD_S)),
+                ]
+                loop = asyncio.get_running_loop()
+                started = loop.time()
+                while (elapsed := loop.time() - started) < minutes * 60.0:
+                    if any(task.done() for task in tasks):
+                        for task in tasks:
+                            if task.done():
+                                task.result()  # a client that failed: say why
+                    samples.append((elapsed, rss_mib(serve.pid)))
+                    await asyncio.sleep(5.0)
+                for task in tasks:
+                    task.cancel()
+                await asyncio.gather(*tasks, return_exceptions=True)
+        finally:
+            if serve is not None:
+                await _stop(serve)
+            await _stop(emulator)
+    first = max(rss for at, rss in samples if at <= 60.0)
+    later = [(at, rss) for at, rss in samples if at > 60.0]
+    peak = max((rss for _, rss in later), default=first)
+    slope = _slope_per_h(later)
+    projected = peak + max(0.0, slope) * max(0.0, 1.0 - samples[-1][0] / 3600.0)
+    ok = peak - first <= 20.0 and projected - first <= 20.0
+    print(
+        f"memory: serve with the dashboard open {samples[-1][0] / 60:.1f} min "
+        f"({len(samples)} samples): first minute {first:.1f} MiB, later peak {peak:.1f} MiB "
+        f"(+{peak - first:.1f}), last {samples[-1][1]:.1f} MiB, growth {slope:+.1f} MiB/h, "
+        f"projected to 1 h {projected:.1f} MiB (+{projected - first:.1f}); goal +20 MiB: "
+        f"{'met' if ok else 'MISSED'}"
+    )
+    return 0 if ok else 1
+
+
+def _slope_per_h(samples: list[tuple[float, float]]) -> float:
+    if len(samples) < 2:
+        return 0.0
+    n = len(samples)
+    mean_t = sum(at for at, _ in samples) / n
+    mean_m = sum(rss for _, rss in samples) / n
+    var = sum((at - mean_t) ** 2 for at, _ in samples)
+    cov = sum((at - mean_t) * (rss - mean_m) for at, rss in samples)
+    return cov / var * 3600.0 if var else 0.0
 
 
 def _commit() -> str:
@@ -301,6 +464,15 @@ async def main(window_s: float, *, quick: bool = False) -> int:
                 f"{row.core:6.3f} {row.to_device_b_s:6.0f}/s {row.from_device_b_s:7.0f}/s "
                 f"{row.line:6.1%}  {goal}: {'met' if ok else 'MISSED'}"
             )
+        if not quick:
+            core, took, busier = await measure_goto(home)
+            ok = core <= INSTANT_CORE_GOAL and busier <= LINE_BYTES_PER_S
+            failed |= not ok
+            print(
+                f"scopelink goto (instant SynScan, whole command incl. start-up): {core:.3f} core "
+                f"over {took:.1f} s, link {busier:.0f} B/s ({busier / LINE_BYTES_PER_S:.1%}); "
+                f"goal core <= {INSTANT_CORE_GOAL}, line <= 100%: {'met' if ok else 'MISSED'}"
+            )
     worst, period = await reader_ages(window_s)
     ok = worst <= READER_PERIOD_S
     failed |= not ok
@@ -318,7 +490,12 @@ def cli(argv: list[str] | None = None) -> None:
         "--quick", action="store_true", help="two SynScan rows, 2 s windows (the smoke test)"
     )
     parser.add_argument("--window", type=float, default=20.0, help="seconds per row")
+    parser.add_argument("--memory", action="store_true", help="part 6: serve's RSS over time")
+    parser.add_argument("--minutes", type=float, default=60.0, help="--memory: how long")
     args = parser.parse_args(argv)
+    if args.memory:
+        print(f"bench.polling --memory  {datetime.now(UTC):%Y-%m-%d %H:%M} UTC  commit {_commit()}")
+        sys.exit(asyncio.run(memory(args.minutes)))
     window_s = 2.0 if args.quick else args.window
     sys.exit(asyncio.run(main(window_s, quick=args.quick)))
 
