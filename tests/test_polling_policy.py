@@ -10,6 +10,7 @@ import asyncio
 import re
 from pathlib import Path
 
+import aiohttp
 import pytest
 
 from scopelink.astro import Site
@@ -25,6 +26,7 @@ from scopelink.mount.polling import (
     PollPolicy,
 )
 from scopelink.sim import EQ6, SimulatedMount
+from scopelink.web import Dashboard
 from tests.test_polling_demand import LINE_BYTES_PER_S, skytracker_driver, synscan_driver
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -196,3 +198,13 @@ def test_the_docs_and_the_example_state_the_defaults_the_code_has() -> None:
     ):
         assert re.search(rf"^{key} = {value}\b", cli, re.MULTILINE), key
         assert re.search(rf"# {key} = {value}\b", EXAMPLE_CONFIG), key
+
+
+async def test_an_open_dashboard_page_raises_the_rate_and_its_departure_lowers_it() -> None:
+    async with synscan_driver() as driver, Dashboard(driver, port=0) as dashboard:
+        async with aiohttp.ClientSession() as http, http.ws_connect(f"{dashboard.url}ws") as ws:
+            await ws.receive()  # the hello: the page's updates start
+            await asyncio.sleep(0.5)
+            assert await polls_in(driver, 0.5) >= 10
+        await asyncio.sleep(DEFAULT_DEMAND_HOLD_S + 0.3)  # the page has gone
+        assert driver.poller.watchers == 0 or await polls_in(driver, 1.0) <= 2
