@@ -292,8 +292,9 @@ class Mount(ABC):
         return (0, 0)
 
     def _motion_commanded(self) -> None:
-        """A command that moves the mount went out: poll at full rate now (its slewing state
-        then keeps the rate up) rather than at the end of an idle period."""
+        """A command that moves the mount goes out (called before it is sent, so one that fails
+        half-way is watched too): poll at full rate from now (its slewing state then keeps the
+        rate up) rather than at the end of an idle period."""
         self._poller.demand()
 
     @property
@@ -389,8 +390,8 @@ class Mount(ABC):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._check_sun(alt, az)
-        await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._motion_commanded()
+        await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
@@ -410,8 +411,8 @@ class Mount(ABC):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._check_sun(alt_deg, az_deg)
-        await self._goto_horizontal(alt_deg, az_deg)
         self._motion_commanded()
+        await self._goto_horizontal(alt_deg, az_deg)
         self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
@@ -477,8 +478,8 @@ class Mount(ABC):
         if not self.engaged:
             self._require_connected()
         cancels_park = self.parking
-        await self._abort()
         self._motion_commanded()  # seen to stop at full rate
+        await self._abort()
         self._guard.motions_stopped()
         if cancels_park:  # stopped short of the park position: not parked
             self._parking = False
@@ -506,8 +507,8 @@ class Mount(ABC):
             self._guard.check_move(axis, rate_deg_s, self.state)
         except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
             self._guard.check_move(axis, rate_deg_s, await self.refresh())
-        await start()
         self._motion_commanded()
+        await start()
         self._guard.motion_commanded(axis, rate_deg_s)
 
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
@@ -517,8 +518,8 @@ class Mount(ABC):
             raise InvalidValueError(
                 f"guide pulse {duration_ms} ms must lie in [0, {MAX_PULSE_GUIDE_MS}]"
             )
-        await self._pulse_guide(direction, duration_ms)
         self._motion_commanded()
+        await self._pulse_guide(direction, duration_ms)
 
     async def set_tracking(self, mode: TrackingMode) -> None:
         """Start tracking in ``mode`` or stop it with ``TrackingMode.OFF``."""
@@ -541,9 +542,9 @@ class Mount(ABC):
         await self._check_sun(park.alt_deg, park.az_deg, what="park position")
         if self._park_position_chosen:  # the limits may have changed since it was chosen
             check_park_position(self._park_position, self._limits)
+        self._motion_commanded()
         await self._park()
         self._parking = True
-        self._motion_commanded()
         self._guard.motions_stopped()
 
     async def unpark(self) -> None:
