@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import logging
 import os
 import re
 import signal
@@ -261,9 +262,20 @@ def _away_from_sun() -> tuple[float, float]:
     return 60.0, (az + 180.0) % 360.0
 
 
-async def measure_goto(home: Path) -> tuple[float, float, float]:
-    """``scopelink goto --altaz`` against the unpaced SynScan emulator: (CPU cores, seconds,
-    busier-direction bytes per second on the link) over the whole command."""
+@dataclass(frozen=True, slots=True)
+class GotoRun:
+    core: float
+    """CPU over the whole command, Python's start-up and imports included."""
+    seconds: float
+    linked_core: float
+    """CPU from the first byte on the link to the end (connect, identify, slew polls)."""
+    linked_s: float
+    busier_b_s: float
+    """The busier direction's bytes per second on the link while linked."""
+
+
+async def measure_goto(home: Path) -> GotoRun:
+    """``scopelink goto --altaz`` against the unpaced SynScan emulator."""
     emulator = await _scopelink(home, "emulate", "synscan", "--tcp", "127.0.0.1:0", "--no-pacing")
     relay: Relay | None = None
     try:
@@ -285,17 +297,26 @@ async def measure_goto(home: Path) -> tuple[float, float, float]:
             f"synscan:tcp://127.0.0.1:{port}",
         )
         cpu = 0.0
+        linked: tuple[float, float] | None = None  # (CPU, time) at the first byte on the link
         while goto.returncode is None:
             with contextlib.suppress(OSError, IndexError):
                 cpu = cpu_s(goto.pid)
+            if linked is None and relay.to_device:
+                linked = (cpu, loop.time())
             with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(0.2):
+                async with asyncio.timeout(0.05):
                     await goto.wait()
-        elapsed = loop.time() - started
-        if goto.returncode != 0:
+        ended = loop.time()
+        if goto.returncode != 0 or linked is None:
             raise RuntimeError(f"scopelink goto exited with {goto.returncode}")
-        busier = max(relay.to_device, relay.from_device) / elapsed
-        return cpu / elapsed, elapsed, busier
+        linked_s = ended - linked[1]
+        return GotoRun(
+            cpu / (ended - started),
+            ended - started,
+            (cpu - linked[0]) / linked_s,
+            linked_s,
+            max(relay.to_device, relay.from_device) / linked_s,
+        )
     finally:
         if relay is not None:
             await relay.close()
@@ -444,6 +465,8 @@ def _commit() -> str:
 
 
 async def main(window_s: float, *, quick: bool = False) -> int:
+    # A poll in flight when a measured driver disconnects fails with a warning: not a finding.
+    logging.getLogger("scopelink").setLevel(logging.ERROR)
     print(
         f"bench.polling  {datetime.now(UTC):%Y-%m-%d %H:%M} UTC  commit {_commit()}  "
         f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}  window {window_s:g} s"
@@ -465,13 +488,15 @@ async def main(window_s: float, *, quick: bool = False) -> int:
                 f"{row.line:6.1%}  {goal}: {'met' if ok else 'MISSED'}"
             )
         if not quick:
-            core, took, busier = await measure_goto(home)
-            ok = core <= INSTANT_CORE_GOAL and busier <= LINE_BYTES_PER_S
+            run = await measure_goto(home)
+            ok = run.linked_core <= INSTANT_CORE_GOAL and run.busier_b_s <= LINE_BYTES_PER_S
             failed |= not ok
             print(
-                f"scopelink goto (instant SynScan, whole command incl. start-up): {core:.3f} core "
-                f"over {took:.1f} s, link {busier:.0f} B/s ({busier / LINE_BYTES_PER_S:.1%}); "
-                f"goal core <= {INSTANT_CORE_GOAL}, line <= 100%: {'met' if ok else 'MISSED'}"
+                f"scopelink goto (instant SynScan): {run.core:.3f} core over the whole "
+                f"{run.seconds:.1f} s (Python start-up included), {run.linked_core:.3f} core over "
+                f"the {run.linked_s:.1f} s on the link, link {run.busier_b_s:.0f} B/s "
+                f"({run.busier_b_s / LINE_BYTES_PER_S:.1%}); goal (on the link) core <= "
+                f"{INSTANT_CORE_GOAL}, line <= 100%: {'met' if ok else 'MISSED'}"
             )
     worst, period = await reader_ages(window_s)
     ok = worst <= READER_PERIOD_S
