@@ -9,10 +9,11 @@ driver, all in this process and on the default event loop, as in serve. A second
 (``--flood``) then opens hundreds of TCP connections across the three servers, from several
 loopback source addresses (127.0.0.2, 127.0.0.3, ...: distinct clients to the policy, while
 every packet still goes to 127.0.0.1), and on each connection admitted sends reads back to back.
-The figure is the poller's rate (``mount.poller.polls`` per second) under the flood against its
-unloaded rate (measured before and after the flood, averaged), with the default access policy
-and with no limits at all for comparison. Connections beyond the limits must be refused
-cleanly: Alpaca answers 503 and closes, LX200 and SynScan close without a byte.
+The figure is the poller's rate (``mount.poller.polls`` per second, held at full rate
+throughout: the rate a slew, the horizon guard or a reading client needs) under the flood
+against its unloaded rate (measured before and after the flood, averaged), with the default
+access policy and with no limits at all for comparison. Connections beyond the limits must be
+refused cleanly: Alpaca answers 503 and closes, LX200 and SynScan close without a byte.
 """
 
 from __future__ import annotations
@@ -224,7 +225,9 @@ class FloodResult:
 async def measure(policy: AccessPolicy, sizes: Sizes) -> FloodResult:
     """Poll rate unloaded, then under a flood from another process, on one rig."""
     with TemporaryDirectory() as state_dir:
-        async with serving(policy, Path(state_dir)) as rig:
+        # At full rate throughout (issue #14's poll policy would otherwise idle at 1 poll/s
+        # before the flood and run at full rate during it, because its reads demand that).
+        async with serving(policy, Path(state_dir)) as rig, rig.mount.poller.holding_full_rate():
             await asyncio.sleep(0.5)  # the first polls include the connection's settling
             before = await poll_rate(rig.mount, sizes.seconds / 2)
             process = await asyncio.create_subprocess_exec(

@@ -21,7 +21,7 @@ import platformdirs
 from scopelink.astro import Site
 from scopelink.mount import InvalidValueError, Limits
 from scopelink.mount.limits import DEFAULT_MAX_SYNC_DEG, SUN_AVOIDANCE_DEG
-from scopelink.mount.polling import DEFAULT_STALE_AFTER_S, check_stale_after
+from scopelink.mount.polling import DEFAULT_STALE_AFTER_S, PollPolicy, check_stale_after
 from scopelink.servers.access import DEFAULT_POLICY, IPNetwork, parse_network
 
 __all__ = [
@@ -93,6 +93,9 @@ class Config:
     servers: ServersConfig = field(default_factory=ServersConfig)
     stale_after_s: float = DEFAULT_STALE_AFTER_S
     """``[readings] stale_after_s``: a reading older than this is not served as current."""
+    poll_policy: PollPolicy = field(default_factory=PollPolicy)
+    """``[readings] idle_poll_s``, ``demand_hold_s``, ``max_poll_baud``: how often the mount is
+    polled (docs/mount-api.md, "The poll policy")."""
 
 
 def config_path() -> Path:
@@ -127,7 +130,7 @@ def parse_config(text: str, path: Path) -> Config:
 
 
 _TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers", "readings")
-_READINGS_KEYS: Final = ("stale_after_s",)
+_READINGS_KEYS: Final = ("stale_after_s", "idle_poll_s", "demand_hold_s", "max_poll_baud")
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
 _LIMITS_KEYS: Final = ("max_altitude", "sun_avoidance_deg", "max_sync_deg")
@@ -179,6 +182,7 @@ class _Reader:
             limits=self.limits(self.table(data, "horizon"), self.table(data, "limits")),
             servers=self.servers(self.table(data, "servers")),
             stale_after_s=self.readings(self.table(data, "readings")),
+            poll_policy=self.poll_policy(self.table(data, "readings")),
         )
 
     def readings(self, table: dict[str, Any]) -> float:
@@ -190,6 +194,22 @@ class _Reader:
             return check_stale_after(seconds)
         except ValueError as error:
             raise self.error("readings.stale_after_s", str(error)) from None
+
+    def poll_policy(self, table: dict[str, Any]) -> PollPolicy:
+        defaults = PollPolicy()
+        values: dict[str, Any] = {}
+        for key in ("idle_poll_s", "demand_hold_s", "max_poll_baud"):
+            number = self.number(table, key, "readings")
+            values[key] = getattr(defaults, key) if number is None else number
+        baud = values["max_poll_baud"]
+        if baud != int(baud):
+            raise self.error("readings.max_poll_baud", f"expected a whole number, got {baud!r}")
+        values["max_poll_baud"] = int(baud)
+        try:
+            return PollPolicy(**values)
+        except ValueError as error:
+            key = str(error).split(" ", 1)[0]
+            raise self.error(f"readings.{key}", str(error)) from None
 
     def known(self, table: Mapping[str, Any], prefix: str, keys: tuple[str, ...]) -> None:
         for key in table:

@@ -49,6 +49,9 @@ synscan = 11880
 
 # [readings]
 # stale_after_s = 2.0               # an older reading is not served as current (0.2-5 s)
+# idle_poll_s = 1.0                 # poll period while nothing needs more (0.1-2.5 s)
+# demand_hold_s = 2.0               # a client's read keeps the full poll rate this long
+# max_poll_baud = 9600              # polls never move more than a line of this many baud
 """
 
 _EXAMPLES = f"""\
@@ -190,5 +193,12 @@ def show(config: Config) -> str:
     if servers.alpaca_allow is not None:
         networks = [str(network) for network in servers.alpaca_allow]
         lines.append(f"# [servers.alpaca] allow = {networks}")
-    lines += ["", "[readings]", f"stale_after_s = {config.stale_after_s}"]
+    lines += [
+        "",
+        "[readings]",
+        f"stale_after_s = {config.stale_after_s}",
+        f"idle_poll_s = {config.poll_policy.idle_poll_s}",
+        f"demand_hold_s = {config.poll_policy.demand_hold_s}",
+        f"max_poll_baud = {config.poll_policy.max_poll_baud}",
+    ]
     return "\n".join(lines) + "\n"

@@ -168,6 +168,7 @@ async def open_device(command: DeviceCommand) -> Mount:
     except DeviceError as error:
         raise CommandError(str(error), error.hint) from None
     mount.stale_after_s = command.config.stale_after_s
+    mount.poll_policy = command.config.poll_policy
     warn_if_sun_unguarded(mount.limits)
     return mount
 

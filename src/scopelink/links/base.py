@@ -50,6 +50,9 @@ class Link(ABC):
     def __init__(self, name: str) -> None:
         self._name = name
         self._closed = False
+        self.bytes_read = 0
+        """Bytes read and written since the link opened (the poller's line cap counts them)."""
+        self.bytes_written = 0
 
     @property
     def name(self) -> str:
@@ -77,6 +80,7 @@ class Link(ABC):
         except LinkClosedError:
             await self._release_after_end()
             raise
+        self.bytes_read += len(data)
         trace_transfer("<--", self._name, data)
         return data
 
@@ -97,6 +101,7 @@ class Link(ABC):
         payload = bytes(data)
         if not payload:
             return
+        self.bytes_written += len(payload)
         trace_transfer("-->", self._name, payload)
         try:
             await self._write_all(payload)

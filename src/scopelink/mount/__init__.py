@@ -13,7 +13,7 @@ from scopelink.mount.errors import (
     SunAvoidanceError,
 )
 from scopelink.mount.limits import Limits
-from scopelink.mount.polling import DEFAULT_STALE_AFTER_S
+from scopelink.mount.polling import DEFAULT_STALE_AFTER_S, PollPolicy
 from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.mount.types import (
     AlignmentMode,
@@ -49,6 +49,7 @@ __all__ = [
     "ParkPosition",
     "ParkedError",
     "PierSide",
+    "PollPolicy",
     "Priority",
     "SlewProgress",
     "SlewTarget",

@@ -30,6 +30,7 @@ from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
 from scopelink.mount.limits import Limits
 from scopelink.mount.polling import (
     DEFAULT_STALE_AFTER_S,
+    PollPolicy,
     StateBroadcast,
     StatePoller,
     check_stale_after,
@@ -86,9 +87,11 @@ class Mount(ABC):
     """A telescope mount, whatever protocol (or simulation) is behind it.
 
     Reads come from a state cache (:attr:`state`) that a background poller keeps fresh while
-    anyone is inside :meth:`watching` (or iterating :meth:`states`). ``poll_interval_s`` is the
-    shortest time between two polls: 0 for a device on a wire (the wire paces it), more for
-    mounts whose refresh costs only CPU.
+    anyone is inside :meth:`watching` (or iterating :meth:`states`), at the rate
+    :attr:`poll_policy` gives: full rate while something needs it, else slowly (see
+    :mod:`scopelink.mount.polling`). ``poll_interval_s`` is the shortest time between two polls:
+    0 for a device on a wire (the line cap paces it), more for mounts whose refresh costs only
+    CPU (which poll at that rate whenever watched: there is no line to spare).
     """
 
     poll_interval_s: float = 0.0
@@ -120,6 +123,9 @@ class Mount(ABC):
             self._broadcast,
             interval_s=self.poll_interval_s,
             retry_s=self.poll_retry_s,
+            full_rate_needed=self._full_rate_needed,
+            idle_period_s=lambda: self._poller.policy.idle_period_s(self._stale_after_s),
+            line_bytes=self._line_bytes,
         )
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
@@ -238,7 +244,9 @@ class Mount(ABC):
 
     def fresh_state(self, *, position: bool = True) -> MountState:
         """The cache if it may be served as current, else the error saying why (see
-        :func:`~scopelink.mount.polling.require_fresh`); ``position``: judge its age."""
+        :func:`~scopelink.mount.polling.require_fresh`); ``position``: judge its age.
+        A reader: the poller runs at full rate for the next ``poll_policy.demand_hold_s``."""
+        self._poller.demand()
         name = self.identity.model or "the mount"
         return require_fresh(self.state, self._stale_after_s, position=position, name=name)
 
@@ -250,8 +258,44 @@ class Mount(ABC):
         return await self.refresh()
 
     def watching(self) -> AbstractAsyncContextManager[None]:
-        """Keep :attr:`state` fresh (polling as fast as the wire allows) inside ``async with``."""
+        """Keep :attr:`state` fresh inside ``async with``: polled at the rate the poll policy
+        gives (idle unless a reader, a slew or the guard needs more)."""
         return self._poller.watching()
+
+    @property
+    def poll_policy(self) -> PollPolicy:
+        """How often the poller polls: idle period, how long a read raises the rate, the line
+        cap (see :mod:`scopelink.mount.polling` and docs/mount-api.md)."""
+        return self._poller.policy
+
+    @poll_policy.setter
+    def poll_policy(self, policy: PollPolicy) -> None:
+        if not isinstance(policy, PollPolicy):
+            raise InvalidValueError(f"a poll policy is a PollPolicy, not {policy!r}")
+        self._poller.policy = policy
+        self._poller.wake()
+
+    def _full_rate_needed(self) -> bool:
+        """Whether the mount itself needs full-rate polls: it slews (a goto, a park, a rate
+        motion, an unconfirmed stop), guides, or is on its way to park; always for a mount
+        whose refresh costs no wire (its ``poll_interval_s`` paces it)."""
+        if not self.refresh_uses_wire:
+            return True
+        state = self.state
+        return (
+            state.slewing or state.pulse_guiding or self._parking or bool(self._guard.rate_motions)
+        )
+
+    def _line_bytes(self) -> tuple[int, int]:
+        """Bytes (sent, received) on the link so far: the poller keeps each poll's within the
+        line cap. (0, 0) where nothing is counted."""
+        return (0, 0)
+
+    def _motion_commanded(self) -> None:
+        """A command that moves the mount goes out (called before it is sent, so one that fails
+        half-way is watched too): poll at full rate from now (its slewing state then keeps the
+        rate up) rather than at the end of an idle period."""
+        self._poller.demand()
 
     @property
     def poller(self) -> StatePoller:
@@ -261,7 +305,7 @@ class Mount(ABC):
     async def states(self) -> AsyncGenerator[MountState, None]:
         """Each newly published state, starting with the current one; watches while iterating.
         A slow consumer skips states rather than queueing them."""
-        async with self.watching():
+        async with self.watching(), self._poller.holding_full_rate():
             version = self._broadcast.version
             yield self.state
             while True:
@@ -346,6 +390,7 @@ class Mount(ABC):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._check_sun(alt, az)
+        self._motion_commanded()
         await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
@@ -366,6 +411,7 @@ class Mount(ABC):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._check_sun(alt_deg, az_deg)
+        self._motion_commanded()
         await self._goto_horizontal(alt_deg, az_deg)
         self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
@@ -432,6 +478,7 @@ class Mount(ABC):
         if not self.engaged:
             self._require_connected()
         cancels_park = self.parking
+        self._motion_commanded()  # seen to stop at full rate
         await self._abort()
         self._guard.motions_stopped()
         if cancels_park:  # stopped short of the park position: not parked
@@ -460,6 +507,7 @@ class Mount(ABC):
             self._guard.check_move(axis, rate_deg_s, self.state)
         except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
             self._guard.check_move(axis, rate_deg_s, await self.refresh())
+        self._motion_commanded()
         async with self._guard.starting(axis, rate_deg_s):  # watched before its command leaves
             await start()
 
@@ -470,6 +518,7 @@ class Mount(ABC):
             raise InvalidValueError(
                 f"guide pulse {duration_ms} ms must lie in [0, {MAX_PULSE_GUIDE_MS}]"
             )
+        self._motion_commanded()
         await self._pulse_guide(direction, duration_ms)
 
     async def set_tracking(self, mode: TrackingMode) -> None:
@@ -493,6 +542,7 @@ class Mount(ABC):
         await self._check_sun(park.alt_deg, park.az_deg, what="park position")
         if self._park_position_chosen:  # the limits may have changed since it was chosen
             check_park_position(self._park_position, self._limits)
+        self._motion_commanded()
         await self._park()
         self._parking = True
         self._guard.motions_stopped()

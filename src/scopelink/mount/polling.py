@@ -1,12 +1,21 @@
 """The state cache behind every front end: one poller per mount, running while anyone watches.
 
 Front ends never wait on the wire to answer a read: they take :attr:`Mount.state`, which this
-poller keeps fresh by calling ``refresh()`` back to back (no faster than ``interval_s``) for as long
-as at least one watcher is registered. A failed poll keeps the last good reading, names the cause
-in ``problems`` and is retried after ``retry_s``, doubling with each failure in a row up to
-``max_retry_s``; the poller itself never dies of a device error. It polls while the mount is
-*engaged* (connected, or its link lost but not disconnected): a driver's ``refresh`` reopens a lost
-link, so polling on is what brings it back (docs/reliability-safety.md, "Lost and stalled devices").
+poller keeps fresh by calling ``refresh()`` for as long as at least one watcher is registered.
+
+How often (the poll policy, :class:`PollPolicy`; docs/mount-api.md, "The poll policy"): at full
+rate only while something needs it (a reader's :meth:`StatePoller.demand` within the last
+``demand_hold_s``, a :meth:`StatePoller.holding_full_rate` holder such as a ``Mount.states()``
+consumer,
+or the mount's own ``full_rate_needed``: a slew, a park, a rate motion); otherwise once every
+``idle_poll_s``. Even at full rate a poll starts no sooner than the previous one's bytes would
+take on a line of ``max_poll_baud`` (10 bits a byte), whatever the link.
+
+A failed poll keeps the last good reading, names the cause in ``problems`` and is retried after
+``retry_s``, doubling with each failure in a row up to ``max_retry_s``; the poller itself never
+dies of a device error. It polls while the mount is *engaged* (connected, or its link lost but
+not disconnected): a driver's ``refresh`` reopens a lost link, so polling on is what brings it
+back (docs/reliability-safety.md, "Lost and stalled devices").
 """
 
 from __future__ import annotations
@@ -15,6 +24,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import math
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 
@@ -22,10 +32,15 @@ from scopelink.mount.errors import NotConnectedError, StaleReadingError
 from scopelink.mount.types import MountState, TrackingMode
 
 __all__ = [
+    "BITS_PER_BYTE",
+    "DEFAULT_DEMAND_HOLD_S",
+    "DEFAULT_IDLE_POLL_S",
+    "DEFAULT_MAX_POLL_BAUD",
     "DEFAULT_STALE_AFTER_S",
     "MAX_RETRY_S",
     "MAX_STALE_AFTER_S",
     "MIN_STALE_AFTER_S",
+    "PollPolicy",
     "StateBroadcast",
     "StatePoller",
     "check_stale_after",
@@ -46,6 +61,53 @@ MAX_STALE_AFTER_S = 5.0
 MAX_RETRY_S = 2.0
 """The poller's back-off after failures in a row stops growing here: a device that comes back is
 polled again within this (plus one attempt), inside the 5 s the reconnect promise gives."""
+
+DEFAULT_IDLE_POLL_S = 1.0
+"""With nothing needing more, the mount is polled once a second (as INDI does)."""
+IDLE_POLL_RANGE_S = (0.1, 2.5)
+"""Allowed ``idle_poll_s``: at most half the longest ``stale_after_s``."""
+DEFAULT_DEMAND_HOLD_S = 2.0
+"""A read raises the rate to full for this long: a client reading at least this often gets
+full-rate readings; a slower one, idle-rate readings no older than ``idle_poll_s``."""
+DEMAND_HOLD_RANGE_S = (0.1, 60.0)
+DEFAULT_MAX_POLL_BAUD = 9600
+"""The poller never moves more bytes a second (either way) than a 9600-baud line carries."""
+MAX_POLL_BAUD_RANGE = (2400, 1_000_000)
+"""Below 2400 baud a SynScan full read would take a quarter of a second of line time."""
+BITS_PER_BYTE = 10
+"""A byte on an 8N1 line: start bit, 8 data bits, stop bit."""
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class PollPolicy:
+    """How often the poller polls (see the module's docstring); checked on construction."""
+
+    idle_poll_s: float = DEFAULT_IDLE_POLL_S
+    demand_hold_s: float = DEFAULT_DEMAND_HOLD_S
+    max_poll_baud: int = DEFAULT_MAX_POLL_BAUD
+
+    def __post_init__(self) -> None:
+        _check_range("idle_poll_s", self.idle_poll_s, IDLE_POLL_RANGE_S, "seconds")
+        _check_range("demand_hold_s", self.demand_hold_s, DEMAND_HOLD_RANGE_S, "seconds")
+        if isinstance(self.max_poll_baud, bool) or not isinstance(self.max_poll_baud, int):
+            raise ValueError(f"max_poll_baud {self.max_poll_baud!r} must be a whole number")
+        _check_range("max_poll_baud", self.max_poll_baud, MAX_POLL_BAUD_RANGE, "baud")
+
+    @property
+    def max_bytes_per_s(self) -> float:
+        return self.max_poll_baud / BITS_PER_BYTE
+
+    def idle_period_s(self, stale_after_s: float) -> float:
+        """The idle poll period in force: ``idle_poll_s``, at most half of ``stale_after_s``
+        (an idle mount's reading is then never older than ``stale_after_s``)."""
+        return min(self.idle_poll_s, stale_after_s / 2.0)
+
+
+def _check_range(name: str, value: object, bounds: tuple[float, float], unit: str) -> None:
+    low, high = bounds
+    number = value if isinstance(value, int | float) and not isinstance(value, bool) else None
+    if number is None or not low <= number <= high:  # (nan fails both comparisons)
+        raise ValueError(f"{name} {value!r} must lie in [{low:g}, {high:g}] {unit}")
 
 
 def check_stale_after(seconds: float) -> float:
@@ -120,7 +182,8 @@ class StateBroadcast:
 
 
 class StatePoller:
-    """Calls ``refresh`` in a background task while :meth:`watching` has at least one user."""
+    """Calls ``refresh`` in a background task while :meth:`watching` has at least one user, at
+    the rate the poll policy gives (see the module's docstring)."""
 
     def __init__(
         self,
@@ -132,6 +195,10 @@ class StatePoller:
         interval_s: float,
         retry_s: float,
         max_retry_s: float = MAX_RETRY_S,
+        policy: PollPolicy | None = None,
+        full_rate_needed: Callable[[], bool] = lambda: True,
+        idle_period_s: Callable[[], float] | None = None,
+        line_bytes: Callable[[], tuple[int, int]] = lambda: (0, 0),
     ) -> None:
         self._refresh = refresh
         self._is_engaged = is_engaged
@@ -140,12 +207,22 @@ class StatePoller:
         self.interval_s = interval_s
         self.retry_s = retry_s
         self.max_retry_s = max_retry_s
+        self.policy = policy or PollPolicy()
+        self._full_rate_needed = full_rate_needed
+        self._idle_period_s = idle_period_s or (lambda: self.policy.idle_poll_s)
+        self._line_bytes = line_bytes
         self.failures_in_a_row = 0
         self._watchers = 0
         self._task: asyncio.Task[None] | None = None
         self._refreshing = False
+        self._holders = 0
+        self._demand_until = -math.inf
+        self._wake: asyncio.Event | None = None
         self.polls = 0
         self.failures = 0
+        self.line_period_s = 0.0
+        """The last poll's bytes on a line of ``policy.max_poll_baud`` (seconds): no poll starts
+        sooner than this after the one before."""
 
     @property
     def watchers(self) -> int:
@@ -154,6 +231,43 @@ class StatePoller:
     @property
     def running(self) -> bool:
         return self._task is not None and not self._task.done()
+
+    @property
+    def full_rate(self) -> bool:
+        """Whether anything needs the full rate now (a holder, recent demand, the mount)."""
+        if self._holders > 0 or self._full_rate_needed():
+            return True
+        try:
+            now = asyncio.get_running_loop().time()
+        except RuntimeError:
+            return False
+        return now < self._demand_until
+
+    def demand(self) -> None:
+        """A reader wants current readings: full rate for the next ``policy.demand_hold_s``
+        (a poller waiting out its idle period polls at once)."""
+        try:
+            now = asyncio.get_running_loop().time()
+        except RuntimeError:  # no loop, so no poller to hurry
+            return
+        self._demand_until = max(self._demand_until, now + self.policy.demand_hold_s)
+        self.wake()
+
+    def wake(self) -> None:
+        """Re-judge the rate now (something that needs the full rate has started)."""
+        if self._wake is not None:
+            self._wake.set()
+
+    @asynccontextmanager
+    async def holding_full_rate(self) -> AsyncIterator[None]:
+        """Poll at full rate (within the line cap) for the body of the ``async with``; the
+        caller must be watching too."""
+        self._holders += 1
+        self.wake()
+        try:
+            yield
+        finally:
+            self._holders -= 1
 
     @asynccontextmanager
     async def watching(self) -> AsyncIterator[None]:
@@ -179,6 +293,7 @@ class StatePoller:
 
     async def _run(self) -> None:
         loop = asyncio.get_running_loop()
+        self._wake = asyncio.Event()
         last_error = ""
         while self._watchers > 0:
             started = loop.time()
@@ -186,6 +301,7 @@ class StatePoller:
                 await self._pause(self.retry_s)
                 continue
             self._refreshing = True
+            sent, received = self._line_bytes()
             try:
                 await self._refresh()
             except asyncio.CancelledError:
@@ -206,8 +322,34 @@ class StatePoller:
             last_error = ""
             self.failures_in_a_row = 0
             self.polls += 1
+            sent_now, received_now = self._line_bytes()
+            moved = max(sent_now - sent, received_now - received, 0)
+            # Never longer than the idle period: a reconnect's identification (~100 bytes) must
+            # not leave the reading stale before the next poll.
+            idle_s = self._idle_period_s()
+            self.line_period_s = min(moved / self.policy.max_bytes_per_s, idle_s)
             if self._watchers > 0:
-                await asyncio.sleep(max(0.0, self.interval_s - (loop.time() - started)))
+                await self._rest(started, max(self.interval_s, self.line_period_s))
+
+    async def _rest(self, started: float, shortest_s: float) -> None:
+        """Wait until the next poll is due: ``shortest_s`` after ``started`` at full rate, the
+        idle period after it otherwise (cut short when something needs the full rate)."""
+        loop = asyncio.get_running_loop()
+        wake = self._wake
+        assert wake is not None
+        while True:
+            wake.clear()
+            full = self.full_rate
+            period = shortest_s if full else max(shortest_s, self._idle_period_s())
+            left = started + period - loop.time()
+            if left <= 0.0:
+                return
+            if full:
+                await asyncio.sleep(left)
+                return
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(left):
+                    await wake.wait()
 
     def backoff_s(self) -> float:
         """The pause before the next poll after ``failures_in_a_row`` failures: ``retry_s``,

@@ -1,7 +1,8 @@
 """The WebSocket side of the dashboard: one broadcaster for every open page.
 
 While at least one page is connected, one task holds ``mount.watching()`` (so the state cache is
-polled), and every ``interval_s`` sends all pages the same update: the mount's state, the chart's
+polled; each update is a read that raises the poll rate, see docs/mount-api.md), and every
+``interval_s`` sends all pages the same update: the mount's state, the chart's
 objects (every ``sky_every`` updates: they cost ERFA time) and the new traffic lines. A page that
 cannot take an update within ``send_timeout_s`` is closed rather than allowed to stall the others.
 When the last page goes, polling stops.
@@ -117,6 +118,7 @@ class LiveHub:
                 if not self._sockets:
                     break
                 tick += 1
+                self._mount.poller.demand()  # a page reads continuously: see the poll policy
                 try:
                     message = await self.build_update(with_sky=tick % self._sky_every == 0)
                 except Exception:  # pages keep their last view; the next tick tries again

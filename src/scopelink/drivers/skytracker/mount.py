@@ -157,7 +157,7 @@ class SkyTrackerMount(Mount):
     """
 
     poll_interval_s = 0.0
-    """Background polls may run back to back: each takes ~25 ms of wire time."""
+    """Background polls may run back to back (within the poll policy's line cap)."""
 
     def __init__(
         self,
@@ -314,6 +314,10 @@ class SkyTrackerMount(Mount):
 
     def _needs_reconnect(self) -> bool:
         return self._line is None or self._line.link.closed or self._link_lost
+
+    def _line_bytes(self) -> tuple[int, int]:
+        link = self._line.link if self._line is not None else None
+        return (link.bytes_written, link.bytes_read) if link is not None else (0, 0)
 
     async def _drop_line(self) -> None:
         line, self._line = self._line, None
@@ -557,7 +561,7 @@ class SkyTrackerMount(Mount):
             since = time.monotonic() - self._goto_status_at
             if since < GOTO_STATUS_POLL_S:
                 await asyncio.sleep(GOTO_STATUS_POLL_S - since)
-        started = self.now()
+        started, started_real = self.now(), time.monotonic()
         try:
             self._note_status(await self._read_status(line, Priority.POLL))
             self._goto_status_at = time.monotonic()
@@ -575,8 +579,12 @@ class SkyTrackerMount(Mount):
             raise
         self._problems = ()
         state = self._publish_now()
-        # On the mount's clock, so an accelerated simulator gets a margin in simulated time.
+        # On the mount's clock, so an accelerated simulator gets a margin in simulated time;
+        # stretched as the poll policy's line cap stretches the period on a fast link.
         self._poll_s = (self.now() - started).total_seconds()
+        real_s = time.monotonic() - started_real
+        if real_s > 0.0:
+            self._poll_s *= max(1.0, self.poller.line_period_s / real_s)
         await self._guard_horizon(state)
         return self.state
 

@@ -313,6 +313,9 @@ class SynScanMount(Mount):
         self._reidentify = False
         logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
 
+    def _line_bytes(self) -> tuple[int, int]:
+        return self.wire.statistics.bytes_sent, self.wire.statistics.bytes_received
+
     def _standing_problems(self) -> tuple[str, ...]:
         # An unconfirmed stop stays named while polls fail (no motion is claimed meanwhile).
         return (self._owed.describe(),) if self._owed else ()
