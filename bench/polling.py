@@ -46,6 +46,7 @@ from pathlib import Path
 
 import aiohttp
 
+from bench.processes import start_scopelink
 from scopelink.astro import Site, j2000_to_observed
 from scopelink.astro.catalog import lookup
 from scopelink.cli.config import GREENWICH
@@ -131,26 +132,9 @@ class Relay:
         await asyncio.gather(pump(reader, device_writer, up), pump(device_reader, writer, down))
 
 
-def _environment(home: Path) -> dict[str, str]:
-    return {
-        **os.environ,
-        "PYTHONUNBUFFERED": "1",
-        "SCOPELINK_CONFIG": str(home / "absent.toml"),
-        "XDG_STATE_HOME": str(home / "state"),
-    }
-
-
 async def _scopelink(home: Path, *args: str) -> asyncio.subprocess.Process:
-    return await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "scopelink",
-        *args,
-        stdin=asyncio.subprocess.DEVNULL,
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.DEVNULL,
-        env=_environment(home),
-    )
+    """A long run never reads its children's errors: they go nowhere, not into a full pipe."""
+    return await start_scopelink(home, *args, stderr=asyncio.subprocess.DEVNULL)
 
 
 async def _read_until(process: asyncio.subprocess.Process, pattern: str) -> str:

@@ -42,6 +42,7 @@ from typing import Any, TypeVar
 
 import aiohttp
 
+from bench.processes import environment, start_scopelink
 from scopelink.astro import Site, observed_to_apparent, observed_to_j2000
 from scopelink.links import LinkError, open_tcp, precise_event_loop
 from scopelink.protocol.lx200.angles import format_dec, format_ra
@@ -368,7 +369,7 @@ async def _start_emulator(config: SoakConfig, home: Path) -> tuple[Emulator, int
         stdin=asyncio.subprocess.PIPE,
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
-        env=_environment(home),
+        env=environment(home),
         cwd=ROOT,
     )
     printed = await _read_until(process, lambda line: "listening on" in line)
@@ -378,28 +379,6 @@ async def _start_emulator(config: SoakConfig, home: Path) -> tuple[Emulator, int
 
 
 # --- the processes -------------------------------------------------------------------------------
-
-
-def _environment(home: Path) -> dict[str, str]:
-    return {
-        **os.environ,
-        "PYTHONUNBUFFERED": "1",
-        "SCOPELINK_CONFIG": str(home / "absent.toml"),
-        "XDG_STATE_HOME": str(home / "state"),
-    }
-
-
-async def _scopelink(home: Path, *args: str) -> asyncio.subprocess.Process:
-    return await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "scopelink",
-        *args,
-        stdin=asyncio.subprocess.DEVNULL,
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-        env=_environment(home),
-    )
 
 
 async def _read_until(process: asyncio.subprocess.Process, last: Callable[[str], bool]) -> str:
@@ -862,7 +841,7 @@ async def _running(tasks: list[asyncio.Task[None]]) -> AsyncIterator[None]:
 
 async def _start_serve(home: Path, device_port: int) -> tuple[asyncio.subprocess.Process, str]:
     """``scopelink serve`` on the emulated device, every server on a free port; what it printed."""
-    serve = await _scopelink(
+    serve = await start_scopelink(
         home,
         "serve",
         "--device",
