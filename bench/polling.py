@@ -137,6 +137,27 @@ async def _scopelink(home: Path, *args: str) -> asyncio.subprocess.Process:
     return await start_scopelink(home, *args, stderr=asyncio.subprocess.DEVNULL)
 
 
+async def _serve(
+    home: Path, device: str, *, dashboard: bool
+) -> tuple[asyncio.subprocess.Process, str]:
+    """``scopelink serve`` in front of ``device`` with Alpaca (and the dashboard) on free ports
+    and every other server off; returns the process and what it printed until it was ready."""
+    serve = await _scopelink(
+        home,
+        "serve",
+        "--device",
+        device,
+        "--alpaca-port=0",
+        "--discovery-port=-1",
+        "--lx200-port=-1",
+        "--skyfi-port=-1",
+        "--stellarium-port=-1",
+        "--synscan-port=-1",
+        f"--dashboard-port={0 if dashboard else -1}",
+    )
+    return serve, await _read_until(serve, r"^Ctrl-C stops\.$")
+
+
 async def _read_until(process: asyncio.subprocess.Process, pattern: str) -> str:
     assert process.stdout is not None
     lines: list[str] = []
@@ -194,20 +215,9 @@ async def measure(driver: str, paced: bool, client: str, window_s: float, home: 
         assert found is not None
         relay = Relay(int(found.group(1)))
         relay_port = await relay.start()
-        serve = await _scopelink(
-            home,
-            "serve",
-            "--device",
-            f"{driver}:tcp://127.0.0.1:{relay_port}",
-            "--alpaca-port=0",
-            "--discovery-port=-1",
-            "--lx200-port=-1",
-            "--skyfi-port=-1",
-            "--stellarium-port=-1",
-            "--synscan-port=-1",
-            "--dashboard-port=-1",
+        serve, printed = await _serve(
+            home, f"{driver}:tcp://127.0.0.1:{relay_port}", dashboard=False
         )
-        printed = await _read_until(serve, r"^Ctrl-C stops\.$")
         alpaca = re.search(r"Alpaca\s+http://127\.0\.0\.1:(\d+)", printed)
         assert alpaca is not None
         if client == "alpaca10":
@@ -369,20 +379,9 @@ async def memory(minutes: float) -> int:
             printed = await _read_until(emulator, r"listening on")
             found = re.search(r"127\.0\.0\.1:(\d+)", printed)
             assert found is not None
-            serve = await _scopelink(
-                home,
-                "serve",
-                "--device",
-                f"synscan:tcp://127.0.0.1:{found.group(1)}",
-                "--alpaca-port=0",
-                "--discovery-port=-1",
-                "--lx200-port=-1",
-                "--skyfi-port=-1",
-                "--stellarium-port=-1",
-                "--synscan-port=-1",
-                "--dashboard-port=0",
+            serve, printed = await _serve(
+                home, f"synscan:tcp://127.0.0.1:{found.group(1)}", dashboard=True
             )
-            printed = await _read_until(serve, r"^Ctrl-C stops\.$")
             alpaca = re.search(r"Alpaca\s+http://127\.0\.0\.1:(\d+)", printed)
             dashboard = re.search(r"Dashboard\s+http://127\.0\.0\.1:(\d+)", printed)
             assert alpaca is not None
