@@ -6,7 +6,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import random
-import struct
 from collections.abc import Awaitable, Callable
 from datetime import datetime
 
@@ -16,8 +15,7 @@ from bench.soak.config import COMMAND_BOUND_S, READ_BOUND_S, STREAM_GAP_BOUND_S
 from bench.soak.night import Night
 from bench.soak.targets import random_target
 from scopelink.links import LinkError, open_tcp
-from scopelink.protocol.lx200.angles import format_dec, format_ra
-from scopelink.protocol.stellarium import GotoMessage
+from scopelink.protocol import lx200, stellarium
 from scopelink.protocol.synscan import (
     NEED_DATA,
     AnyReply,
@@ -27,94 +25,148 @@ from scopelink.protocol.synscan import (
 )
 
 
+class LX200Session:
+    """SkySafari's end of one LX200 connection: each command encoded by the codec
+    (:func:`encode_command`) and its reply read by the shape the codec gives it
+    (:func:`reply_kind`), compared with the codec's own replies. The codec has no client-side
+    reply reader yet, so the two shapes read here (one character; text up to the terminator)
+    are cut by :meth:`char` and :meth:`text`."""
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self._reader = reader
+        self._writer = writer
+
+    def send(self, command: lx200.AnyCommand) -> str:
+        """Send ``command``; its text (``:GR#``), which names the request in the records."""
+        frame = lx200.encode_command(command)
+        self._writer.write(frame)
+        return frame.decode("ascii")
+
+    def char(self) -> Awaitable[bytes]:
+        return self._reader.readexactly(1)
+
+    def text(self) -> Awaitable[bytes]:
+        return self._reader.readuntil(_TERMINATOR)
+
+    def read(self, command: lx200.AnyCommand) -> Awaitable[bytes]:
+        """The reply to ``command`` (a one-character or a terminated one; the first character
+        of a slew's)."""
+        if lx200.reply_kind(command) is lx200.ReplyKind.TERMINATED:
+            return self.text()
+        return self.char()
+
+    async def close(self) -> None:
+        self._writer.close()
+        with contextlib.suppress(OSError):
+            await self._writer.wait_closed()
+
+
+_TERMINATOR = lx200.text_reply("")
+"""What ends a text reply (``#``)."""
+_POLLS = (lx200.Get(lx200.Query.RA), lx200.Get(lx200.Query.DEC))
+_HALT = lx200.Halt()
+
+
 async def lx200_client(port: int, night: Night, chance: random.Random, period_s: float) -> None:
     """SkySafari-like: :GR#/:GD# polling, now and then a goto (:Sr :Sd :MS#) or :Q#; one
     connection of 20-40 s."""
-    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+    session = LX200Session(*await asyncio.open_connection("127.0.0.1", port))
     night.reconnects["lx200"] += 1
     try:
         connected_until = night.now() + chance.uniform(20.0, 40.0)
         behind_a_command = False
         while night.now() < connected_until:
-            for command in (b":GR#", b":GD#"):
-                writer.write(command)
-                work = reader.readuntil(b"#")
+            for command in _POLLS:
+                what = session.send(command)
+                work = session.read(command)
                 if behind_a_command:
                     # LX200 answers in order: this read waits for the :Q# before it to reach
                     # the device (through any fault)
-                    await night.timed(
-                        "lx200", f"{command.decode()} after :Q#", COMMAND_BOUND_S, work
-                    )
+                    await night.timed("lx200", f"{what} after :Q#", COMMAND_BOUND_S, work)
                 else:
-                    await night.timed("lx200", command.decode(), READ_BOUND_S, work)
+                    await night.timed("lx200", what, READ_BOUND_S, work)
             behind_a_command = False
             roll = chance.random()
             if roll < 0.03:
-                await _lx200_goto(reader, writer, night, chance)
+                await _lx200_goto(session, night, chance)
             elif roll < 0.04:
                 night.moved("LX200 :Q#")
-                writer.write(b":Q#")  # no reply
+                session.send(_HALT)  # no reply
                 night.of("lx200").count += 1
                 behind_a_command = True
             await asyncio.sleep(period_s)
     finally:
-        writer.close()
-        with contextlib.suppress(OSError):
-            await writer.wait_closed()
+        await session.close()
 
 
-async def _lx200_goto(
-    reader: asyncio.StreamReader,
-    writer: asyncio.StreamWriter,
-    night: Night,
-    chance: random.Random,
-) -> None:
+async def _lx200_goto(session: LX200Session, night: Night, chance: random.Random) -> None:
     target = random_target(chance)
     for command in (
-        f":Sr{format_ra(target.ra_of_date_hours)}#",
-        f":Sd{format_dec(target.dec_of_date_deg)}#",
+        lx200.SetTargetRA(target.ra_of_date_hours),
+        lx200.SetTargetDec(target.dec_of_date_deg),
     ):
-        writer.write(command.encode())
-        accepted = await night.timed("lx200", command[:3], READ_BOUND_S, reader.readexactly(1))
-        if accepted != b"1":
-            night.answered_error("lx200", f"{command[:3]} refused")
+        code = session.send(command)[:3]
+        accepted = await night.timed("lx200", code, READ_BOUND_S, session.read(command))
+        if accepted != lx200.boolean_reply(True):
+            night.answered_error("lx200", f"{code} refused")
     night.moved("LX200 :MS#")
-    writer.write(b":MS#")
-    reply = await night.timed("lx200", ":MS#", COMMAND_BOUND_S, reader.readexactly(1))
-    if reply != b"0":
-        reason = await night.timed("lx200", ":MS# reason", READ_BOUND_S, reader.readuntil(b"#"))
-        night.answered_error("lx200", f":MS# {reply.decode()} {reason.decode(errors='replace')}")
+    goto = lx200.GotoTarget()
+    what = session.send(goto)
+    reply = await night.timed("lx200", what, COMMAND_BOUND_S, session.read(goto))
+    if reply != lx200.slew_reply(None):
+        reason = await night.timed("lx200", f"{what} reason", READ_BOUND_S, session.text())
+        night.answered_error("lx200", f"{what} {reply.decode()} {reason.decode(errors='replace')}")
     else:
         night.slews += 1
 
 
 async def stellarium_client(port: int, night: Night, chance: random.Random, *, gotos: bool) -> None:
-    """Reads the position stream (24-byte messages every 0.5 s), with ``gotos`` sends a goto now
-    and then; one connection of 20-40 s."""
+    """Reads the position stream (a message every 0.5 s), framed by the codec's client
+    connection; with ``gotos`` sends a goto now and then; one connection of 20-40 s. A message
+    that is no position is an answered error; a stream that cannot be framed ends the
+    connection."""
     reader, writer = await asyncio.open_connection("127.0.0.1", port)
     night.reconnects["stellarium"] += 1
+    connection = stellarium.StellariumClientConnection()
+
+    async def next_message() -> (
+        stellarium.CurrentPosition | stellarium.SkippedMessage | stellarium.BadLength
+    ):
+        while (event := connection.next_event()) is stellarium.NEED_DATA:
+            data = await reader.read(_STELLARIUM_READ_SIZE)
+            if not data:
+                raise EOFError("the Stellarium server closed the connection")
+            connection.receive_data(data)
+        return event
+
     try:
         connected_until = night.now() + chance.uniform(20.0, 40.0)
         last = night.now()
         while night.now() < connected_until:
             message = await night.timed(
-                "stellarium", "position", STREAM_GAP_BOUND_S, reader.readexactly(24)
+                "stellarium", "position", STREAM_GAP_BOUND_S, next_message()
             )
-            length, kind = struct.unpack_from("<HH", message)
-            if (length, kind) != (24, 0):
-                night.answered_error("stellarium", f"message {length} {kind}")
+            if not isinstance(message, stellarium.CurrentPosition):
+                night.answered_error("stellarium", message.describe())
+                if connection.broken:
+                    break
             night.stream_gaps.append(night.now() - last)
             last = night.now()
             if gotos and chance.random() < 0.04:
                 target = random_target(chance)
-                goto = GotoMessage.from_degrees(target.ra_j2000_hours, target.dec_j2000_deg)
+                goto = stellarium.GotoMessage.from_degrees(
+                    target.ra_j2000_hours, target.dec_j2000_deg
+                )
                 night.moved("Stellarium goto")
-                writer.write(goto.encode())
+                writer.write(connection.send(goto))
                 night.of("stellarium").count += 1
     finally:
         writer.close()
         with contextlib.suppress(OSError):
             await writer.wait_closed()
+
+
+_STELLARIUM_READ_SIZE = 4096
 
 
 async def synscan_client(port: int, night: Night, period_s: float) -> None:
