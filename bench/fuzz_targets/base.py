@@ -70,6 +70,25 @@ def parsed_in_chunks(
     return events
 
 
+def checked_events(
+    parser: _Parser,
+    stream: bytes,
+    rng: random.Random,
+    need_data: object,
+    allowed: tuple[type, ...],
+) -> list[object]:
+    """Every event ``parser`` yields for ``stream`` fed in :func:`chunks`, each of an
+    ``allowed`` type, and no more of them than the bytes allow (:func:`progress_guard`)."""
+    events: list[object] = []
+    for chunk in chunks(stream, rng):
+        parser.receive_data(chunk)
+        while (event := parser.next_event()) is not need_data:
+            events.append(event)
+            progress_guard(len(events), len(stream))
+            expect(isinstance(event, allowed), f"unexpected event {event!r}")
+    return events
+
+
 def progress_guard(count: int, fed: int) -> None:
     # Each event consumes at least one byte; a few more (a pause, a release) are allowed for.
     expect(count <= fed + 4, f"{count} events from {fed} bytes: the parser does not advance")

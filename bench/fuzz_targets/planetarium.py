@@ -8,9 +8,8 @@ from collections.abc import Sequence
 
 from bench.fuzz_targets.base import (
     Target,
-    chunks,
+    checked_events,
     expect,
-    progress_guard,
 )
 from scopelink.protocol import lx200, stellarium
 
@@ -49,14 +48,7 @@ _LX200_EVENTS = (
 def _lx200_events(
     connection: lx200.LX200ServerConnection, data: bytes, rng: random.Random
 ) -> list[object]:
-    events: list[object] = []
-    for chunk in chunks(data, rng):
-        connection.receive_data(chunk)
-        while (event := connection.next_event()) is not lx200.NEED_DATA:
-            events.append(event)
-            progress_guard(len(events), len(data))
-            expect(isinstance(event, _LX200_EVENTS), f"unexpected event {event!r}")
-    return events
+    return checked_events(connection, data, rng, lx200.NEED_DATA, _LX200_EVENTS)
 
 
 def check_lx200_server(data: bytes, rng: random.Random) -> None:
@@ -115,14 +107,7 @@ def _check_stellarium(
     rng: random.Random,
 ) -> None:
     def events_of(stream: bytes) -> list[object]:
-        events: list[object] = []
-        for chunk in chunks(stream, rng):
-            connection.receive_data(chunk)
-            while (event := connection.next_event()) is not stellarium.NEED_DATA:
-                events.append(event)
-                progress_guard(len(events), len(stream))
-                expect(isinstance(event, _STELLARIUM_EVENTS), f"unexpected event {event!r}")
-        return events
+        return checked_events(connection, stream, rng, stellarium.NEED_DATA, _STELLARIUM_EVENTS)
 
     events = events_of(data)
     for event in events:
