@@ -13,8 +13,6 @@ from bench.soak.config import COMMAND_BOUND_S, READ_BOUND_S, SLEW_BOUND_S
 from bench.soak.night import Night
 from bench.soak.targets import random_target, separation_deg
 
-# --- the clients ---------------------------------------------------------------------------------
-
 
 class Alpaca:
     """An Alpaca client on one keep-alive HTTP session."""

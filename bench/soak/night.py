@@ -15,8 +15,6 @@ from bench.soak.config import POSITION_READS
 
 T = TypeVar("T")
 
-# --- what the night records ----------------------------------------------------------------------
-
 
 @dataclass
 class Requests:

@@ -22,8 +22,6 @@ from bench.soak.config import (
 )
 from bench.soak.night import Night
 
-# --- the night -----------------------------------------------------------------------------------
-
 
 @dataclass
 class Check:
@@ -46,9 +44,6 @@ class SoakReport:
     @property
     def passed(self) -> bool:
         return all(check.passed for check in self.checks)
-
-
-# --- the checks ----------------------------------------------------------------------------------
 
 
 def _longest_gap(times: list[float], start: float, end: float) -> tuple[float, float]:

@@ -10,8 +10,6 @@ from datetime import UTC, datetime
 from bench.soak.config import LOWEST_TARGET_ALT_DEG, SITE
 from scopelink.astro import observed_to_apparent, observed_to_j2000
 
-# --- targets -------------------------------------------------------------------------------------
-
 
 @dataclass(frozen=True)
 class Target:
