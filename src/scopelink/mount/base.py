@@ -104,7 +104,7 @@ class Mount(StateCache):
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
-        self._dead_man = DeadMan(self._guard.axes_of, self._stop_axis)
+        self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
         self._sync_frame = SyncFrame()
         self._sync_lock = asyncio.Lock()
         """One sync at a time, so the recorded frame follows the order the device got them in."""
@@ -161,9 +161,6 @@ class Mount(StateCache):
         """Commands inside are on behalf of the :class:`MotionClient` with ``token`` (requests
         that arrive apart from their client's connection, like the dashboard's HTTP calls)."""
         return self._dead_man.acting_for(token)
-
-    async def _stop_axis(self, axis: MountAxis) -> None:
-        await self.move_axis(axis, 0.0)
 
     def _publish(self, state: MountState) -> None:
         if state.parked and state.slewing:  # parked only once arrived and stopped
