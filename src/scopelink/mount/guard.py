@@ -37,8 +37,8 @@ from contextlib import aclosing, asynccontextmanager
 from dataclasses import dataclass
 from datetime import datetime
 
-from scopelink.mount import danger
 from scopelink.mount.budget import Base, Reading, Unseen, base_from, blind_danger, make_base
+from scopelink.mount.danger import altitude_direction, check_move, near_limit, reading_danger
 from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.errors import DeviceError, MountError, NotConnectedError
 from scopelink.mount.guarded import GuardedMount, GuardSettings
@@ -113,14 +113,14 @@ class HorizonGuard:
     def check_move(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> None:
         """Refuse a rate motion that starts at or beyond a limit and heads further out, where
         the direction is known (see :func:`scopelink.mount.danger.check_move`)."""
-        danger.check_move(self._mount, self.settings, axis, rate_deg_s, state)
+        check_move(self._mount, self.settings, axis, rate_deg_s, state)
 
     def altitude_direction(
         self, axis: MountAxis, rate_deg_s: float, state: MountState
     ) -> float | None:
         """Whether turning ``axis`` at ``rate_deg_s`` raises (+1) or lowers (-1) the tube now;
         None where that cannot be told (:func:`scopelink.mount.danger.altitude_direction`)."""
-        return danger.altitude_direction(self._mount, axis, rate_deg_s, state)
+        return altitude_direction(self._mount, axis, rate_deg_s, state)
 
     @asynccontextmanager
     async def starting(self, axis: MountAxis, rate_deg_s: float) -> AsyncIterator[None]:
@@ -330,7 +330,7 @@ class HorizonGuard:
                     intervals.append(elapsed)
                     period_s = statistics.median(intervals)
                     readings = (previous, reading)
-                    reason = danger.reading_danger(
+                    reason = reading_danger(
                         mount,
                         self.settings,
                         self.rate_motions,
@@ -354,7 +354,7 @@ class HorizonGuard:
                         await upcoming
 
     def _near_limit(self, state: MountState, *, factor: float = 1.0) -> bool:
-        return danger.near_limit(self._mount, self.settings, state, factor=factor)
+        return near_limit(self._mount, self.settings, state, factor=factor)
 
     def _blind_danger(
         self, base: Base, now_s: float, origin: datetime, state: MountState
