@@ -38,6 +38,14 @@ def _subpackage(path: Path) -> str | None:
     return rel.parts[0]
 
 
+def _from_module(node: ast.ImportFrom, package_parts: list[str]) -> str:
+    """The module a ``from ... import`` names, relative imports resolved in ``package_parts``."""
+    if not node.level:
+        return node.module or ""
+    base = package_parts[: len(package_parts) - node.level + 1]
+    return ".".join([*base, node.module] if node.module else base)
+
+
 def _imported_names(tree: ast.AST, path: Path) -> list[tuple[int, str]]:
     names: list[tuple[int, str]] = []
     package_parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).parent.parts]
@@ -45,12 +53,7 @@ def _imported_names(tree: ast.AST, path: Path) -> list[tuple[int, str]]:
         if isinstance(node, ast.Import):
             names.extend((node.lineno, alias.name) for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package_parts[: len(package_parts) - node.level + 1]
-                module = ".".join([*base, node.module] if node.module else base)
-            else:
-                module = node.module or ""
-            names.append((node.lineno, module))
+            names.append((node.lineno, _from_module(node, package_parts)))
     return names
 
 
@@ -92,17 +95,13 @@ def _import_graph() -> dict[str, set[str]]:
     paths = {_module_name(p): p for p in _modules()}
     graph: dict[str, set[str]] = {}
     for name, path in paths.items():
-        package_parts = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+        package_parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).parent.parts]
         targets: set[str] = set()
         for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
             if isinstance(node, ast.Import):
                 targets.update(alias.name for alias in node.names)
             elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package_parts[: len(package_parts) - node.level + 1]
-                    module = ".".join([*base, node.module] if node.module else base)
-                else:
-                    module = node.module or ""
+                module = _from_module(node, package_parts)
                 for alias in node.names:
                     sub = f"{module}.{alias.name}"
                     targets.add(sub if sub in paths else module)
@@ -111,7 +110,8 @@ def _import_graph() -> dict[str, set[str]]:
 
 
 def test_no_import_cycle() -> None:
-    """No module of ``src/scopelink`` imports itself through others (docs/architecture.md)."""
+    """No module of ``src/scopelink`` imports itself through others (decision and rules:
+    docs/mount-api.md, "Guard and dead-man")."""
     try:
         tuple(graphlib.TopologicalSorter(_import_graph()).static_order())
     except graphlib.CycleError as error:
