@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import graphlib
 from pathlib import Path
 
 import pytest
@@ -37,6 +38,14 @@ def _subpackage(path: Path) -> str | None:
     return rel.parts[0]
 
 
+def _from_module(node: ast.ImportFrom, package_parts: list[str]) -> str:
+    """The module a ``from ... import`` names, relative imports resolved in ``package_parts``."""
+    if not node.level:
+        return node.module or ""
+    base = package_parts[: len(package_parts) - node.level + 1]
+    return ".".join([*base, node.module] if node.module else base)
+
+
 def _imported_names(tree: ast.AST, path: Path) -> list[tuple[int, str]]:
     names: list[tuple[int, str]] = []
     package_parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).parent.parts]
@@ -44,12 +53,7 @@ def _imported_names(tree: ast.AST, path: Path) -> list[tuple[int, str]]:
         if isinstance(node, ast.Import):
             names.extend((node.lineno, alias.name) for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package_parts[: len(package_parts) - node.level + 1]
-                module = ".".join([*base, node.module] if node.module else base)
-            else:
-                module = node.module or ""
-            names.append((node.lineno, module))
+            names.append((node.lineno, _from_module(node, package_parts)))
     return names
 
 
@@ -76,3 +80,47 @@ def test_imports_point_down(path: Path) -> None:
             assert parts[0] not in FORBIDDEN_IN_PROTOCOL, (
                 f"{path.name}:{lineno}: the sans-IO protocol layer imports {name}"
             )
+
+
+def _module_name(path: Path) -> str:
+    parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """Each module of ``src/scopelink`` and the package modules it imports, wherever the import
+    stands (``TYPE_CHECKING`` blocks and functions included: a reader follows those too).
+    ``from a.b import c`` counts as an import of ``a.b.c`` when that is a module, else of
+    ``a.b``; a package's ``__init__`` is not counted as imported by its submodules' imports."""
+    paths = {_module_name(p): p for p in _modules()}
+    graph: dict[str, set[str]] = {}
+    for name, path in paths.items():
+        package_parts = ["scopelink", *path.relative_to(PACKAGE_ROOT).parent.parts]
+        targets: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                targets.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                module = _from_module(node, package_parts)
+                for alias in node.names:
+                    sub = f"{module}.{alias.name}"
+                    targets.add(sub if sub in paths else module)
+        graph[name] = {t for t in targets if t in paths and t != name}
+    return graph
+
+
+def test_no_import_cycle() -> None:
+    """No module of ``src/scopelink`` imports itself through others (decision and rules:
+    docs/mount-api.md, "Guard and dead-man")."""
+    try:
+        tuple(graphlib.TopologicalSorter(_import_graph()).static_order())
+    except graphlib.CycleError as error:
+        cycle = error.args[1]
+        pytest.fail(f"import cycle: {' -> '.join(cycle)}")
+
+
+def test_the_cycle_check_finds_a_cycle() -> None:
+    graph = _import_graph()
+    graph["scopelink.mount.types"].add("scopelink.mount.base")  # base imports types already
+    with pytest.raises(graphlib.CycleError):
+        tuple(graphlib.TopologicalSorter(graph).static_order())

@@ -1,9 +1,11 @@
 """The horizon guard on real devices: the SynScan driver on TCP to the SynScan emulator, whose own
-horizon is -10°, so only the guard keeps the tube above scopelink's 10° horizon."""
+horizon is -10°, so only the guard keeps the tube above scopelink's 10° horizon; and the Sky
+Tracker driver on TCP to its emulator, whose tracking the same guard turns off."""
 
 from __future__ import annotations
 
 import asyncio
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +15,7 @@ from scopelink.sim import AZ_GTI
 from tests.test_safety_support import (
     HORIZON_DEG,
     TOLERANCE_DEG,
+    skytracker_rig,
     synscan_rig,
     wait_until_still,
 )
@@ -41,6 +44,17 @@ async def test_tracking_that_carries_the_mount_below_the_horizon_is_turned_off()
         state = await rig.mount.wait_for(lambda s: s.tracking is TrackingMode.OFF, timeout_s=15.0)
         assert any("sidereal tracking was stopped" in p for p in state.problems)
         assert rig.sim.tracking is TrackingMode.OFF  # the device itself stopped tracking
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+
+
+async def test_sky_tracker_tracking_that_sets_is_turned_off_by_the_guard(tmp_path: Path) -> None:
+    # The one guard covers the Sky Tracker too (issue #13): its tracking of a star setting in the
+    # west is turned off above the horizon, not once a reading is already below it.
+    async with skytracker_rig(tmp_path, at=(10.6, 270.0), rate=300.0) as rig:
+        await rig.mount.set_tracking(TrackingMode.ALT_AZ)
+        state = await rig.mount.wait_for(lambda s: s.tracking is TrackingMode.OFF, timeout_s=15.0)
+        assert any("altaz tracking was stopped" in p for p in state.problems), state.problems
+        assert rig.mount.guard.stops >= 1
         assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
 
 

@@ -25,7 +25,7 @@ from bench.safety_guard import HORIZON_DEG, noisy_rig, noisy_trial
 from scopelink.drivers.synscan.wire import STOP_GRACE_S
 from scopelink.mount import MountAxis
 from scopelink.mount import guard as guard_module
-from scopelink.mount.guard import GuardSettings
+from scopelink.mount.guarded import GuardSettings
 from scopelink.protocol.synscan import AnyCommand, FixedRateSlew
 from scopelink.servers.faults import Fault, FaultKind
 

@@ -3,8 +3,8 @@
 Public methods validate their arguments and check the configured limits *before* the
 protocol-specific implementation runs, so no subclass can forget a check: a motion that would leave
 the allowed sky raises :class:`LimitError` and nothing reaches the link. Subclasses implement the
-underscore methods they support; the rest raise :class:`NotSupportedError`, which front ends report
-as "not implemented".
+underscore methods they support (:mod:`scopelink.mount.device`); the rest raise
+:class:`NotSupportedError`, which front ends report as "not implemented".
 """
 
 from __future__ import annotations
@@ -12,13 +12,14 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import math
-from abc import ABC, abstractmethod
-from collections.abc import AsyncGenerator, Awaitable, Callable
+from collections.abc import Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
-from scopelink.astro import Site, angular_separation_deg, j2000_to_observed
+from scopelink.astro import Site, j2000_to_observed
 from scopelink.astro.catalog import CatalogObject, lookup
+from scopelink.mount.cache import StateCache
+from scopelink.mount.deadman import DeadMan, MotionClient
 from scopelink.mount.errors import (
     InvalidValueError,
     LimitError,
@@ -26,17 +27,10 @@ from scopelink.mount.errors import (
     NotSupportedError,
     ParkedError,
 )
-from scopelink.mount.guard import GuardSettings, HorizonGuard, MotionClient
+from scopelink.mount.guard import HorizonGuard
+from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
-from scopelink.mount.polling import (
-    DEFAULT_STALE_AFTER_S,
-    PollPolicy,
-    StateBroadcast,
-    StatePoller,
-    check_stale_after,
-    require_fresh,
-    without_motion_claims,
-)
+from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import (
@@ -47,9 +41,7 @@ from scopelink.mount.syncs import (
 )
 from scopelink.mount.types import (
     AlignmentMode,
-    Capabilities,
     GuideDirection,
-    Identity,
     MountAxis,
     MountState,
     ParkPosition,
@@ -83,22 +75,16 @@ def _check_alt_az(alt_deg: float, az_deg: float) -> None:
         raise InvalidValueError(f"azimuth {az_deg}° must lie in [0, 360)")
 
 
-class Mount(ABC):
+class Mount(StateCache):
     """A telescope mount, whatever protocol (or simulation) is behind it.
 
     Reads come from a state cache (:attr:`state`) that a background poller keeps fresh while
     anyone is inside :meth:`watching` (or iterating :meth:`states`), at the rate
     :attr:`poll_policy` gives: full rate while something needs it, else slowly (see
-    :mod:`scopelink.mount.polling`). ``poll_interval_s`` is the shortest time between two polls:
-    0 for a device on a wire (the line cap paces it), more for mounts whose refresh costs only
-    CPU (which poll at that rate whenever watched: there is no line to spare).
+    :mod:`scopelink.mount.cache` and :mod:`scopelink.mount.polling`). What a driver implements
+    is :class:`~scopelink.mount.device.MountDevice`'s.
     """
 
-    poll_interval_s: float = 0.0
-    poll_retry_s: float = 1.0
-    refresh_uses_wire: bool = True
-    """Whether :meth:`refresh` costs a round trip to a device (front ends then answer from
-    :attr:`state` while the poller runs, instead of refreshing per request)."""
     stops_itself_at_limits: bool = False
     """Whether the device stops rate motions and tracking at the limits by itself (the
     simulator); otherwise :attr:`guard` watches them and stops them in time."""
@@ -113,24 +99,12 @@ class Mount(ABC):
     ) -> None:
         self._site = site
         self._limits = limits or Limits()
-        self._clock = clock
-        self._broadcast = StateBroadcast(MountState(read_at=clock()))
-        self._stale_after_s = DEFAULT_STALE_AFTER_S
-        self._poller = StatePoller(
-            self.refresh,
-            lambda: self.engaged,
-            self._report_problem,
-            self._broadcast,
-            interval_s=self.poll_interval_s,
-            retry_s=self.poll_retry_s,
-            full_rate_needed=self._full_rate_needed,
-            idle_period_s=lambda: self._poller.policy.idle_period_s(self._stale_after_s),
-            line_bytes=self._line_bytes,
-        )
+        super().__init__(clock=clock)
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
-        self._guard = HorizonGuard(self, GuardSettings())
+        self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
+        self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
         self._sync_frame = SyncFrame()
         self._sync_lock = asyncio.Lock()
         """One sync at a time, so the recorded frame follows the order the device got them in."""
@@ -138,16 +112,6 @@ class Mount(ABC):
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
 
     # --- who, what, where -------------------------------------------------------------------------
-
-    @property
-    @abstractmethod
-    def capabilities(self) -> Capabilities:
-        """What this mount can do."""
-
-    @property
-    @abstractmethod
-    def identity(self) -> Identity:
-        """Who answered on the link."""
 
     @property
     def site(self) -> Site:
@@ -160,15 +124,6 @@ class Mount(ABC):
     @limits.setter
     def limits(self, limits: Limits) -> None:
         self._limits = limits
-
-    def now(self) -> datetime:
-        """The mount's notion of the current UTC time (a simulated mount may run its own clock)."""
-        return self._clock()
-
-    @property
-    def state(self) -> MountState:
-        """The last known state, without waiting on the wire."""
-        return self._broadcast.state
 
     @property
     def park_position(self) -> ParkPosition:
@@ -200,129 +155,27 @@ class Mount(ABC):
     def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
         """The dead-man for one client of a front end: inside ``async with``, rate motions are
         owned by the client, and those still running when the block ends are stopped."""
-        return self._guard.client(name)
+        return self._dead_man.client(name)
 
     def acting_for(self, token: str | None) -> AbstractContextManager[MotionClient | None]:
         """Commands inside are on behalf of the :class:`MotionClient` with ``token`` (requests
         that arrive apart from their client's connection, like the dashboard's HTTP calls)."""
-        return self._guard.acting_for(token)
+        return self._dead_man.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
         if state.parked and state.slewing:  # parked only once arrived and stopped
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
             self._parking = False  # a device that reconnects says itself whether it is parked
-        state = self._guard.annotate(without_motion_claims(state))
-        self._broadcast.publish(state)
-        self._guard.observe(state)
+        super()._publish(self._guard.annotate(state))
+        self._guard.observe(self.state)
 
-    def _report_problem(self, problem: str) -> None:
-        """Publish the last good reading again, with ``problem`` saying why it is not fresh
-        (and the driver's standing problems, e.g. an unconfirmed stop, after it)."""
-        standing = tuple(p for p in self._standing_problems() if p != problem)
-        self._publish(dataclasses.replace(self.state, problems=(problem, *standing)))
-
-    def _standing_problems(self) -> tuple[str, ...]:
-        """Problems that outlast a failed poll (none by default)."""
-        return ()
-
-    # --- the state cache ------------------------------------------------------------------------
-
-    @property
-    def stale_after_s(self) -> float:
-        """An older reading (seconds) is not served as current (0.2-5 s, default 2 s)."""
-        return self._stale_after_s
-
-    @stale_after_s.setter
-    def stale_after_s(self, seconds: float) -> None:
-        self._stale_after_s = check_stale_after(seconds)
-
-    @property
-    def engaged(self) -> bool:
-        """Connected, or a driver's link lost since (its poller reopens it) until disconnect."""
-        return self.state.connected
-
-    def fresh_state(self, *, position: bool = True) -> MountState:
-        """The cache if it may be served as current, else the error saying why (see
-        :func:`~scopelink.mount.polling.require_fresh`); ``position``: judge its age.
-        A reader: the poller runs at full rate for the next ``poll_policy.demand_hold_s``."""
-        self._poller.demand()
-        name = self.identity.model or "the mount"
-        return require_fresh(self.state, self._stale_after_s, position=position, name=name)
-
-    async def current_state(self, *, position: bool = True) -> MountState:
-        """A fresh state at the lowest cost: the cache while the poller keeps it fresh over a
-        wire (as :meth:`fresh_state` allows), else a refresh (exact, for a simulated mount)."""
-        if self.refresh_uses_wire and self._poller.running and self.engaged:
-            return self.fresh_state(position=position)
-        return await self.refresh()
-
-    def watching(self) -> AbstractAsyncContextManager[None]:
-        """Keep :attr:`state` fresh inside ``async with``: polled at the rate the poll policy
-        gives (idle unless a reader, a slew or the guard needs more)."""
-        return self._poller.watching()
-
-    @property
-    def poll_policy(self) -> PollPolicy:
-        """How often the poller polls: idle period, how long a read raises the rate, the line
-        cap (see :mod:`scopelink.mount.polling` and docs/mount-api.md)."""
-        return self._poller.policy
-
-    @poll_policy.setter
-    def poll_policy(self, policy: PollPolicy) -> None:
-        if not isinstance(policy, PollPolicy):
-            raise InvalidValueError(f"a poll policy is a PollPolicy, not {policy!r}")
-        self._poller.policy = policy
-        self._poller.wake()
+    def _publish_again(self) -> None:
+        """Publish the current state again (with the guard's latest notice)."""
+        self._publish(self.state)
 
     def _full_rate_needed(self) -> bool:
-        """Whether the mount itself needs full-rate polls: it slews (a goto, a park, a rate
-        motion, an unconfirmed stop), guides, or is on its way to park; always for a mount
-        whose refresh costs no wire (its ``poll_interval_s`` paces it)."""
-        if not self.refresh_uses_wire:
-            return True
-        state = self.state
-        return (
-            state.slewing or state.pulse_guiding or self._parking or bool(self._guard.rate_motions)
-        )
-
-    def _line_bytes(self) -> tuple[int, int]:
-        """Bytes (sent, received) on the link so far: the poller keeps each poll's within the
-        line cap. (0, 0) where nothing is counted."""
-        return (0, 0)
-
-    def _motion_commanded(self) -> None:
-        """A command that moves the mount goes out (called before it is sent, so one that fails
-        half-way is watched too): poll at full rate from now (its slewing state then keeps the
-        rate up) rather than at the end of an idle period."""
-        self._poller.demand()
-
-    @property
-    def poller(self) -> StatePoller:
-        """The background poller (its counters and watchers, for health displays)."""
-        return self._poller
-
-    async def states(self) -> AsyncGenerator[MountState, None]:
-        """Each newly published state, starting with the current one; watches while iterating.
-        A slow consumer skips states rather than queueing them."""
-        async with self.watching(), self._poller.holding_full_rate():
-            version = self._broadcast.version
-            yield self.state
-            while True:
-                await self._broadcast.changed_since(version)
-                version = self._broadcast.version
-                yield self.state
-
-    async def wait_for(
-        self, predicate: Callable[[MountState], bool], timeout_s: float | None = None
-    ) -> MountState:
-        """The first state (current or later) satisfying ``predicate``; ``TimeoutError`` after
-        ``timeout_s`` seconds."""
-        async with asyncio.timeout(timeout_s), aclosing(self.states()) as states:
-            async for state in states:
-                if predicate(state):
-                    return state
-        raise AssertionError("unreachable: states() never ends")  # pragma: no cover
+        return super()._full_rate_needed() or self._parking or bool(self._guard.rate_motions)
 
     async def wait_for_slew(
         self,
@@ -332,7 +185,7 @@ class Mount(ABC):
         """Wait until the current slew has ended (read after this call began) and return that
         state; ``progress`` is called with each new reading meanwhile."""
         since = self.now()
-        tracker = _ProgressTracker(self._target)
+        tracker = ProgressTracker(self._target)
         async with asyncio.timeout(timeout_s), aclosing(self.states()) as states:
             async for state in states:
                 if progress is not None:
@@ -342,19 +195,7 @@ class Mount(ABC):
                     return state
         raise AssertionError("unreachable: states() never ends")  # pragma: no cover
 
-    # --- connection ------------------------------------------------------------------------------
-
-    @abstractmethod
-    async def connect(self) -> None:
-        """Open the link and identify the device."""
-
-    @abstractmethod
-    async def disconnect(self) -> None:
-        """Stop using the device and close the link; motion is stopped where the protocol allows."""
-
-    @abstractmethod
-    async def refresh(self) -> MountState:
-        """Read the device now and return (and cache) a fresh state."""
+    # --- preconditions ----------------------------------------------------------------------------
 
     def _require_connected(self) -> None:
         if not self.state.connected:
@@ -565,89 +406,3 @@ class Mount(ABC):
         check_time(utc)
         self._require_connected()
         await self._set_time(utc)
-
-    # --- protocol-specific parts: override what the device supports ----------------------------
-
-    async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        raise NotSupportedError("this mount cannot go to equatorial coordinates")
-
-    async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
-        raise NotSupportedError("this mount cannot go to horizontal coordinates")
-
-    async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        raise NotSupportedError("this mount cannot sync")
-
-    async def _abort(self) -> None:
-        raise NotSupportedError("this mount cannot abort a slew")
-
-    async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
-        raise NotSupportedError("this mount cannot move an axis at a rate")
-
-    async def _pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
-        raise NotSupportedError("this mount cannot pulse-guide")
-
-    async def _set_tracking(self, mode: TrackingMode) -> None:
-        raise NotSupportedError("this mount cannot change tracking")
-
-    async def _park(self) -> None:
-        raise NotSupportedError("this mount cannot park")
-
-    async def _unpark(self) -> None:
-        raise NotSupportedError("this mount cannot unpark")
-
-    async def _set_site(self, site: Site) -> None:  # noqa: B027 - optional hook, no-op by default
-        """Devices that store no site keep the default: the site is used on the PC side only."""
-
-    async def _set_time(self, utc: datetime) -> None:
-        raise NotSupportedError("this mount keeps no time")
-
-
-class _ProgressTracker:
-    """Distance to the target and an arrival estimate from the recent closing speed."""
-
-    def __init__(self, target: SlewTarget | None) -> None:
-        self._target = target
-        self._last: tuple[datetime, float] | None = None
-        self._speed_deg_s: float | None = None
-
-    def update(self, state: MountState) -> SlewProgress:
-        distance = self._distance(state)
-        if distance is None:
-            return SlewProgress(state, None, None)
-        if self._last is not None:
-            elapsed = (state.read_at - self._last[0]).total_seconds()
-            closed = self._last[1] - distance
-            if elapsed > 0 and closed > 0:
-                speed = closed / elapsed
-                # Smooth over a few readings: acceleration ramps make single steps jumpy.
-                previous = self._speed_deg_s
-                self._speed_deg_s = speed if previous is None else 0.5 * (previous + speed)
-        self._last = (state.read_at, distance)
-        eta = None
-        if not state.slewing:
-            eta = 0.0
-        elif self._speed_deg_s:
-            eta = distance / self._speed_deg_s
-        return SlewProgress(state, distance, eta)
-
-    def _distance(self, state: MountState) -> float | None:
-        target = self._target
-        if target is None:
-            return None
-        if target.ra_j2000_hours is not None and target.dec_j2000_deg is not None:
-            if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
-                return None
-            return angular_separation_deg(
-                state.ra_j2000_hours * 15.0,
-                state.dec_j2000_deg,
-                target.ra_j2000_hours * 15.0,
-                target.dec_j2000_deg,
-            )
-        if (
-            target.alt_deg is None
-            or target.az_deg is None
-            or state.alt_deg is None
-            or state.az_deg is None
-        ):
-            return None
-        return angular_separation_deg(state.az_deg, state.alt_deg, target.az_deg, target.alt_deg)

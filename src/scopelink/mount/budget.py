@@ -13,16 +13,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from datetime import datetime
-from typing import TYPE_CHECKING
 
 from scopelink.mount.errors import LimitError
+from scopelink.mount.guarded import GuardedMount, GuardSettings
+from scopelink.mount.limits import Limits
 from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState, PierSide, TrackingMode
-
-if TYPE_CHECKING:
-    from scopelink.mount.base import Mount
-    from scopelink.mount.guard import GuardSettings
-    from scopelink.mount.limits import Limits
 
 __all__ = [
     "FLAT_SLOPE",
@@ -94,7 +90,7 @@ class Travel:
 
 
 def altitude_slope(
-    mount: Mount, axis: MountAxis, rate_deg_s: float, state: MountState
+    mount: GuardedMount, axis: MountAxis, rate_deg_s: float, state: MountState
 ) -> float | None:
     """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``, at
     the reading ``state`` (None where that cannot be told).
@@ -131,7 +127,7 @@ def altitude_slope(
 
 
 def make_base(
-    mount: Mount, rates: dict[MountAxis, float], reading: Reading, state: MountState
+    mount: GuardedMount, rates: dict[MountAxis, float], reading: Reading, state: MountState
 ) -> Base:
     """A good reading and, for each rate motion, its altitude slope there."""
     slopes = {axis: altitude_slope(mount, axis, rate, state) for axis, rate in rates.items()}
@@ -139,7 +135,7 @@ def make_base(
 
 
 def base_from(
-    mount: Mount,
+    mount: GuardedMount,
     rates: dict[MountAxis, float],
     state: MountState,
     origin: datetime,
@@ -244,7 +240,7 @@ def highest_floor(limits: Limits, az_deg: float, span_deg: float) -> float:
 
 
 def blind_danger(
-    mount: Mount,
+    mount: GuardedMount,
     settings: GuardSettings,
     motions: list[Unseen],
     base: Base,
@@ -305,7 +301,7 @@ def sky_travel_deg(motions: list[Unseen], braking_deg_s2: float) -> float:
 
 
 def _blind_sun_danger(
-    mount: Mount,
+    mount: GuardedMount,
     settings: GuardSettings,
     motions: list[Unseen],
     reading: Reading,

@@ -1,4 +1,4 @@
-"""What keeps a real mount inside its limits after a command was accepted, and a dead-man.
+"""What keeps a real mount inside its limits after a command was accepted.
 
 ``Mount.goto_*`` check the target before anything reaches the link, but a rate motion
 (``move_axis``) or tracking has no end point to check: on a device that does not stop itself at
@@ -17,10 +17,11 @@ be told (an alt-az mount's altitude axis; an equatorial mount's axes from hemisp
 astrometry); elsewhere the guard stops it at the first readings.
 Why the mount stopped is logged and shown in ``MountState.problems`` until the next motion command.
 
-The dead-man: front ends that hold a connection per client (LX200, the SynScan server,
-Stellarium, the dashboard's page) run each client inside :meth:`Mount.motion_client`; a rate
-motion started by that client and still running when it goes is stopped. Decisions and measured
-margins are in ``docs/reliability-safety.md``.
+The guard sees the mount only through :class:`~scopelink.mount.guarded.GuardedMount`; what it
+judges is :mod:`scopelink.mount.danger`'s (the readings) and :mod:`scopelink.mount.budget`'s (the
+travel it cannot see). Who owns a rate motion is recorded here for the dead-man
+(:mod:`scopelink.mount.deadman`). Decisions and measured margins are in
+``docs/reliability-safety.md``.
 """
 
 from __future__ import annotations
@@ -29,90 +30,23 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
-import math
-import secrets
 import statistics
 from collections import deque
-from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
-from contextlib import aclosing, asynccontextmanager, contextmanager
-from contextvars import ContextVar
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import aclosing, asynccontextmanager
 from dataclasses import dataclass
 from datetime import datetime
-from typing import TYPE_CHECKING
 
-from scopelink.mount.budget import (
-    FLAT_SLOPE,
-    Base,
-    Reading,
-    Unseen,
-    altitude_slope,
-    base_from,
-    blind_danger,
-    has_ceiling,
-    make_base,
-)
-from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
-from scopelink.mount.sun import SETTING as SUN_SETTING
-from scopelink.mount.types import AlignmentMode, MountAxis, MountState, TrackingMode
+from scopelink.mount.budget import Base, Reading, Unseen, base_from, blind_danger, make_base
+from scopelink.mount.danger import altitude_direction, check_move, near_limit, reading_danger
+from scopelink.mount.deadman import MotionClient, current_client
+from scopelink.mount.errors import DeviceError, MountError, NotConnectedError
+from scopelink.mount.guarded import GuardedMount, GuardSettings
+from scopelink.mount.types import MountAxis, MountState, TrackingMode
 
-if TYPE_CHECKING:
-    from scopelink.mount.base import Mount
-
-__all__ = ["GuardSettings", "HorizonGuard", "MotionClient"]
+__all__ = ["HorizonGuard"]
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True, slots=True)
-class GuardSettings:
-    """How early the guard stops a motion.
-
-    ``margin_deg`` is kept between the predicted stopping point and the limit. The guard looks
-    ``reaction_polls`` poll periods ahead: one to see the next reading, the rest for the stop
-    commands to reach the device. ``min_lookahead_s`` (mount clock) is the floor of that
-    look-ahead for very fast links. The motors then brake: ``braking_deg_s2`` is the deceleration
-    assumed (lower than any Sky-Watcher ramp we know: the simulator's EQ6 brakes at 3.3°/s², the
-    Sky Tracker at 2°/s²), so the braking distance is over- rather than underestimated.
-
-    Tracking alone moves at most 15°/h: while the tracked position is more than ``near_deg``
-    (plus the margin) from every limit, the guard computes where tracking has carried it every
-    ``far_check_s`` (real) seconds instead of polling the device; nearer, it polls.
-
-    Between good readings (a noisy link) the guard budgets for the travel it cannot see: the
-    time since the last good reading plus ``stop_latency_s`` (from the decision until the
-    device has the stop) at the worst rate the commanded motions and ``tracking_deg_s`` allow,
-    plus the braking distance; it checks that budget every ``blind_check_s``. A stop the device
-    has not confirmed within ``confirm_s`` is sent again (the wait doubling up to
-    ``confirm_max_s``), both axes, until it is confirmed.
-    """
-
-    margin_deg: float = 0.2
-    reaction_polls: float = 4.0
-    min_lookahead_s: float = 0.05
-    braking_deg_s2: float = 1.5
-    near_deg: float = 1.0
-    far_check_s: float = 0.25
-    stop_latency_s: float = 0.15
-    blind_check_s: float = 0.02
-    tracking_deg_s: float = 0.0045
-    confirm_s: float = 1.0
-    confirm_max_s: float = 8.0
-
-
-class MotionClient:
-    """One client of a front end (an LX200 connection, a dashboard page): the owner of the rate
-    motions it starts. ``token`` names it in requests that arrive apart from its connection."""
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self.token = secrets.token_urlsafe(12)
-
-    def __repr__(self) -> str:
-        return f"MotionClient({self.name!r})"
-
-
-_acting_for: ContextVar[MotionClient | None] = ContextVar("scopelink_motion_client", default=None)
-"""The client on whose behalf the current task moves the mount (None: nobody in particular)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,13 +69,20 @@ _REPEAT_PAUSE_S = 0.2
 
 
 class HorizonGuard:
-    """Stops rate motions and tracking before they cross the limits of ``mount``."""
+    """Stops rate motions and tracking before they cross the limits of ``mount``;
+    ``show_notice`` publishes the state again, so a new :attr:`notice` is seen at once."""
 
-    def __init__(self, mount: Mount, settings: GuardSettings | None = None) -> None:
+    def __init__(
+        self,
+        mount: GuardedMount,
+        settings: GuardSettings | None = None,
+        *,
+        show_notice: Callable[[], None],
+    ) -> None:
         self._mount = mount
         self.settings = settings or GuardSettings()
+        self._show_notice = show_notice
         self._motions: dict[MountAxis, _RateMotion] = {}
-        self._clients: dict[str, MotionClient] = {}
         self._task: asyncio.Task[None] | None = None
         self._poke: asyncio.Event | None = None
         """Set by a new rate motion while the guard waits far from the limits."""
@@ -165,53 +106,21 @@ class HorizonGuard:
         """The rate motions commanded through ``move_axis`` and not stopped since."""
         return {axis: motion.rate_deg_s for axis, motion in self._motions.items()}
 
+    def axes_of(self, client: MotionClient) -> list[MountAxis]:
+        """The axes whose rate motion ``client`` started and nobody has changed since."""
+        return [axis for axis, motion in self._motions.items() if motion.owner is client]
+
     def check_move(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> None:
         """Refuse a rate motion that starts at or beyond a limit and heads further out, where
-        the direction is known (see :meth:`altitude_direction`)."""
-        if rate_deg_s == 0.0 or state.alt_deg is None or state.az_deg is None:
-            return
-        limits = self._mount.limits
-        margin = self.settings.margin_deg
-        floor = limits.horizon_at(state.az_deg)
-        at_floor = state.alt_deg <= floor + margin
-        at_top = has_ceiling(limits) and state.alt_deg >= limits.max_altitude_deg - margin
-        if not (at_floor or at_top):
-            return
-        direction = self.altitude_direction(axis, rate_deg_s, state)
-        if direction is None:
-            return  # the guard judges the motion from its first readings instead
-        if direction < 0.0 and at_floor:
-            raise LimitError(
-                f"the mount is at altitude {state.alt_deg:.2f}°, at the configured horizon of "
-                f"{floor:.2f}°, and this motion would take it lower: nothing was sent to the "
-                "mount (move the other way)"
-            )
-        if direction > 0.0 and at_top:
-            raise LimitError(
-                f"the mount is at altitude {state.alt_deg:.2f}°, at the configured limit of "
-                f"{limits.max_altitude_deg:.2f}°, and this motion would take it higher: nothing "
-                "was sent to the mount (move the other way)"
-            )
+        the direction is known (see :func:`scopelink.mount.danger.check_move`)."""
+        check_move(self._mount, self.settings, axis, rate_deg_s, state)
 
     def altitude_direction(
         self, axis: MountAxis, rate_deg_s: float, state: MountState
     ) -> float | None:
         """Whether turning ``axis`` at ``rate_deg_s`` raises (+1) or lowers (-1) the tube now;
-        None where that cannot be told (conventions: :func:`budget.altitude_slope`)."""
-        if self._mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
-            if axis is MountAxis.SECONDARY:
-                return math.copysign(1.0, rate_deg_s)
-            return None
-        slope = self.altitude_slope(axis, rate_deg_s, state)
-        if slope is None or abs(slope) < FLAT_SLOPE:
-            return None
-        return math.copysign(1.0, slope)
-
-    def altitude_slope(self, axis: MountAxis, rate_deg_s: float, state: MountState) -> float | None:
-        """Degrees of altitude per degree that ``axis`` turns in the direction of ``rate_deg_s``
-        at the reading ``state`` (None where that cannot be told): see
-        :func:`scopelink.mount.budget.altitude_slope`."""
-        return altitude_slope(self._mount, axis, rate_deg_s, state)
+        None where that cannot be told (:func:`scopelink.mount.danger.altitude_direction`)."""
+        return altitude_direction(self._mount, axis, rate_deg_s, state)
 
     @asynccontextmanager
     async def starting(self, axis: MountAxis, rate_deg_s: float) -> AsyncIterator[None]:
@@ -229,7 +138,7 @@ class HorizonGuard:
         if previous is not None:
             speed = max(speed, previous.speed_deg_s)
         self._motions[axis] = _RateMotion(
-            rate_deg_s, _acting_for.get(), previous.since if previous else self._mount.now(), speed
+            rate_deg_s, current_client(), previous.since if previous else self._mount.now(), speed
         )
         # Watching begins with the answer, as before, unless the answer is late: polls started
         # with the command would only compete with it for the wire.
@@ -264,7 +173,7 @@ class HorizonGuard:
         started = self._motions.get(axis)
         since = started.since if started is not None else None
         self._motions[axis] = _RateMotion(
-            rate_deg_s, _acting_for.get(), since or self._mount.now(), abs(rate_deg_s)
+            rate_deg_s, current_client(), since or self._mount.now(), abs(rate_deg_s)
         )
         self.notice = ""
         if self._poke is not None:
@@ -283,46 +192,6 @@ class HorizonGuard:
     def command_accepted(self) -> None:
         """A new motion command (goto, tracking on) supersedes the last stop's notice."""
         self.notice = ""
-
-    # --- the dead-man ---------------------------------------------------------------------------
-
-    @asynccontextmanager
-    async def client(self, name: str) -> AsyncIterator[MotionClient]:
-        """Run a front end's client inside: rate motions it starts are stopped when it goes."""
-        client = MotionClient(name)
-        self._clients[client.token] = client
-        reset = _acting_for.set(client)
-        try:
-            yield client
-        finally:
-            with contextlib.suppress(ValueError):  # left from another context: nothing to reset
-                _acting_for.reset(reset)
-            del self._clients[client.token]
-            await self.stop_motions_of(client)
-
-    @contextmanager
-    def acting_for(self, token: str | None) -> Iterator[MotionClient | None]:
-        """Commands inside are on behalf of the client ``token`` names (if it is still here)."""
-        client = self._clients.get(token) if token else None
-        reset = _acting_for.set(client)
-        try:
-            yield client
-        finally:
-            _acting_for.reset(reset)
-
-    async def stop_motions_of(self, client: MotionClient) -> None:
-        """Stop the rate motions ``client`` started that nobody has changed since."""
-        axes = [axis for axis, motion in self._motions.items() if motion.owner is client]
-        for axis in axes:
-            logger.warning(
-                "%s went away while moving the %s axis: stopping it",
-                client.name,
-                axis.name.lower(),
-            )
-            try:
-                await asyncio.shield(self._mount.move_axis(axis, 0.0))
-            except MountError as error:
-                logger.warning("stopping the %s axis failed: %s", axis.name.lower(), error)
 
     # --- the horizon guard --------------------------------------------------------------------
 
@@ -373,27 +242,6 @@ class HorizonGuard:
             raise
         except Exception:  # the guard must never take the event loop down with it
             logger.exception("the horizon guard failed")
-
-    def _tracked_altitude(self, state: MountState) -> float | None:
-        """Where tracking has carried the last reading's sky position by now (tracking holds
-        RA/Dec fixed, so this costs astrometry only, no exchange with the device)."""
-        if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
-            return state.alt_deg
-        alt, _ = self._mount.observed_altaz(state.ra_j2000_hours, state.dec_j2000_deg)
-        return alt
-
-    def _near_limit(self, state: MountState, *, factor: float = 1.0) -> bool:
-        """Whether tracking may reach a limit soon: within ``near_deg`` of it (or unknown)."""
-        alt = self._tracked_altitude(state)
-        if alt is None or state.az_deg is None:
-            return True
-        limits = self._mount.limits
-        near = self.settings.margin_deg + factor * self.settings.near_deg
-        if self._near_sun(state, near):
-            return True
-        if alt - limits.horizon_at(state.az_deg) < near:
-            return True
-        return has_ceiling(limits) and limits.max_altitude_deg - alt < near
 
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
@@ -481,7 +329,15 @@ class HorizonGuard:
                     # The typical poll period: a gap (a reply lost) is the blind budget's part.
                     intervals.append(elapsed)
                     period_s = statistics.median(intervals)
-                    reason = self._danger(previous, reading, period_s, state)
+                    readings = (previous, reading)
+                    reason = reading_danger(
+                        mount,
+                        self.settings,
+                        self.rate_motions,
+                        readings,
+                        period_s=period_s,
+                        state=state,
+                    )
                     previous = reading
                     if reason is None:
                         reason = self._blind_danger(base, reading.at_s, origin, state)
@@ -497,11 +353,15 @@ class HorizonGuard:
                     with contextlib.suppress(asyncio.CancelledError, StopAsyncIteration):
                         await upcoming
 
+    def _near_limit(self, state: MountState, *, factor: float = 1.0) -> bool:
+        return near_limit(self._mount, self.settings, state, factor=factor)
+
     def _blind_danger(
         self, base: Base, now_s: float, origin: datetime, state: MountState
     ) -> str | None:
         """Why the mount must stop now because of what it may have done unseen since ``base``
-        (mount-clock seconds since ``origin``), or None: see :func:`budget.blind_danger`."""
+        (mount-clock seconds since ``origin``), or None: see
+        :func:`scopelink.mount.budget.blind_danger`."""
         motions = [
             Unseen(axis, motion.speed_deg_s, self._moving_s(motion, base.reading, now_s, origin))
             for axis, motion in self._motions.items()
@@ -517,79 +377,6 @@ class HorizonGuard:
         if motion.since is not None:
             since_s = max(since_s, (motion.since - origin).total_seconds())
         return max(now_s - since_s, 0.0) + self.settings.stop_latency_s
-
-    def _danger(
-        self, previous: Reading, reading: Reading, period_s: float, state: MountState
-    ) -> str | None:
-        """Why the mount must stop now, or None while it stays inside the limits."""
-        settings = self.settings
-        elapsed = reading.at_s - previous.at_s
-        alt_rate = (reading.alt_deg - previous.alt_deg) / elapsed
-        az_rate = _wrap_signed(reading.az_deg - previous.az_deg) / elapsed
-        ahead_s = max(settings.min_lookahead_s, settings.reaction_polls * period_s)
-        # Braking from the fastest axis rate takes axis_rate / deceleration seconds, during which
-        # the altitude keeps changing at about half its present rate.
-        axis_rate = max((abs(rate) for rate in self.rate_motions.values()), default=0.0)
-        ahead_s += axis_rate / settings.braking_deg_s2 / 2.0
-        alt_then = reading.alt_deg + alt_rate * ahead_s
-        az_then = reading.az_deg + az_rate * ahead_s
-        limits = self._mount.limits
-        floor_now = limits.horizon_at(reading.az_deg)
-        floor_then = limits.horizon_at(az_then)
-        above_now = reading.alt_deg - floor_now
-        above_then = alt_then - floor_then
-        what = "a manual motion" if self._motions else f"{state.tracking.value} tracking"
-        if above_then < settings.margin_deg and above_then < above_now:
-            return (
-                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
-                f"{reading.az_deg % 360.0:.1f}°): it was heading below the configured horizon of "
-                f"{floor_then:.2f}°"
-            )
-        below_now = limits.max_altitude_deg - reading.alt_deg
-        below_then = limits.max_altitude_deg - alt_then
-        if has_ceiling(limits) and below_then < settings.margin_deg and below_then < below_now:
-            return (
-                f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
-                f"the configured limit of {limits.max_altitude_deg:.2f}°"
-            )
-        return self._sun_danger(reading, alt_then, az_then, ahead_s, what)
-
-    def _sun_danger(
-        self, reading: Reading, alt_then: float, az_then: float, ahead_s: float, what: str
-    ) -> str | None:
-        """Why a motion heading into the Sun avoidance zone must stop now (``_danger``'s
-        prediction, judged against where the Sun will be then), or None."""
-        try:
-            zone = self._mount.sun_zone()
-        except LimitError as error:  # the Sun cannot be placed: nothing can be judged safe
-            return f"{what} was stopped: {error}"
-        if zone is None:
-            return None
-        now = zone.distance_deg(reading.alt_deg, reading.az_deg)
-        then = zone.distance_deg(alt_then, az_then, later_s=ahead_s)
-        # Tracking closes in at most 0.5°/h (a thin Moon): the margin is for rate motions only,
-        # so a target a goto was allowed to (at the zone's edge) stays tracked.
-        edge = zone.radius_deg + (self.settings.margin_deg if self._motions else 0.0)
-        if then < edge and then < now:
-            return (
-                f"{what} was stopped at altitude {reading.alt_deg:.2f}° (azimuth "
-                f"{reading.az_deg % 360.0:.1f}°), {now:.1f}° from the Sun: it was heading into "
-                f"the {zone.radius_deg:g}° Sun avoidance zone ({SUN_SETTING})"
-            )
-        return None
-
-    def _near_sun(self, state: MountState, near_deg: float) -> bool:
-        """Whether the tracked position is within ``near_deg`` of the Sun avoidance zone."""
-        if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
-            return False
-        try:
-            zone = self._mount.sun_zone()
-        except LimitError:
-            return True
-        if zone is None:
-            return False
-        distance = zone.distance_j2000_deg(state.ra_j2000_hours, state.dec_j2000_deg)
-        return distance < zone.radius_deg + near_deg
 
     async def _stop(self, state: MountState, reason: str) -> None:
         """Stop the mount, and repeat the stop until the device has confirmed it (or the mount
@@ -607,20 +394,24 @@ class HorizonGuard:
         def tell(notice: str) -> None:
             self.notice = notice
 
-        await _until_confirmed(self._mount, self.settings, stop, reason, tell)
-        self._mount._publish(self._mount.state)  # show the notice now, not at the next poll
+        await _until_confirmed(
+            self._mount, self.settings, stop, reason, tell=tell, show_notice=self._show_notice
+        )
+        self._show_notice()  # now, not at the next poll
 
 
 async def _until_confirmed(
-    mount: Mount,
+    mount: GuardedMount,
     settings: GuardSettings,
     stop: Callable[[], Awaitable[None]],
     reason: str,
+    *,
     tell: Callable[[str], None],
+    show_notice: Callable[[], None],
 ) -> None:
     """Run ``stop`` until it returns (the device confirmed it) within ``confirm_s``, the wait
     doubling up to ``confirm_max_s``; give up only when the mount is no longer connected.
-    ``tell`` gets the notice to show meanwhile."""
+    ``tell`` gets the notice to show meanwhile (``show_notice`` shows it)."""
     wait_s = settings.confirm_s
     while True:
         try:
@@ -636,7 +427,7 @@ async def _until_confirmed(
             why = str(error) or f"not confirmed within {wait_s:g} s"
             tell(f"{reason}; the stop is not confirmed yet, sending it again: {why}")
             logger.error("the horizon guard's stop is not confirmed: %s; again", why)
-            mount._publish(mount.state)
+            show_notice()
             if not mount.state.connected:
                 return
             if isinstance(error, MountError):
@@ -646,7 +437,3 @@ async def _until_confirmed(
 
 def _next_state(states: AsyncIterator[MountState]) -> Awaitable[MountState]:
     return anext(states)
-
-
-def _wrap_signed(degrees: float) -> float:
-    return (degrees + 180.0) % 360.0 - 180.0

@@ -18,7 +18,7 @@ import logging
 from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
-from scopelink.mount.guard import MotionClient
+from scopelink.mount.deadman import MotionClient
 from scopelink.web.sky import SkyPositions, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
