@@ -180,3 +180,26 @@ async def test_keypad_speed_motions_are_guarded_too() -> None:
         with pytest.raises(LimitError, match="would take it lower"):
             await rig.mount.move_axis_fixed(MountAxis.SECONDARY, 9, positive=False)
         assert len(rig.slews_received()) == sent
+
+
+async def test_an_unexpected_error_in_a_stop_does_not_end_the_watch(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A driver bug seen once under load (a RuntimeError from asyncio inside the driver's abort)
+    # used to end the guard's task: the motion then went on unwatched, below the horizon.
+    async with synscan_rig(at=(13.0, 250.0)) as rig:
+        real_abort = rig.mount.abort
+        failures: list[str] = []
+
+        async def abort_failing_once() -> None:
+            if not failures:
+                failures.append("abort")
+                raise RuntimeError("Cannot change state of expiring Timeout")
+            await real_abort()
+
+        monkeypatch.setattr(rig.mount, "abort", abort_failing_once)
+        await rig.mount.move_axis(MountAxis.PRIMARY, FAST_DEG_S)
+        rest = await wait_until_still(rig)
+        assert failures == ["abort"]  # the fault did happen
+        assert rig.min_alt_deg >= HORIZON_DEG - TOLERANCE_DEG, rig.min_alt_deg
+        assert rest < 12.0

@@ -232,16 +232,19 @@ class HorizonGuard:
                 await task
 
     async def _run(self) -> None:
-        try:
-            while self._needed(self._mount.state):
+        while self._needed(self._mount.state):
+            try:
                 if self._motions or self._near_limit(self._mount.state):
                     await self._watch_closely()
                 else:
                     await self._wait_while_far()
-        except asyncio.CancelledError:
-            raise
-        except Exception:  # the guard must never take the event loop down with it
-            logger.exception("the horizon guard failed")
+            except asyncio.CancelledError:
+                raise
+            except Exception:
+                # Never take the event loop down, and never stop watching while a motion or
+                # tracking needs it: a bug met once (in a driver, say) must not leave it unwatched.
+                logger.exception("the horizon guard failed; watching again")
+                await asyncio.sleep(_REPEAT_PAUSE_S)
 
     async def _wait_while_far(self) -> None:
         """Tracking far from every limit: check the tracked altitude a few times a second, with
@@ -423,14 +426,16 @@ async def _until_confirmed(
             tell(f"{reason}; stopping it FAILED: {error}")
             logger.error("the horizon guard could not stop the mount: %s", error)
             return
-        except (MountError, TimeoutError) as error:
+        except Exception as error:  # a driver's bug must not end the stopping either
+            if not isinstance(error, MountError | TimeoutError):
+                logger.exception("the horizon guard's stop failed unexpectedly; again")
             why = str(error) or f"not confirmed within {wait_s:g} s"
             tell(f"{reason}; the stop is not confirmed yet, sending it again: {why}")
             logger.error("the horizon guard's stop is not confirmed: %s; again", why)
             show_notice()
             if not mount.state.connected:
                 return
-            if isinstance(error, MountError):
+            if not isinstance(error, TimeoutError):
                 await asyncio.sleep(_REPEAT_PAUSE_S)  # a fast failure (a closed port)
             wait_s = min(2.0 * wait_s, settings.confirm_max_s)
 
