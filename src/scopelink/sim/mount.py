@@ -4,7 +4,10 @@ Nothing runs in the background. Every command plans the axes' motion from "now" 
 (slews, ramps, tracking that follows the target through ``astro``, guide pulses, and a stop where
 continuous motion would cross the horizon or a mechanical limit), and every reading evaluates
 that plan at the clock's current time. So a stepped clock advanced by a test, or a clock running
-x1000, gives exactly the same positions. See ``docs/simulator.md``.
+x1000, gives exactly the same positions. The mount decides what the axes do; its
+:class:`~scopelink.sim.motion.MotionPlan` carries it out and keeps the timing, and
+:class:`~scopelink.sim.limit_search.LimitSearch` finds where the plan must stop. See
+``docs/simulator.md``.
 """
 
 from __future__ import annotations

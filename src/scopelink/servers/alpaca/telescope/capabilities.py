@@ -8,8 +8,7 @@ answer without a connection. CanMoveAxis and AxisRates are in ``motion``, Tracki
 from __future__ import annotations
 
 from scopelink.mount import AlignmentMode, TrackingMode
-from scopelink.servers.alpaca.telescope.member import Member, fixed, not_implemented
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, fixed, not_implemented
 
 __all__ = ["CapabilityMembers"]
 
@@ -17,11 +16,8 @@ _ALIGNMENT = {AlignmentMode.ALT_AZ: 0, AlignmentMode.POLAR: 1, AlignmentMode.GER
 """ASCOM ``AlignmentModes``."""
 
 
-class CapabilityMembers:
+class CapabilityMembers(MemberGroup):
     """The Can* flags and the mount's fixed facts."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         caps = self.session.mount.capabilities

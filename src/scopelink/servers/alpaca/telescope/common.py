@@ -9,8 +9,7 @@ from scopelink import __version__ as scopelink_version
 from scopelink.mount import TrackingMode
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member, fixed, not_implemented
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, fixed, not_implemented
 from scopelink.servers.alpaca.telescope.site import format_utc
 
 __all__ = ["INTERFACE_VERSION", "CommonMembers"]
@@ -19,11 +18,8 @@ INTERFACE_VERSION = 4
 """ITelescopeV4 (ASCOM Platform 7): Connect/Disconnect/Connecting and DeviceState."""
 
 
-class CommonMembers:
+class CommonMembers(MemberGroup):
     """Connection, identity, DeviceState and the (unsupported) actions and raw commands."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         session = self.session

@@ -17,7 +17,7 @@ from scopelink.servers.alpaca.params import Params
 from scopelink.servers.alpaca.telescope.capabilities import CapabilityMembers
 from scopelink.servers.alpaca.telescope.common import CommonMembers
 from scopelink.servers.alpaca.telescope.config import TelescopeConfig
-from scopelink.servers.alpaca.telescope.member import Handler, Member
+from scopelink.servers.alpaca.telescope.member import Handler, Member, MemberGroup
 from scopelink.servers.alpaca.telescope.motion import MotionMembers
 from scopelink.servers.alpaca.telescope.parking import ParkingMembers
 from scopelink.servers.alpaca.telescope.position import PositionMembers
@@ -75,7 +75,7 @@ class TelescopeDevice:
 
     def _member_table(self) -> dict[str, Member]:
         session = self.session
-        groups = (
+        groups: tuple[MemberGroup, ...] = (
             CommonMembers(session),
             CapabilityMembers(session),
             PositionMembers(session),

@@ -7,13 +7,15 @@ Each member group (``common``, ``capabilities``, ``position``, ``tracking``, ``s
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
+from scopelink.servers.alpaca.telescope.session import TelescopeSession
 
-__all__ = ["Handler", "Member", "fixed", "not_implemented"]
+__all__ = ["Handler", "Member", "MemberGroup", "fixed", "not_implemented"]
 
 Handler = Callable[[Params], object]
 """Takes the request's parameters; returns the Value (or an awaitable of it), None for none."""
@@ -26,6 +28,17 @@ class Member:
     get: Handler | None = None
     put: Handler | None = None
     needs_connection: bool = True
+
+
+class MemberGroup(ABC):
+    """One ASCOM group of members over the shared ``session``."""
+
+    def __init__(self, session: TelescopeSession) -> None:
+        self.session = session
+
+    @abstractmethod
+    def members(self) -> dict[str, Member]:
+        """The group's members, keyed by lower-case URL name."""
 
 
 def fixed(value: object) -> Member:

@@ -5,8 +5,7 @@ from __future__ import annotations
 from scopelink.mount import MAX_PULSE_GUIDE_MS, GuideDirection, MountAxis
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup
 
 __all__ = ["MotionMembers"]
 
@@ -24,11 +23,8 @@ def _axis(params: Params) -> int:
     return params.integer("Axis", 0, 2)
 
 
-class MotionMembers:
+class MotionMembers(MemberGroup):
     """Manual motion: guide pulses and moving an axis at a rate."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         return {

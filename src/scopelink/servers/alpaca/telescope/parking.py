@@ -5,17 +5,13 @@ from __future__ import annotations
 from scopelink.mount import MountError, ParkPosition
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber, from_mount_error
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member, not_implemented
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
 
 __all__ = ["ParkingMembers"]
 
 
-class ParkingMembers:
+class ParkingMembers(MemberGroup):
     """Park (a slew: Slewing is true until it has landed), Unpark and SetPark."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         return {

@@ -10,17 +10,13 @@ from scopelink.astro import destination_side_of_pier, hour_angle_hours, lst_hour
 from scopelink.mount import AlignmentMode
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member, not_implemented
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
 
 __all__ = ["PositionMembers"]
 
 
-class PositionMembers:
+class PositionMembers(MemberGroup):
     """The position in both frames, the pier side, sidereal time and the state flags."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         session = self.session

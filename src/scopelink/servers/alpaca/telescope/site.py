@@ -11,8 +11,7 @@ from datetime import UTC, datetime
 
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member, not_implemented
-from scopelink.servers.alpaca.telescope.session import TelescopeSession
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
 
 __all__ = ["SiteMembers", "format_utc", "parse_utc"]
 
@@ -41,11 +40,8 @@ def parse_utc(text: str) -> datetime:
         ) from None
 
 
-class SiteMembers:
+class SiteMembers(MemberGroup):
     """The mount's clock and site, read and set."""
-
-    def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
 
     def members(self) -> dict[str, Member]:
         mount = self.session.mount

@@ -11,7 +11,7 @@ import asyncio
 from scopelink.astro import observed_to_j2000
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup
 from scopelink.servers.alpaca.telescope.session import TelescopeSession
 
 __all__ = ["MAX_SETTLE_TIME_S", "SlewingMembers"]
@@ -43,11 +43,11 @@ def _horizontal(params: Params) -> tuple[float, float]:
     return altitude, azimuth
 
 
-class SlewingMembers:
+class SlewingMembers(MemberGroup):
     """Slews, syncs and their target, in the configured equatorial frame or in alt/az."""
 
     def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
+        super().__init__(session)
         self._target_ra: float | None = None
         self._target_dec: float | None = None
         self._settle_time_s = 0

@@ -7,7 +7,7 @@ import enum
 from scopelink.mount import AlignmentMode, Mount, TrackingMode
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
-from scopelink.servers.alpaca.telescope.member import Member, not_implemented
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
 from scopelink.servers.alpaca.telescope.session import TelescopeSession
 
 __all__ = ["DriveRate", "TrackingMembers", "supported_drive_rates"]
@@ -58,11 +58,11 @@ def supported_drive_rates(mount: Mount) -> list[DriveRate]:
     return [rate for rate in DriveRate if mode_for(mount, rate) in modes]
 
 
-class TrackingMembers:
+class TrackingMembers(MemberGroup):
     """Tracking on/off at the selected drive rate; the rates the mount cannot change."""
 
     def __init__(self, session: TelescopeSession) -> None:
-        self.session = session
+        super().__init__(session)
         self._drive_rate = DriveRate.SIDEREAL
         """The selected TrackingRate, remembered while tracking is off."""
 
