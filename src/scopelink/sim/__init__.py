@@ -13,6 +13,7 @@ from scopelink.sim.geometry import (
     GermanEquatorialGeometry,
     geometry_for,
 )
+from scopelink.sim.limit_search import LimitStop
 from scopelink.sim.models import (
     AZ_GTI,
     DOB_GOTO,
@@ -28,7 +29,7 @@ from scopelink.sim.models import (
     MountModel,
     synscan_fixed_rate_deg_s,
 )
-from scopelink.sim.mount import LimitStop, SimulatedMount
+from scopelink.sim.mount import SimulatedMount
 from scopelink.sim.tracking import SkyPath, SkyTarget, ra_drift_hours_per_s
 
 __all__ = [

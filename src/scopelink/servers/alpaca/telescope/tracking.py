@@ -1,0 +1,122 @@
+"""Tracking and rates: Tracking, TrackingRate, TrackingRates, the offset and guide rates."""
+
+from __future__ import annotations
+
+import enum
+
+from scopelink.mount import AlignmentMode, Mount, TrackingMode
+from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
+from scopelink.servers.alpaca.params import Params
+from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
+from scopelink.servers.alpaca.telescope.session import TelescopeSession
+
+__all__ = ["DriveRate", "TrackingMembers", "supported_drive_rates"]
+
+
+class DriveRate(enum.IntEnum):
+    """ASCOM ``DriveRates``."""
+
+    SIDEREAL = 0
+    LUNAR = 1
+    SOLAR = 2
+    KING = 3
+
+
+_DRIVE_RATE_OF_MODE = {
+    TrackingMode.SIDEREAL: DriveRate.SIDEREAL,
+    TrackingMode.ALT_AZ: DriveRate.SIDEREAL,
+    TrackingMode.PEC: DriveRate.SIDEREAL,
+    TrackingMode.LUNAR: DriveRate.LUNAR,
+    TrackingMode.SOLAR: DriveRate.SOLAR,
+}
+
+
+def mode_for(mount: Mount, rate: DriveRate) -> TrackingMode | None:
+    """The tracking mode that drives ``mount`` at ``rate`` (None: it has none)."""
+    modes = mount.capabilities.tracking_modes
+    if rate is DriveRate.SIDEREAL:
+        # An alt-az mount follows the stars on both axes: its own mode (SynScan's "alt-az").
+        preferred = (
+            (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
+            if mount.capabilities.alignment_mode is AlignmentMode.ALT_AZ
+            else (TrackingMode.SIDEREAL, TrackingMode.PEC, TrackingMode.ALT_AZ)
+        )
+        for mode in preferred:
+            if mode in modes:
+                return mode
+        return None
+    if rate is DriveRate.LUNAR:
+        return TrackingMode.LUNAR
+    if rate is DriveRate.SOLAR:
+        return TrackingMode.SOLAR
+    return None
+
+
+def supported_drive_rates(mount: Mount) -> list[DriveRate]:
+    """The ASCOM drive rates ``mount`` can track at (its TrackingRates)."""
+    modes = mount.capabilities.tracking_modes
+    return [rate for rate in DriveRate if mode_for(mount, rate) in modes]
+
+
+class TrackingMembers(MemberGroup):
+    """Tracking on/off at the selected drive rate; the rates the mount cannot change."""
+
+    def __init__(self, session: TelescopeSession) -> None:
+        super().__init__(session)
+        self._drive_rate = DriveRate.SIDEREAL
+        """The selected TrackingRate, remembered while tracking is off."""
+
+    def members(self) -> dict[str, Member]:
+        mount = self.session.mount
+        ni = not_implemented
+        return {
+            "tracking": Member(
+                get=lambda _: mount.state.tracking is not TrackingMode.OFF,
+                put=self._put_tracking,
+            ),
+            "trackingrate": Member(get=self._tracking_rate, put=self._put_tracking_rate),
+            "trackingrates": Member(
+                get=lambda _: [int(rate) for rate in supported_drive_rates(mount)],
+                needs_connection=False,
+            ),
+            "rightascensionrate": Member(get=lambda _: 0.0, put=ni("RightAscensionRate")),
+            "declinationrate": Member(get=lambda _: 0.0, put=ni("DeclinationRate")),
+            "guideratedeclination": Member(get=self._guide_rate, put=ni("GuideRateDeclination")),
+            "guideraterightascension": Member(
+                get=self._guide_rate, put=ni("GuideRateRightAscension")
+            ),
+        }
+
+    def _tracking_rate(self, _: Params) -> int:
+        tracking = self.session.mount.state.tracking
+        return int(_DRIVE_RATE_OF_MODE.get(tracking, self._drive_rate))
+
+    def _guide_rate(self, _: Params) -> float:
+        # The Mount API has no guide rate; a mount that knows its own (the simulator) says it.
+        rate = getattr(self.session.mount, "guide_rate_deg_s", None)
+        if not isinstance(rate, float):
+            raise AlpacaError(
+                ErrorNumber.NOT_IMPLEMENTED, "this mount does not report a guide rate"
+            )
+        return rate
+
+    async def _put_tracking(self, params: Params) -> None:
+        on = params.boolean("Tracking")
+        mount = self.session.mount
+        mode = mode_for(mount, self._drive_rate) if on else TrackingMode.OFF
+        if mode is None:
+            raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount cannot track")
+        await self.session.call(mount.set_tracking(mode))
+
+    async def _put_tracking_rate(self, params: Params) -> None:
+        value = params.integer("TrackingRate", 0, 3)
+        rate = DriveRate(value)
+        mount = self.session.mount
+        if rate not in supported_drive_rates(mount):
+            raise AlpacaError(
+                ErrorNumber.INVALID_VALUE, f"tracking rate {rate.name.lower()} is not supported"
+            )
+        self._drive_rate = rate
+        mode = mode_for(mount, rate)
+        if mode is not None and mount.state.tracking is not TrackingMode.OFF:
+            await self.session.call(mount.set_tracking(mode))
