@@ -28,5 +28,6 @@ def assert_provenance(stdout: str) -> None:
     load average, then the commit."""
     lines = stdout.splitlines()
     assert len(lines) >= 2, stdout
-    assert lines[0].startswith("date ") and " UTC, load average " in lines[0], stdout
+    assert lines[0].startswith("date "), stdout
+    assert " UTC, load average " in lines[0], stdout
     assert lines[1].startswith("commit "), stdout
