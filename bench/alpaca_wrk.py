@@ -51,7 +51,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from bench.processes import Relay, alpaca_port, cpu_seconds, emulate, serve_alpaca, stop
-from bench.provenance import provenance
+from bench.provenance import peer_label, pin_problem, print_provenance
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Mount
@@ -448,8 +448,8 @@ async def main_async(seconds: float, peer: tuple[str, str] | None, rounds: int, 
                 peer_runs.append(theirs)
     best = [_best(row_runs) for row_runs in runs]
     best_peer = _best(peer_runs)
-    for line in provenance():
-        print(line)
+    label = peer_label("alpaca-simulators", peer[1], PEER_VERSION) if peer else "none (not run)"
+    print_provenance(f"peer {label}")
     print(
         f"GET rightascension, wrk -t{THREADS} -c{CONNECTIONS}, {seconds:g} s per run, "
         f"each row the best of {rounds} interleaved round(s), 127.0.0.1"
@@ -471,8 +471,7 @@ async def main_async(seconds: float, peer: tuple[str, str] | None, rounds: int, 
     )
     print(_row(ROWS[2], best[2], best_peer, policy))
     print(_row(ROWS[3], best[3], best_peer, quick_note if quick else ""))
-    peer_name = f"alpaca-simulators {peer[1] if peer else PEER_VERSION} (peer)"
-    print(_row(peer_name, best_peer, best_peer, "" if peer else "peer not run"))
+    print(_row(f"{label} (peer)", best_peer, best_peer, "" if peer else "peer not run"))
     for line in goal_lines(best[:2], best_peer):
         print(line)
     print(f"{ROWS[2]}, {ROWS[3]}: no throughput goal ({policy})")
@@ -499,14 +498,11 @@ def main() -> None:
         executable = install_peer() if args.install_peer else find_peer(args.peer)
         if executable is not None:
             version = peer_version(executable)
-            if version != PEER_VERSION and not args.any_peer_version:
-                print(
-                    f"bench.alpaca_wrk: the peer {executable} is alpaca-simulators {version}, "
-                    f"not the pinned {PEER_VERSION}: --install-peer, or --any-peer-version",
-                    file=sys.stderr,
-                )
+            problem = pin_problem("alpaca-simulators", version, PEER_VERSION, args.any_peer_version)
+            if problem is not None:
+                print(f"bench.alpaca_wrk: {executable}: {problem}", file=sys.stderr)
                 sys.exit(2)
-            peer = (executable, version if version == PEER_VERSION else f"{version} UNPINNED")
+            peer = (executable, version)
     os.environ.setdefault("PYTHONUNBUFFERED", "1")
     rounds = 1 if args.quick else max(1, args.rounds)
     sys.exit(asyncio.run(main_async(seconds, peer, rounds, args.quick)))
