@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from bench.provenance import provenance
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -73,9 +75,10 @@ PLAN = (
 )
 """The documented order: quick and CPU-bound first, the long runs last."""
 
-GOAL = re.compile(r"^\s*goal\b|:\s*(PASS|MISS|met|MISSED)\b")
-"""A goal line: it starts with "goal", or gives a verdict after a colon (bench.polling's rows)."""
-MISSED = re.compile(r"\b(MISS|MISSED)\b")
+GOAL = re.compile(r"^\s*goal\b|:\s*(PASS|MISS|met|MISSED)\b|^soak (PASSED|FAILED)")
+"""A goal line: it starts with "goal", gives a verdict after a colon (bench.polling's rows), or
+is the soak's verdict."""
+MISSED = re.compile(r"\b(MISS|MISSED|FAILED)\b")
 
 
 def present(step: Step) -> bool:
@@ -107,6 +110,7 @@ def run_step(step: Step, out: Path) -> Outcome:
     if not present(step):
         return Outcome(step, None, 0.0, [])
     started = time.monotonic()
+    origin = [f"{line}\n" for line in provenance()]
     lines: list[str] = []
     with subprocess.Popen(
         [sys.executable, "-m", f"bench.{step.module}", *step.options],
@@ -121,7 +125,10 @@ def run_step(step: Step, out: Path) -> Outcome:
             sys.stdout.write(line)
             sys.stdout.flush()
             lines.append(line)
-    (out / f"{step.name}.txt").write_text("".join(lines), encoding="utf-8")
+    # A report that does not say where its figures come from gets it from here (taken as it
+    # started): bench.soak and bench.fuzz print none of their own yet.
+    head = [] if lines and lines[0].startswith("date ") else origin
+    (out / f"{step.name}.txt").write_text("".join(head + lines), encoding="utf-8")
     goals = [line.rstrip("\n") for line in lines if GOAL.search(line)]
     return Outcome(step, process.returncode, time.monotonic() - started, goals)
 
