@@ -91,3 +91,25 @@ def test_a_run_saves_each_report_with_its_provenance(tmp_path: Path) -> None:
     )
     assert unknown.returncode != 0
     assert unknown.stderr.strip() == "bench.all: no benchmark named nope (see --list)"
+
+
+def test_the_docs_quote_the_pins_and_goals_the_code_checks() -> None:
+    """docs/benchmarks.md and the benchmarks never disagree on a peer's version or a goal."""
+    from bench import alpaca_wrk, astro, drivers_skytracker, drivers_synscan, security_flood
+
+    for peer, version in (
+        ("`alpaca-simulators`", alpaca_wrk.PEER_VERSION),
+        ("`astropy`", astro.PEER_PIN),
+        ("`nexstar`", drivers_synscan.NEXSTAR_PIN),
+    ):
+        assert f"| PyPI {peer}" in DOCS, peer
+        row = next(line for line in DOCS.splitlines() if line.strip().startswith(f"| PyPI {peer}"))
+        assert f"| {version} |" in row, row
+    text = " ".join(DOCS.split())  # as read, whatever the line breaks
+    assert (
+        f"at least **{alpaca_wrk.GOAL_RATIO:g}x the peer's throughput with p99 <= "
+        f"{alpaca_wrk.GOAL_P99_MS:g} ms**"
+    ) in text
+    assert f"within **{drivers_skytracker.GOAL_CPU_OF_BARE:g}x**" in text
+    assert f"poller keeps **>= {100 * security_flood.GOAL_RATIO:.0f} %**" in text
+    assert f"the best of {security_flood.FULL.rounds} rounds" in text
