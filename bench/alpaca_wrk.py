@@ -67,6 +67,13 @@ THREADS = 2
 PATH = "/api/v1/telescope/0/rightascension?ClientID=1&ClientTransactionID=1"
 PEER_VERSION = "1.3.2"
 """The alpaca-simulators release measured against (pinned: its speed is part of the figure)."""
+PEER_STACK = {
+    "fastapi": "0.165.0",
+    "uvicorn": "0.54.0",
+    "starlette": "1.10.0",
+    "pydantic": "2.14.4",
+}
+"""The peer's web stack, pinned at install and named in the report: its speed is the peer's."""
 PEER_VENV = Path.home() / ".cache" / "scopelink" / f"alpaca-simulators-{PEER_VERSION}-venv"
 GOAL_RATIO = 10.0
 GOAL_P99_MS = 10.0
@@ -258,26 +265,45 @@ def find_peer(explicit: str | None) -> str | None:
     return shutil.which("alpaca-simulators")
 
 
-def peer_version(executable: str) -> str:
-    """The alpaca-simulators version installed beside ``executable`` (its venv's Python), or
-    "unknown"."""
+def peer_versions(executable: str) -> dict[str, str]:
+    """The versions of alpaca-simulators and of :data:`PEER_STACK` installed beside
+    ``executable`` (its venv's Python); "unknown" where they cannot be read."""
     python = Path(executable).parent / "python"
-    query = "import importlib.metadata as m; print(m.version('alpaca-simulators'))"
+    names = ["alpaca-simulators", *PEER_STACK]
+    query = (
+        "import importlib.metadata as m\n"
+        f"for name in {names!r}:\n"
+        "    try: print(m.version(name))\n"
+        "    except m.PackageNotFoundError: print('not installed')"
+    )
     try:
         done = subprocess.run(
             [str(python), "-c", query], capture_output=True, text=True, check=True, timeout=60
         )
+        found = done.stdout.split()
     except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    return done.stdout.strip() or "unknown"
+        found = []
+    return {name: found[i] if i < len(found) else "unknown" for i, name in enumerate(names)}
+
+
+def stack_label(versions: dict[str, str]) -> str:
+    """The peer's web stack as measured, a version other than the pinned one marked."""
+    return ", ".join(
+        f"{name} {versions[name]}" + ("" if versions[name] == pin else f" (pin {pin})")
+        for name, pin in PEER_STACK.items()
+    )
 
 
 def install_peer() -> str:
-    """Create the peer's own virtual environment and install alpaca-simulators into it."""
+    """Create the peer's own virtual environment and install alpaca-simulators into it, its web
+    stack pinned too."""
     PEER_VENV.parent.mkdir(parents=True, exist_ok=True)
     subprocess.run([sys.executable, "-m", "venv", str(PEER_VENV)], check=True)
     pip = PEER_VENV / "bin" / "pip"
-    subprocess.run([str(pip), "install", "-q", f"alpaca-simulators=={PEER_VERSION}"], check=True)
+    pins = [f"{name}=={version}" for name, version in PEER_STACK.items()]
+    subprocess.run(
+        [str(pip), "install", "-q", f"alpaca-simulators=={PEER_VERSION}", *pins], check=True
+    )
     return str(PEER_VENV / "bin" / "alpaca-simulators")
 
 
@@ -425,7 +451,9 @@ def goal_lines(ours: list[Measured | None], peer: Measured | None) -> list[str]:
     return lines
 
 
-async def main_async(seconds: float, peer: tuple[str, str] | None, rounds: int, quick: bool) -> int:
+async def main_async(
+    seconds: float, peer: tuple[str, str, str] | None, rounds: int, quick: bool
+) -> int:
     # A poll in flight when a measured driver disconnects fails with a warning: not a finding.
     logging.getLogger("scopelink").setLevel(logging.ERROR)
     wrk = shutil.which("wrk")
@@ -449,7 +477,7 @@ async def main_async(seconds: float, peer: tuple[str, str] | None, rounds: int, 
     best = [_best(row_runs) for row_runs in runs]
     best_peer = _best(peer_runs)
     label = peer_label("alpaca-simulators", peer[1], PEER_VERSION) if peer else "none (not run)"
-    print_provenance(f"peer {label}")
+    print_provenance(f"peer {label}" + (f"; {peer[2]}" if peer else ""))
     print(
         f"GET rightascension, wrk -t{THREADS} -c{CONNECTIONS}, {seconds:g} s per run, "
         f"each row the best of {rounds} interleaved round(s), 127.0.0.1"
@@ -497,12 +525,13 @@ def main() -> None:
     if not (args.no_peer or args.quick):
         executable = install_peer() if args.install_peer else find_peer(args.peer)
         if executable is not None:
-            version = peer_version(executable)
+            versions = peer_versions(executable)
+            version = versions["alpaca-simulators"]
             problem = pin_problem("alpaca-simulators", version, PEER_VERSION, args.any_peer_version)
             if problem is not None:
                 print(f"bench.alpaca_wrk: {executable}: {problem}", file=sys.stderr)
                 sys.exit(2)
-            peer = (executable, version)
+            peer = (executable, version, stack_label(versions))
     os.environ.setdefault("PYTHONUNBUFFERED", "1")
     rounds = 1 if args.quick else max(1, args.rounds)
     sys.exit(asyncio.run(main_async(seconds, peer, rounds, args.quick)))

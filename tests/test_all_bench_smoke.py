@@ -105,6 +105,8 @@ def test_the_docs_quote_the_pins_and_goals_the_code_checks() -> None:
         assert f"| PyPI {peer}" in DOCS, peer
         row = next(line for line in DOCS.splitlines() if line.strip().startswith(f"| PyPI {peer}"))
         assert f"| {version} |" in row, row
+    stack = ", ".join(f"{name} {pin}" for name, pin in alpaca_wrk.PEER_STACK.items())
+    assert f"| {stack} | `bench.alpaca_wrk` |" in DOCS
     text = " ".join(DOCS.split())  # as read, whatever the line breaks
     assert (
         f"at least **{alpaca_wrk.GOAL_RATIO:g}x the peer's throughput with p99 <= "

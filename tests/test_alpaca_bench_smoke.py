@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from bench.alpaca_wrk import line_use, parse_wrk
+from bench.alpaca_wrk import PEER_STACK, line_use, parse_wrk, stack_label
 
 from tests.bench_support import assert_provenance, run_quick_bench
 from tests.conftest import require_executable
@@ -67,3 +67,10 @@ def test_the_line_is_measured_not_assumed() -> None:
     text = line_use(sent=90, received=840, seconds=1.0, polls=41)
     assert text.startswith("line 88% of 9600 8N1 (840 B/s in, 90 out)"), text
     assert "41.0 polls/s of 20.5 B from the device: 0.88 of the 46.9/s the line allows" in text
+
+
+def test_the_peers_web_stack_is_named_and_a_version_off_its_pin_marked() -> None:
+    versions = dict(PEER_STACK)
+    assert stack_label(versions) == ", ".join(f"{n} {v}" for n, v in PEER_STACK.items())
+    versions["uvicorn"] = "0.1.0"
+    assert f"uvicorn 0.1.0 (pin {PEER_STACK['uvicorn']})" in stack_label(versions)
