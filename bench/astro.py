@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from bench.provenance import provenance as common_provenance
+from bench.provenance import peer_label, pin_problem, print_provenance
 from scopelink.astro import Site, j2000_to_observed
 
 SITE = Site(51.4779, -0.0015, 46.0)
@@ -152,13 +152,12 @@ def single_rows(sizes: Sizes, peer: Astropy) -> tuple[float, float, float]:
     return polled, fresh, theirs / sizes.calls
 
 
-def provenance() -> list[str]:
+def peer_lines() -> list[str]:
     import astropy
     import erfa
 
     return [
-        *common_provenance(),
-        f"peer astropy {astropy.__version__} (pin {PEER_PIN}), pyerfa {erfa.__version__}, "
+        f"peer {peer_label('astropy', astropy.__version__, PEER_PIN)}, pyerfa {erfa.__version__}, "
         f"numpy {np.__version__}",
     ]
 
@@ -177,19 +176,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     options = parser.parse_args(argv)
     import astropy
 
-    if astropy.__version__ != PEER_PIN and not options.any_peer_version:
-        print(
-            f"bench.astro: astropy {astropy.__version__} is not the pinned {PEER_PIN}; "
-            f"install astropy=={PEER_PIN} or pass --any-peer-version",
-            file=sys.stderr,
-        )
+    problem = pin_problem("astropy", astropy.__version__, PEER_PIN, options.any_peer_version)
+    if problem is not None:
+        print(f"bench.astro: {problem}", file=sys.stderr)
         return 2
     sizes = QUICK if options.quick else FULL
     peer = Astropy()
     ours_vector, peer_vector = vector_rows(sizes, peer)
     polled, fresh, peer_single = single_rows(sizes, peer)
-    for line in provenance():
-        print(line)
+    print_provenance(*peer_lines())
     print()
     print(f"1. {sizes.positions} positions at one instant, best of {sizes.repeats}")
     print(f"   {'path':<56} {'ms':>9} {'us/pos':>8}")

@@ -1,12 +1,13 @@
 """How long a ``scopelink`` command takes from the shell, against its floors.
 
 Each command is run as a user runs it (a fresh ``python -m scopelink`` process) and timed wall
-clock, median of N runs. Peers measured in the same run: a bare interpreter (``python -c pass``)
+clock, N runs: the best (the least disturbed by a shared machine, what every ratio uses) and
+the median. Peers measured in the same run: a bare interpreter (``python -c pass``)
 and the import of the CLI alone. For ``status`` over a 9600-baud-paced SynScan emulator the wire
 time of the bytes exchanged (counted from the ``-v`` byte trace, 10 bits per byte) is the floor
 the link itself sets.
 
-    .venv/bin/python -m bench.cli_latency            # 5 runs each
+    .venv/bin/python -m bench.cli_latency            # 5 runs each, best and median
     .venv/bin/python -m bench.cli_latency --quick    # 1 run each (smoke test)
 """
 
@@ -26,6 +27,9 @@ import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import NamedTuple
+
+from bench.provenance import print_provenance
 
 BITS_PER_BYTE = 10  # 8N1
 BAUD = 9600
@@ -47,11 +51,20 @@ def _timed(command: Sequence[str], env: dict[str, str]) -> tuple[float, str]:
     return elapsed, result.stderr
 
 
-def _median(command: Sequence[str], env: dict[str, str], runs: int) -> float:
-    return statistics.median(_timed(command, env)[0] for _ in range(runs))
+class Timing(NamedTuple):
+    best: float
+    median: float
+
+    @classmethod
+    def of(cls, times: Sequence[float]) -> Timing:
+        return cls(min(times), statistics.median(times))
 
 
-def _median_in_process(argv: list[str], env: dict[str, str], runs: int) -> float:
+def _runs(command: Sequence[str], env: dict[str, str], runs: int) -> Timing:
+    return Timing.of([_timed(command, env)[0] for _ in range(runs)])
+
+
+def _runs_in_process(argv: list[str], env: dict[str, str], runs: int) -> Timing:
     """``scopelink ARGV`` through :func:`main` in this (warm) process: the command's own cost."""
     from scopelink.cli.main import main as scopelink_main
 
@@ -71,7 +84,7 @@ def _median_in_process(argv: list[str], env: dict[str, str], runs: int) -> float
             del os.environ["SCOPELINK_CONFIG"]
         else:
             os.environ["SCOPELINK_CONFIG"] = saved
-    return statistics.median(times)
+    return Timing.of(times)
 
 
 @contextmanager
@@ -105,42 +118,44 @@ def main(argv: Sequence[str] | None = None) -> int:
     scopelink = [python, "-m", "scopelink"]
     with tempfile.TemporaryDirectory() as folder:
         env = _environment(Path(folder) / "absent.toml")
-        floor = _median([python, "-c", "pass"], env, runs)
-        rows: list[tuple[str, float, str]] = [("python -c pass (peer)", floor, "1.0x")]
-        imports = _median([python, "-c", "import scopelink.cli.main"], env, runs)
-        rows.append(("import scopelink.cli.main", imports, f"{imports / floor:.1f}x"))
+        floor_timing = _runs([python, "-c", "pass"], env, runs)
+        floor = floor_timing.best
+        rows: list[tuple[str, Timing, str]] = [("python -c pass (peer)", floor_timing, "1.0x")]
+        imports = _runs([python, "-c", "import scopelink.cli.main"], env, runs)
+        rows.append(("import scopelink.cli.main", imports, f"{imports.best / floor:.1f}x"))
         for label, extra in (
             ("scopelink --version", ["--version"]),
             ("scopelink status --device sim", ["status", "--json", "--device", "sim"]),
         ):
-            seconds = _median([*scopelink, *extra], env, runs)
-            rows.append((label, seconds, f"{seconds / floor:.1f}x"))
+            timing = _runs([*scopelink, *extra], env, runs)
+            rows.append((label, timing, f"{timing.best / floor:.1f}x"))
         with _paced_emulator(env) as device:
             status = [*scopelink, "status", "--json", "--device", device]
-            seconds = _median(status, env, runs)
+            timing = _runs(status, env, runs)
             _, trace = _timed([*status, "-v"], env)
             wire_bytes = sum(int(count) for count in _TRACE_BYTES.findall(trace))
             wire_s = wire_bytes * BITS_PER_BYTE / BAUD
             rows.append(
                 (
                     "scopelink status, SynScan emulator at 9600 baud",
-                    seconds,
-                    f"{seconds / floor:.1f}x; wire floor {wire_s * 1000:.0f} ms "
-                    f"({wire_bytes} bytes): {seconds / wire_s:.1f}x",
+                    timing,
+                    f"{timing.best / floor:.1f}x; wire floor {wire_s * 1000:.0f} ms "
+                    f"({wire_bytes} bytes): {timing.best / wire_s:.1f}x",
                 )
             )
-            in_process = _median_in_process(["status", "--json", "--device", device], env, runs)
+            in_process = _runs_in_process(["status", "--json", "--device", device], env, runs)
             rows.append(
                 (
                     "  the same in a warm process (no start-up)",
                     in_process,
-                    f"wire floor {wire_s * 1000:.0f} ms: {in_process / wire_s:.1f}x",
+                    f"wire floor {wire_s * 1000:.0f} ms: {in_process.best / wire_s:.1f}x",
                 )
             )
-    print(f"median of {runs} run(s), wall clock")
-    print(f"{'command':<50} {'seconds':>8}  vs python -c pass")
-    for label, seconds, ratio in rows:
-        print(f"{label:<50} {seconds:>8.3f}  {ratio}")
+    print_provenance()
+    print(f"best and median of {runs} run(s), wall clock; ratios of the best")
+    print(f"{'command':<50} {'best s':>8} {'median s':>8}  vs python -c pass")
+    for label, timing, ratio in rows:
+        print(f"{label:<50} {timing.best:>8.3f} {timing.median:>8.3f}  {ratio}")
     return 0
 
 

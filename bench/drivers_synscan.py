@@ -2,6 +2,10 @@
 command side by side with PyPI ``nexstar`` and a minimal blocking pyserial client, each against
 the emulated hand control running in a separate process (as the real one is a separate machine).
 
+Every row is the best of N rounds (interleaved: on a shared machine the slower rounds measure the
+neighbours). Goal (issue #14 part 2): our CPU per ``e`` at most nexstar's in the same run
+(stretch: half); the report ends with its verdict. nexstar is pinned (:data:`NEXSTAR_PIN`).
+
 Run ``.venv/bin/python -m bench.drivers_synscan`` (about half a minute) or with ``--quick`` (a few
 seconds, what the smoke test runs). See ``docs/benchmarks.md`` and ``docs/drivers-synscan.md``.
 """
@@ -12,6 +16,7 @@ import argparse
 import asyncio
 import functools
 import multiprocessing
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -22,6 +27,7 @@ from multiprocessing.connection import Connection
 
 import serial
 
+from bench.provenance import installed_version, peer_label, pin_problem, print_provenance
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.links import open_link, precise_event_loop
@@ -38,6 +44,10 @@ BYTE_S = SERIAL_9600_8N1.bits_per_byte / SERIAL_9600_8N1.baudrate
 """One byte on a 9600 8N1 line: 1.04 ms."""
 E_ROUND_TRIP_BYTES = 1 + 18
 """``e`` and ``XXXXXXXX,YYYYYYYY#``."""
+NEXSTAR_PIN = "0.0.5"
+"""The PyPI ``nexstar`` release measured against (pyproject's test extra pins the same)."""
+GOAL_SHARE_OF_NEXSTAR = 1.0
+STRETCH_SHARE_OF_NEXSTAR = 0.5
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,24 +237,51 @@ def pyserial_client(url: str) -> Batch:
     return batch
 
 
+CLIENTS: list[tuple[str, Callable[[str], Batch]]] = [
+    ("scopelink SynScanMount.wire", scopelink_client),
+    (f"nexstar {NEXSTAR_PIN} getPosition", nexstar_client),
+    ("pyserial write/read", pyserial_client),
+]
+
+
 def cpu_per_command(url: str, sizes: Sizes) -> list[ClientFigures]:
-    """Time each client in turn against one unpaced emulator (in its own process)."""
-    clients: list[tuple[str, Callable[[str], Batch]]] = [
-        ("scopelink SynScanMount.wire", scopelink_client),
-        ("nexstar 0.0.5 getPosition", nexstar_client),
-        ("pyserial write/read", pyserial_client),
+    """Time each client in turn against one unpaced emulator (in its own process), for
+    ``sizes.rounds`` interleaved rounds: each client's best (least CPU) round."""
+    rounds = [
+        [
+            timed_in_thread(name, functools.partial(make, url), sizes.commands)
+            for name, make in CLIENTS
+        ]
+        for _ in range(sizes.rounds)
     ]
-    return [
-        timed_in_thread(name, functools.partial(make, url), sizes.commands)
-        for name, make in clients
-    ]
+    return [min(runs, key=lambda row: row.cpu_us) for runs in zip(*rounds, strict=True)]
+
+
+def goal_line(figures: list[ClientFigures]) -> str:
+    ours, nexstar = figures[0].cpu_us, figures[1].cpu_us
+    share = ours / nexstar
+    verdict = "PASS" if share <= GOAL_SHARE_OF_NEXSTAR else "MISS"
+    stretch = "PASS" if share <= STRETCH_SHARE_OF_NEXSTAR else "MISS"
+    return (
+        f"goal CPU per e <= nexstar's: {verdict}; stretch <= {STRETCH_SHARE_OF_NEXSTAR:.0%} of "
+        f"nexstar's: {stretch} (ours {ours:.0f} us, nexstar {nexstar:.0f} us: {share:.2f}x)"
+    )
 
 
 # --- report --------------------------------------------------------------------------------------
 
 
-def main(sizes: Sizes) -> None:
-    print(f"scopelink SynScan driver benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
+def main(sizes: Sizes, any_peer_version: bool) -> int:
+    version = installed_version("nexstar")
+    problem = pin_problem("nexstar", version, NEXSTAR_PIN, any_peer_version)
+    if problem is not None:
+        print(f"bench.drivers_synscan: {problem}", file=sys.stderr)
+        return 2
+    print_provenance(f"peer {peer_label('nexstar', version, NEXSTAR_PIN)}")
+    print(
+        f"scopelink SynScan driver benchmarks ({'quick' if sizes is QUICK else 'full'} run, "
+        f"each row the best of {sizes.rounds} round(s))"
+    )
     print()
     print("1. polls over TCP paced at 9600 8N1 both ways, emulator in another process (best round)")
     print(f"{'poll':<20} {'per s':>8} {'bytes each':>11} {'wire limit':>11} {'of limit':>9}")
@@ -270,9 +307,16 @@ def main(sizes: Sizes) -> None:
     for row in figures:
         ratio = row.cpu_us / baseline
         print(f"{row.name:<30} {row.cpu_us:>8.0f} {row.wall_us:>8.0f} {ratio:>15.2f}x")
+    print()
+    print(goal_line(figures))
+    return 0
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m bench.drivers_synscan", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="a few seconds, smaller counts")
-    main(QUICK if parser.parse_args().quick else FULL)
+    parser.add_argument(
+        "--any-peer-version", action="store_true", help=f"run with nexstar other than {NEXSTAR_PIN}"
+    )
+    options = parser.parse_args()
+    sys.exit(main(QUICK if options.quick else FULL, options.any_peer_version))

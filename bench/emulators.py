@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
-from bench.provenance import provenance
+from bench.provenance import print_provenance
 from scopelink.astro import Site, angular_separation_deg
 from scopelink.links import Link, paced, precise_event_loop
 from scopelink.protocol.synscan import (
@@ -352,9 +352,8 @@ def _describe_run(run: PollRun, one_mount: PollRun | None) -> str:
 
 
 async def main(sizes: Sizes) -> None:
+    print_provenance()
     print(f"scopelink emulator benchmarks ({'quick' if sizes is QUICK else 'full'} run)")
-    for line in provenance():
-        print(line)
     print(f"wire limit for e at 9600 8N1: 9600 / ((1 + 18) * 10) = {WIRE_LIMIT:.2f} polls/s")
     print()
     print(

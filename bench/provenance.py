@@ -3,6 +3,7 @@ report so that each figure in docs/benchmarks.md can be traced to the code that 
 
 from __future__ import annotations
 
+import importlib.metadata
 import os
 import platform
 import subprocess
@@ -28,3 +29,34 @@ def provenance() -> list[str]:
         f"load average {load} on {os.cpu_count()} cores",
         f"commit {git('rev-parse', '--short', 'HEAD')}{dirty}, Python {platform.python_version()}",
     ]
+
+
+def print_provenance(*more: str) -> None:
+    """Print :func:`provenance` (and any ``more`` lines: the peers' versions): the first lines of
+    every benchmark's report."""
+    for line in (*provenance(), *more):
+        print(line, flush=True)
+
+
+def installed_version(distribution: str) -> str:
+    """The installed version of ``distribution`` in this environment, or "not installed"."""
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def pin_problem(name: str, version: str, pin: str, any_version: bool) -> str | None:
+    """Why a peer may not be measured: its version is not ``pin`` (unless ``any_version``, and
+    then the report must say so: see :func:`peer_label`)."""
+    if version == pin or any_version:
+        return None
+    return (
+        f"the peer {name} is version {version}, not the pinned {pin}: install {name}=={pin}, "
+        "or pass --any-peer-version"
+    )
+
+
+def peer_label(name: str, version: str, pin: str) -> str:
+    """``name version (pin P)``, marked when it is not the pinned one."""
+    return f"{name} {version} (pin {pin}" + (")" if version == pin else ": NOT the pinned version)")

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from bench.provenance import print_provenance
 from scopelink.astro import Site
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
@@ -139,6 +140,10 @@ async def main(trials: int, down_s: float) -> list[tuple[str, str, list[Trial]]]
     return table
 
 
+RECONNECT_PROMISE_S = 5.0
+"""docs/reliability-safety.md: a device that comes back is read again within 5 s."""
+
+
 def report(table: list[tuple[str, str, list[Trial]]]) -> str:
     lines = [
         f"stale_after_s {DEFAULT_STALE_AFTER_S:g} s (default); seconds as min / median / max",
@@ -150,6 +155,13 @@ def report(table: list[tuple[str, str, list[Trial]]]) -> str:
             f"{_row([t.refused_s for t in trials]):>21}"
             f"{_row([t.down_s for t in trials]):>21}"
             f"{_row([t.back_s for t in trials]):>21}"
+        )
+    for driver, fault, trials in table:
+        back = max(t.back_s for t in trials)
+        verdict = "PASS" if back <= RECONNECT_PROMISE_S else "MISS"
+        lines.append(
+            f"goal {driver} {fault}: back within {RECONNECT_PROMISE_S:g} s in every trial: "
+            f"{verdict} (worst {back:.2f} s of {len(trials)})"
         )
     return "\n".join(lines)
 
@@ -164,6 +176,7 @@ def cli(argv: list[str] | None = None) -> None:
     logging.getLogger("bench").setLevel(logging.INFO)
     trials = 1 if args.quick else args.trials
     down_s = 3.0 if args.quick else args.down
+    print_provenance()
     print(report(asyncio.run(main(trials, down_s))))
 
 

@@ -21,3 +21,13 @@ def run_quick_bench(module: str, *, timeout_s: float = 60) -> subprocess.Complet
     )
     assert result.returncode == 0, result.stderr
     return result
+
+
+def assert_provenance(stdout: str) -> None:
+    """The report begins with where its figures come from (bench/provenance.py): the date and
+    load average, then the commit."""
+    lines = stdout.splitlines()
+    assert len(lines) >= 2, stdout
+    assert lines[0].startswith("date "), stdout
+    assert " UTC, load average " in lines[0], stdout
+    assert lines[1].startswith("commit "), stdout

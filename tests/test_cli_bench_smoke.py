@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import pytest
 
-from tests.bench_support import run_quick_bench
+from tests.bench_support import assert_provenance, run_quick_bench
 
 
 @pytest.mark.timeout(120)
 def test_quick_cli_benchmark_prints_its_table() -> None:
     result = run_quick_bench("bench.cli_latency", timeout_s=120)
+    assert_provenance(result.stdout)
     lines = result.stdout.splitlines()
+    assert lines[2] == "best and median of 1 run(s), wall clock; ratios of the best", result.stdout
     assert any(line.startswith("python -c pass (peer)") for line in lines), result.stdout
     emulator = [line for line in lines if line.startswith("scopelink status, SynScan emulator")]
     assert emulator, result.stdout

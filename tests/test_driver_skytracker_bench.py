@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from tests.bench_support import run_quick_bench
+from tests.bench_support import assert_provenance, run_quick_bench
 
 
 @pytest.mark.timeout(90)
 def test_quick_benchmark_prints_its_tables() -> None:
     result = run_quick_bench("bench.drivers_skytracker", timeout_s=90)
+    assert_provenance(result.stdout)
     lines = result.stdout.splitlines()
     wire = [line for line in lines if line.startswith("position poll") and line.endswith("%")]
     assert len(wire) == 1, result.stdout
@@ -17,3 +18,11 @@ def test_quick_benchmark_prints_its_tables() -> None:
     assert 0 < driver <= limit * 1.02  # the emulated line never beats the wire
     assert 0 < bare <= limit * 1.02
     assert any(line.startswith("status (R)") and line.endswith("x") for line in lines)
+    # One verdict for every CPU row the goal (issue #14 part 2) speaks for.
+    goals = [line for line in lines if line.startswith("goal ")]
+    assert [line.split(":")[0] for line in goals] == [
+        "goal position poll (Q \\r q)",
+        "goal refresh (R + position)",
+        "goal status (R)",
+    ], result.stdout
+    assert all(line.split(": ")[-1].split()[0] in {"PASS", "MISS"} for line in goals), goals
