@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scopelink.astro import Site
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
 from scopelink.cli.options import (
     add_site_and_clock_arguments,
@@ -217,10 +218,9 @@ EMULATORS: dict[str, EmulatedDevice] = {
 # --- the command ----------------------------------------------------------------------------------
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "emulate",
-        help="run an emulated device on a pty or TCP port",
         description="Run an emulated device until Ctrl-C. It prints where clients connect.",
     )
     devices = parser.add_subparsers(dest="device", metavar="DEVICE", required=True)

@@ -14,6 +14,7 @@ from rich.progress import BarColumn, Progress, TaskID, TextColumn
 
 from scopelink.astro import format_degrees, format_hours
 from scopelink.astro.catalog import lookup
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import add_device_arguments, run_on_mount
@@ -52,10 +53,9 @@ examples:
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    goto = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    goto = commands.parser(
         "goto",
-        help="slew to a named object or to coordinates, with progress; Ctrl-C aborts",
         description=(
             "Slew to TARGET: a name from the offline catalogue, or J2000 'RA DEC' (hours and "
             "degrees, decimal or sexagesimal), or with --altaz 'ALT AZ' in degrees. Shows the "
@@ -79,9 +79,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     accept_negative_values(goto)
     goto.set_defaults(run=run_goto)
 
-    sync = subparsers.add_parser(
+    sync = commands.parser(
         "sync",
-        help="tell the mount it points at a named object or at coordinates",
         description="Sync: the mount is pointing at TARGET (a name, or J2000 'RA DEC').",
         epilog=_SYNC_EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,

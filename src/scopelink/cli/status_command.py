@@ -12,6 +12,7 @@ from contextlib import aclosing
 from rich.console import Console
 from rich.live import Live
 
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import state_json, state_table
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import add_device_arguments, run_on_mount
@@ -28,10 +29,9 @@ examples:
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "status",
-        help="show RA/Dec, Alt/Az, pier side, slewing and tracking (live with --watch)",
         description=(
             "Read the mount and show RA/Dec (J2000 and of date), Alt/Az, pier side, slewing, "
             "tracking and parked. With --watch the table stays live until Ctrl-C."
