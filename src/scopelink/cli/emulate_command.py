@@ -17,13 +17,13 @@ from pathlib import Path
 from scopelink.astro import Site
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
+from scopelink.cli.mount_session import parse_site
 from scopelink.cli.options import (
     add_site_and_clock_arguments,
     parse_host_port,
-    parse_site,
     positive_rate,
-    until_stopped,
 )
+from scopelink.cli.stopping import until_stopped
 from scopelink.links import LinkError, precise_event_loop
 from scopelink.mount import Limits
 from scopelink.protocol.synscan import Version, VersionDialect

@@ -17,8 +17,9 @@ from scopelink.astro.catalog import lookup
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
-from scopelink.cli.options import until_stopped
+from scopelink.cli.mount_session import run_on_mount
+from scopelink.cli.options import add_device_arguments
+from scopelink.cli.stopping import until_stopped
 from scopelink.cli.targets import Coordinates, Named, accept_negative_values, parse_target
 from scopelink.mount import Mount, SlewProgress
 

@@ -9,7 +9,8 @@ import json
 from typing import Any
 
 from scopelink.cli.commands import CommandParsers
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
+from scopelink.cli.mount_session import run_on_mount
+from scopelink.cli.options import add_device_arguments
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Capabilities, Mount

@@ -28,11 +28,11 @@ from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
-    add_device_arguments,
     mount_error,
     open_device,
 )
-from scopelink.cli.options import until_stopped
+from scopelink.cli.options import add_device_arguments
+from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger

@@ -6,7 +6,8 @@ import argparse
 
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, read_config, run_on_mount
+from scopelink.cli.mount_session import read_config, run_on_mount
+from scopelink.cli.options import add_device_arguments
 from scopelink.mount import Mount, utc_now
 
 __all__ = ["register"]
