@@ -26,7 +26,7 @@ import re
 import tempfile
 import typing
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from pathlib import Path
 from urllib.parse import parse_qsl
 
@@ -35,7 +35,7 @@ from aiohttp import web
 from scopelink.astro import Site
 from scopelink.cli.config import ConfigError, load_config
 from scopelink.cli.errors import CommandError
-from scopelink.cli.targets import Coordinates, parse_target
+from scopelink.cli.targets import AltAz, RaDec, parse_target
 from scopelink.decode import Direction, Protocol, TraceInputError, annotate, parse_trace
 from scopelink.links import memory_pair
 from scopelink.mount import MountAxis, TrackingMode
@@ -1127,9 +1127,9 @@ def check_cli_target(data: bytes, rng: random.Random) -> None:
         target = parse_target(words, altaz=altaz)
     except CommandError:
         return
-    if isinstance(target, Coordinates):
+    if isinstance(target, RaDec | AltAz):
         # Ranges are the Mount's to check (InvalidValueError names the bound): "82 0" is read.
-        expect(isinstance(target.first, float) and isinstance(target.second, float), f"{target}")
+        expect(all(isinstance(angle, float) for angle in astuple(target)), f"{target}")
     else:
         expect(bool(target.name) and target.name == target.name.strip(), f"{target!r}")
 
