@@ -42,7 +42,13 @@ from scopelink.astro.refraction import (
     refraction_deg,
     true_altitude_deg,
 )
-from scopelink.astro.sidereal import gast_hours, gmst_hours, lst_hours
+from scopelink.astro.sidereal import (
+    SIDEREAL_DAY_S,
+    SIDEREAL_RATE_DEG_S,
+    gast_hours,
+    gmst_hours,
+    lst_hours,
+)
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import (
     JulianDate,
@@ -56,6 +62,8 @@ from scopelink.astro.timescales import (
 )
 
 __all__ = [
+    "SIDEREAL_DAY_S",
+    "SIDEREAL_RATE_DEG_S",
     "JulianDate",
     "PierSide",
     "RefractionModel",

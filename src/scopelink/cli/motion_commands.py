@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 from typing import Final
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
@@ -21,7 +22,6 @@ from scopelink.mount import (
     MountAxis,
     TrackingMode,
 )
-from scopelink.sim import SIDEREAL_RATE_DEG_S
 
 __all__ = ["AXES", "parse_rate", "register"]
 
