@@ -36,19 +36,19 @@ from scopelink.astro.pier import (
     destination_side_of_pier,
     hour_angle_hours,
 )
+from scopelink.astro.rates import (
+    LUNAR_RATE_DEG_S,
+    SIDEREAL_DAY_S,
+    SIDEREAL_RATE_DEG_S,
+    SOLAR_RATE_DEG_S,
+)
 from scopelink.astro.refraction import (
     RefractionModel,
     observed_altitude_deg,
     refraction_deg,
     true_altitude_deg,
 )
-from scopelink.astro.sidereal import (
-    SIDEREAL_DAY_S,
-    SIDEREAL_RATE_DEG_S,
-    gast_hours,
-    gmst_hours,
-    lst_hours,
-)
+from scopelink.astro.sidereal import gast_hours, gmst_hours, lst_hours
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import (
     JulianDate,
@@ -62,8 +62,10 @@ from scopelink.astro.timescales import (
 )
 
 __all__ = [
+    "LUNAR_RATE_DEG_S",
     "SIDEREAL_DAY_S",
     "SIDEREAL_RATE_DEG_S",
+    "SOLAR_RATE_DEG_S",
     "JulianDate",
     "PierSide",
     "RefractionModel",

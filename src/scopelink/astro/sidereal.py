@@ -11,16 +11,7 @@ import numpy.typing as npt
 from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
 from scopelink.astro.timescales import ScalarTime, TimeLike, tt_pair, ut1_pair
 
-__all__ = ["SIDEREAL_DAY_S", "SIDEREAL_RATE_DEG_S", "gast_hours", "gmst_hours", "lst_hours"]
-
-SIDEREAL_DAY_S = 86164.0905
-"""The mean sidereal day in SI seconds: one turn of the Earth relative to the equinox."""
-
-SIDEREAL_RATE_DEG_S = 360.0 / SIDEREAL_DAY_S
-"""The sidereal rate, degrees per second (15.0411 arcsec/s): how fast the stars turn about the
-celestial pole, what equatorial tracking runs at, and the unit of the "8x", "16x" speeds of hand
-controls, the command line (``move dec 16x``) and the dashboard. The one definition in the
-package; the dashboard page gets it from the server (``sidereal_rate_deg_s`` in its mount JSON)."""
+__all__ = ["gast_hours", "gmst_hours", "lst_hours"]
 
 _HOURS_PER_RADIAN = 12.0 / np.pi
 

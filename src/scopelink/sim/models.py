@@ -1,8 +1,7 @@
 """Mount presets and the SynScan hand control's speed table.
 
-Rates are in degrees per second; the sidereal rate is :data:`scopelink.astro.SIDEREAL_RATE_DEG_S`
-(15.0411 arcsec/s). The tracking rates for the Moon and the Sun are
-ASCOM's (``DriveRates``: lunar 14.685 arcsec/s, solar 15.0 arcsec/s).
+Rates are in degrees per second; the sidereal, lunar and solar rates are
+:mod:`scopelink.astro.rates`'s (15.0411, 14.685 and 15.0 arcsec/s).
 
 The SynScan fixed slew rates are the hand control's speed keys. Sky-Watcher's SynScan V3/V4 hand
 control manual (section "Slew the mount with the direction keys") lists ten speeds as multiples
@@ -25,18 +24,14 @@ __all__ = [
     "DOB_GOTO",
     "EQ6",
     "HEQ5",
-    "LUNAR_RATE_DEG_S",
     "PRESETS",
     "SKY_TRACKER",
-    "SOLAR_RATE_DEG_S",
     "SYNSCAN_FIXED_RATES_DEG_S",
     "SYNSCAN_FIXED_RATE_MULTIPLES",
     "MountModel",
     "synscan_fixed_rate_deg_s",
 ]
 
-LUNAR_RATE_DEG_S = 14.685 / 3600.0
-SOLAR_RATE_DEG_S = 15.0 / 3600.0
 
 SYNSCAN_FIXED_RATE_MULTIPLES: tuple[float, ...] = (
     2.0,
