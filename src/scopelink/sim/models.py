@@ -1,7 +1,7 @@
 """Mount presets and the SynScan hand control's speed table.
 
 Rates are in degrees per second; the sidereal, lunar and solar rates are
-:mod:`scopelink.astro.rates`'s (15.0411, 14.685 and 15.0 arcsec/s).
+:mod:`scopelink.astro.rates`'s.
 
 The SynScan fixed slew rates are the hand control's speed keys. Sky-Watcher's SynScan V3/V4 hand
 control manual (section "Slew the mount with the direction keys") lists ten speeds as multiples
