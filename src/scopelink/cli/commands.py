@@ -108,13 +108,14 @@ class CommandParser(argparse.ArgumentParser):
         self.fill_in()
         return super().parse_known_args(args, namespace)
 
-    def format_help(self) -> str:
+    # ``*args``: Python 3.15 passes a formatter.
+    def format_help(self, *args: Any) -> str:
         self.fill_in()
-        return super().format_help()
+        return super().format_help(*args)
 
-    def format_usage(self) -> str:
+    def format_usage(self, *args: Any) -> str:
         self.fill_in()
-        return super().format_usage()
+        return super().format_usage(*args)
 
 
 class CommandParsers:
