@@ -8,10 +8,8 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -81,25 +79,3 @@ def test_every_listed_command_is_filled_in_by_its_module() -> None:
         subparser.format_help()
         assert subparser.description, command.name
         assert subparser.get_default("run") or command.name == "emulate", command.name
-
-
-@pytest.mark.parametrize("after_s", [0.1, 0.3])
-def test_ctrl_c_while_python_m_scopelink_imports_ends_quietly(
-    tmp_path: Path, after_s: float
-) -> None:
-    """The imports now happen inside ``main``: Ctrl-C there is exit 130, not a traceback."""
-    env = {**os.environ, "SCOPELINK_CONFIG": str(tmp_path / "absent.toml")}
-    command = [sys.executable, "-m", "scopelink", "status", "--watch", "--json", "--device", "sim"]
-    process = subprocess.Popen(
-        command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env
-    )
-    try:
-        time.sleep(after_s)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=30)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert "Traceback" not in stderr, stderr
-    assert process.returncode in (0, 130), stderr
