@@ -12,16 +12,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from scopelink.astro import format_degrees, format_hours
+from scopelink.astro import SIDEREAL_RATE_DEG_S, format_degrees, format_hours
 from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.goto_command import SlewDisplay
 from scopelink.cli.main import build_parser
 from scopelink.cli.motion_commands import parse_rate
 from scopelink.cli.ports_command import SerialPort
-from scopelink.cli.targets import Coordinates, Named, parse_target
+from scopelink.cli.targets import AltAz, Named, RaDec, parse_target
 from scopelink.mount import MountState, SlewProgress
-from scopelink.sim import SIDEREAL_RATE_DEG_S
 from tests.test_cli_support import scopelink
 
 # --- targets ---------------------------------------------------------------------------------
@@ -42,19 +41,17 @@ def test_formatted_coordinates_read_back(
     dec_text = format_degrees(dec, decimals=1, style=style)  # type: ignore[arg-type]
     words = [f"{ra_text} {dec_text}"] if one_argument else [ra_text, dec_text]
     target = parse_target(words)
-    assert isinstance(target, Coordinates)
-    assert not target.altaz
-    assert abs(((target.first - ra + 12) % 24) - 12) < 0.01 / 3600 + 1e-9
-    assert target.second == pytest.approx(dec, abs=0.1 / 3600 + 1e-9)
+    assert isinstance(target, RaDec)
+    assert abs(((target.ra_hours - ra + 12) % 24) - 12) < 0.01 / 3600 + 1e-9
+    assert target.dec_deg == pytest.approx(dec, abs=0.1 / 3600 + 1e-9)
 
 
 @given(alt=st.floats(-90.0, 90.0), az=st.floats(0.0, 359.9))
 def test_altaz_decimal_degrees_read_back(alt: float, az: float) -> None:
     target = parse_target([f"{alt:.5f}", f"{az:.5f}"], altaz=True)
-    assert isinstance(target, Coordinates)
-    assert target.altaz
-    assert target.first == pytest.approx(alt, abs=1e-5)
-    assert target.second == pytest.approx(az, abs=1e-5)
+    assert isinstance(target, AltAz)
+    assert target.alt_deg == pytest.approx(alt, abs=1e-5)
+    assert target.az_deg == pytest.approx(az, abs=1e-5)
 
 
 @given(
@@ -74,22 +71,22 @@ def test_words_starting_with_a_letter_are_names(name: str) -> None:
         (["NGC 7000"], Named("NGC 7000")),
         (
             ["05:35:17", "-05:23:28"],
-            Coordinates(5 + 35 / 60 + 17 / 3600, -(5 + 23 / 60 + 28 / 3600)),
+            RaDec(5 + 35 / 60 + 17 / 3600, -(5 + 23 / 60 + 28 / 3600)),
         ),
-        (["5.5 -5.25"], Coordinates(5.5, -5.25)),
-        (["5 30 00 -5 15 00"], Coordinates(5.5, -5.25)),
-        (["5h 30m 00s +5°15'00\""], Coordinates(5.5, 5.25)),
-        (["5 30 00 5 15 00"], Coordinates(5.5, 5.25)),
+        (["5.5 -5.25"], RaDec(5.5, -5.25)),
+        (["5 30 00 -5 15 00"], RaDec(5.5, -5.25)),
+        (["5h 30m 00s +5°15'00\""], RaDec(5.5, 5.25)),
+        (["5 30 00 5 15 00"], RaDec(5.5, 5.25)),
     ],
 )
-def test_targets(words: list[str], expected: Named | Coordinates) -> None:
+def test_targets(words: list[str], expected: Named | RaDec) -> None:
     target = parse_target(words)
     if isinstance(expected, Named):
         assert target == expected
     else:
-        assert isinstance(target, Coordinates)
-        assert target.first == pytest.approx(expected.first)
-        assert target.second == pytest.approx(expected.second)
+        assert isinstance(target, RaDec)
+        assert target.ra_hours == pytest.approx(expected.ra_hours)
+        assert target.dec_deg == pytest.approx(expected.dec_deg)
 
 
 @pytest.mark.parametrize(
@@ -210,8 +207,8 @@ def test_a_negative_declination_is_an_argument_not_an_option(command: str, dec: 
     assert args.target == ["05:35:17", dec]
     assert args.device == "sim"
     target = parse_target(args.target)
-    assert isinstance(target, Coordinates)
-    assert target.second == pytest.approx(-5.3911, abs=1e-3)
+    assert isinstance(target, RaDec)
+    assert target.dec_deg == pytest.approx(-5.3911, abs=1e-3)
 
 
 def test_a_negative_rate_in_sidereal_multiples_is_an_argument() -> None:

@@ -229,8 +229,8 @@ async def test_old_firmware_dialects() -> None:
 
 async def test_slews_override_equatorial_tracking_except_fixed_rates_1_and_2() -> None:
     """The spec: slews override tracking, except fixed rates 1-2 while tracking equatorially."""
+    from scopelink.astro import SIDEREAL_RATE_DEG_S
     from scopelink.mount import MountAxis
-    from scopelink.sim import SIDEREAL_RATE_DEG_S
     from scopelink.sim.models import synscan_fixed_rate_deg_s
 
     def polar_axis(s: Session) -> float:

@@ -32,9 +32,8 @@ from datetime import timedelta
 
 import pytest
 
-from scopelink.astro import Site
+from scopelink.astro import SIDEREAL_RATE_DEG_S, Site
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.drivers.synscan.identify import SIDEREAL_RATE_DEG_S
 from scopelink.links import Link
 from scopelink.mount import (
     DeviceError,

@@ -87,10 +87,19 @@ def test_an_address_this_machine_lacks_is_named_as_such(tmp_path: Path) -> None:
     assert "another program" not in result.stderr
 
 
-@pytest.mark.parametrize("after_s", [0.05, 0.15, 0.3])
-def test_ctrl_c_during_start_ends_quietly(tmp_path: Path, after_s: float) -> None:
+@pytest.mark.parametrize(
+    ("program", "after_s"),
+    [
+        *(("scopelink", after_s) for after_s in (0.05, 0.15, 0.3)),
+        # Not at 0.05 s: ``-m`` may still be starting the interpreter, which SIGINT kills (-2).
+        *(("python -m scopelink", after_s) for after_s in (0.15, 0.3)),
+    ],
+)
+def test_ctrl_c_during_start_ends_quietly(tmp_path: Path, after_s: float, program: str) -> None:
+    """Ctrl-C while the command's modules import (they do, inside ``main``) or it starts."""
+    command = [str(SCOPELINK)] if program == "scopelink" else [sys.executable, "-m", "scopelink"]
     process = subprocess.Popen(
-        [str(SCOPELINK), "serve", *ONLY_ALPACA, "--state-dir", str(tmp_path / "s")],
+        [*command, "serve", *ONLY_ALPACA, "--state-dir", str(tmp_path / "s")],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -105,7 +114,11 @@ def test_ctrl_c_during_start_ends_quietly(tmp_path: Path, after_s: float) -> Non
             process.kill()
             process.wait()
     assert "Traceback" not in stderr, stderr
-    assert process.returncode in (0, 130), stderr
+    # Under ``-m`` CPython may end a handled Ctrl-C by SIGINT itself (what shells show as 130):
+    # a KeyboardInterrupt that crossed an exec() of a string (dataclasses makes its methods so)
+    # marks the run, and only ``-m`` looks at the mark after main returns (docs/cli.md).
+    quiet = (0, 130) if program == "scopelink" else (0, 130, -signal.SIGINT)
+    assert process.returncode in quiet, stderr
 
 
 async def test_a_page_closed_mid_request_is_not_logged_as_an_error(

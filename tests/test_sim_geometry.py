@@ -6,13 +6,12 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from scopelink.astro import PierSide, altaz_to_hadec, angular_separation_deg
+from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, altaz_to_hadec, angular_separation_deg
 from scopelink.mount import AlignmentMode, GuideDirection
 from scopelink.sim import (
     AZ_GTI,
     EQ6,
     PRESETS,
-    SIDEREAL_RATE_DEG_S,
     SKY_TRACKER,
     SYNSCAN_FIXED_RATES_DEG_S,
     AltAzimuthGeometry,

@@ -7,6 +7,7 @@ from datetime import UTC, datetime, timedelta
 import pytest
 
 from scopelink.astro import (
+    SIDEREAL_RATE_DEG_S,
     PierSide,
     Site,
     angular_separation_deg,
@@ -25,7 +26,7 @@ from scopelink.mount import (
     ParkedError,
     TrackingMode,
 )
-from scopelink.sim import AZ_GTI, EQ6, SIDEREAL_RATE_DEG_S, MountModel, SimClock, SimulatedMount
+from scopelink.sim import AZ_GTI, EQ6, MountModel, SimClock, SimulatedMount
 
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)
 NORTH = Site(latitude_deg=45.0, longitude_deg=7.0, elevation_m=300.0)

@@ -15,7 +15,7 @@ import pytest
 import pytest_asyncio
 from playwright.async_api import Browser, Page, async_playwright, expect
 
-from scopelink.astro import angular_separation_deg
+from scopelink.astro import SIDEREAL_RATE_DEG_S, angular_separation_deg
 from scopelink.astro.catalog import lookup
 from tests.conftest import require_executable
 from tests.test_web_support import HIGH_UP, NEVER_UP, Served, served, sim_mount
@@ -178,6 +178,21 @@ async def axis_speeds(s: Served, seconds: float = 0.3) -> tuple[float, float]:
     ra = abs(second.ra_j2000_hours - first.ra_j2000_hours) * 15 / elapsed
     dec = abs(second.dec_j2000_deg - first.dec_j2000_deg) / elapsed
     return ra, dec
+
+
+async def test_the_pads_sidereal_multiples_use_the_servers_sidereal_rate(browser: Browser) -> None:
+    """app.js writes no sidereal rate of its own: 8x is 8 x the package's one constant."""
+    async with served(sim_mount(rate=2.0)) as s, open_page(browser, s) as page:
+        await page.select_option("#rate", "8")
+        async with page.expect_request(
+            lambda request: request.url.endswith("/api/move") and request.method == "POST"
+        ) as sent:
+            await page.locator(".pad-up").dispatch_event("pointerdown")
+        body = (await sent.value).post_data_json
+        await page.locator(".pad-up").dispatch_event("pointerup")
+        assert isinstance(body, dict)
+        assert body["axis"] == "secondary"
+        assert body["rate_deg_s"] == pytest.approx(8 * SIDEREAL_RATE_DEG_S, rel=1e-12)
 
 
 async def test_the_pad_moves_while_held_by_pointer_or_key(browser: Browser) -> None:

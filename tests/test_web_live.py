@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.decode import Direction, Protocol
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.links.trace import format_transfer, trace_logger, trace_transfer
@@ -45,6 +46,7 @@ async def test_hello_describes_the_mount_the_sky_and_the_state() -> None:
         assert hello["mount"]["limits"]["horizon_deg"] == 0.0
         assert len(hello["mount"]["limits"]["horizon"]) == 180
         assert "sidereal" in hello["mount"]["capabilities"]["tracking_modes"]
+        assert hello["mount"]["sidereal_rate_deg_s"] == SIDEREAL_RATE_DEG_S  # app.js's unit
         sky = {obj["name"]: obj for obj in hello["sky"]}
         assert {"Moon", "Jupiter", "Vega", "Sirius", HIGH_UP} <= set(sky)
         assert sky[HIGH_UP]["alt"] > 45  # high in the west at START

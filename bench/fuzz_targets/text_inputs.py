@@ -4,6 +4,7 @@ target."""
 from __future__ import annotations
 
 import random
+from dataclasses import astuple
 
 from bench.fuzz_targets.base import (
     SCRATCH_DIR,
@@ -13,7 +14,7 @@ from bench.fuzz_targets.base import (
 )
 from scopelink.cli.config import ConfigError, load_config
 from scopelink.cli.errors import CommandError
-from scopelink.cli.targets import Coordinates, parse_target
+from scopelink.cli.targets import AltAz, RaDec, parse_target
 from scopelink.decode import Direction, Protocol, TraceInputError, annotate, parse_trace
 
 
@@ -80,9 +81,9 @@ def check_cli_target(data: bytes, rng: random.Random) -> None:
         target = parse_target(words, altaz=altaz)
     except CommandError:
         return
-    if isinstance(target, Coordinates):
+    if isinstance(target, RaDec | AltAz):
         # Ranges are the Mount's to check (InvalidValueError names the bound): "82 0" is read.
-        expect(isinstance(target.first, float) and isinstance(target.second, float), f"{target}")
+        expect(all(isinstance(angle, float) for angle in astuple(target)), f"{target}")
     else:
         expect(bool(target.name) and target.name == target.name.strip(), f"{target!r}")
 

@@ -1,7 +1,7 @@
-"""``python -m scopelink`` runs the command line."""
+"""``python -m scopelink`` runs the command line, as the ``scopelink`` program does."""
 
 import sys
 
-from scopelink.cli.main import main
+from scopelink.cli import entry
 
-sys.exit(main())
+sys.exit(entry())

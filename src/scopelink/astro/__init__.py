@@ -36,6 +36,12 @@ from scopelink.astro.pier import (
     destination_side_of_pier,
     hour_angle_hours,
 )
+from scopelink.astro.rates import (
+    LUNAR_RATE_DEG_S,
+    SIDEREAL_DAY_S,
+    SIDEREAL_RATE_DEG_S,
+    SOLAR_RATE_DEG_S,
+)
 from scopelink.astro.refraction import (
     RefractionModel,
     observed_altitude_deg,
@@ -56,6 +62,10 @@ from scopelink.astro.timescales import (
 )
 
 __all__ = [
+    "LUNAR_RATE_DEG_S",
+    "SIDEREAL_DAY_S",
+    "SIDEREAL_RATE_DEG_S",
+    "SOLAR_RATE_DEG_S",
     "JulianDate",
     "PierSide",
     "RefractionModel",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Final
 
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path
 from scopelink.cli.config_edit import create_config, set_values, unset_keys
 from scopelink.cli.errors import CommandError
@@ -80,10 +81,9 @@ _ACTIONS: Final = {
 }
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "config",
-        help="show or change the settings file",
         description="The settings file: device, site, horizon, limits and servers (TOML). "
         "set/unset keep the file's comments and layout, check the result before writing, "
         "and write atomically.",

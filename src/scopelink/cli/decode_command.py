@@ -9,6 +9,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any, Final
 
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
 from scopelink.decode import (
     Annotation,
@@ -36,11 +37,10 @@ _CONTEXT_BYTES: Final = 16
 _INDENT: Final = " " * 12
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(commands: CommandParsers) -> None:
     """Add the ``decode`` subcommand."""
-    parser = subparsers.add_parser(
+    parser = commands.parser(
         "decode",
-        help="annotate a byte trace of SynScan or Sky Tracker / Sky Commander traffic",
         description=(
             "Annotate a byte trace: each command and reply with its meaning in plain units. "
             "Each argument (or input line) is one chunk of escaped text (\\r \\n \\t \\0 \\xNN "

@@ -15,14 +15,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scopelink.astro import Site
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
+from scopelink.cli.mount_session import parse_site
 from scopelink.cli.options import (
     add_site_and_clock_arguments,
     parse_host_port,
-    parse_site,
     positive_rate,
-    until_stopped,
 )
+from scopelink.cli.stopping import until_stopped
 from scopelink.links import LinkError, precise_event_loop
 from scopelink.mount import Limits
 from scopelink.protocol.synscan import Version, VersionDialect
@@ -217,10 +218,9 @@ EMULATORS: dict[str, EmulatedDevice] = {
 # --- the command ----------------------------------------------------------------------------------
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "emulate",
-        help="run an emulated device on a pty or TCP port",
         description="Run an emulated device until Ctrl-C. It prints where clients connect.",
     )
     devices = parser.add_subparsers(dest="device", metavar="DEVICE", required=True)

@@ -14,11 +14,13 @@ from rich.progress import BarColumn, Progress, TaskID, TextColumn
 
 from scopelink.astro import format_degrees, format_hours
 from scopelink.astro.catalog import lookup
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
-from scopelink.cli.options import until_stopped
-from scopelink.cli.targets import Coordinates, Named, accept_negative_values, parse_target
+from scopelink.cli.mount_session import run_on_mount
+from scopelink.cli.options import add_device_arguments
+from scopelink.cli.stopping import until_stopped
+from scopelink.cli.targets import AltAz, Named, accept_negative_values, parse_target
 from scopelink.mount import Mount, SlewProgress
 
 __all__ = ["EXIT_INTERRUPTED", "SlewDisplay", "register", "run_goto", "run_sync"]
@@ -52,10 +54,9 @@ examples:
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    goto = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    goto = commands.parser(
         "goto",
-        help="slew to a named object or to coordinates, with progress; Ctrl-C aborts",
         description=(
             "Slew to TARGET: a name from the offline catalogue, or J2000 'RA DEC' (hours and "
             "degrees, decimal or sexagesimal), or with --altaz 'ALT AZ' in degrees. Shows the "
@@ -79,9 +80,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     accept_negative_values(goto)
     goto.set_defaults(run=run_goto)
 
-    sync = subparsers.add_parser(
+    sync = commands.parser(
         "sync",
-        help="tell the mount it points at a named object or at coordinates",
         description="Sync: the mount is pointing at TARGET (a name, or J2000 'RA DEC').",
         epilog=_SYNC_EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -110,13 +110,13 @@ def run_goto(args: argparse.Namespace) -> int:
                 label = found.name
                 where = _radec_text(found.ra_hours, found.dec_deg)
                 print(f"slewing to {found.name}: {where} (J2000)", flush=True)
-            elif target.altaz:
-                await mount.goto_horizontal(target.first, target.second)
-                label = f"Alt {target.first:g}° Az {target.second:g}°"
+            elif isinstance(target, AltAz):
+                await mount.goto_horizontal(target.alt_deg, target.az_deg)
+                label = f"Alt {target.alt_deg:g}° Az {target.az_deg:g}°"
                 print(f"slewing to {label}", flush=True)
             else:
-                await mount.goto_equatorial(target.first, target.second)
-                label = _radec_text(target.first, target.second)
+                await mount.goto_equatorial(target.ra_hours, target.dec_deg)
+                label = _radec_text(target.ra_hours, target.dec_deg)
                 print(f"slewing to {label} (J2000)", flush=True)
             if args.no_wait:
                 return 0
@@ -222,7 +222,7 @@ def _duration(seconds: float) -> str:
 
 def run_sync(args: argparse.Namespace) -> int:
     target = parse_target(args.target)
-    if isinstance(target, Coordinates) and target.altaz:  # pragma: no cover - parse never says so
+    if isinstance(target, AltAz):  # pragma: no cover - parse_target without altaz never says so
         raise CommandError("sync takes RA and Dec")
 
     async def body(mount: Mount) -> int:
@@ -230,7 +230,7 @@ def run_sync(args: argparse.Namespace) -> int:
             found = lookup(target.name, mount.now(), mount.site)
             ra, dec, label = found.ra_hours, found.dec_deg, found.name
         else:
-            ra, dec = target.first, target.second
+            ra, dec = target.ra_hours, target.dec_deg
             label = _radec_text(ra, dec)
         await mount.sync_equatorial(ra, dec)
         state = await mount.refresh()

@@ -8,7 +8,9 @@ import enum
 import json
 from typing import Any
 
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
+from scopelink.cli.commands import CommandParsers
+from scopelink.cli.mount_session import run_on_mount
+from scopelink.cli.options import add_device_arguments
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Capabilities, Mount
@@ -24,10 +26,9 @@ examples:
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "info",
-        help="identify what is on a port: SynScan firmware and model, Sky Tracker, Sky Commander",
         description=(
             "Connect, identify the device and show what it can do. A DEVICE without a kind "
             "prefix is tried as a SynScan hand control, then as a Sky Tracker."

@@ -1,7 +1,8 @@
-"""The ``scopelink`` command: one subcommand per module in this package.
+"""The ``scopelink`` command: the subcommands of :mod:`scopelink.cli.commands`.
 
-Each subcommand module offers ``register(subparsers)``, which adds its parser and sets ``run`` (a
-function taking the parsed namespace and returning the exit status) as the parser's default.
+Only this module, :mod:`~scopelink.cli.commands` and :mod:`~scopelink.cli.errors` are imported
+before the command line is parsed; a subcommand's module (and what it needs: numpy, the servers,
+aiohttp) is imported when that subcommand is used (docs/cli.md, "Start-up").
 """
 
 from __future__ import annotations
@@ -10,35 +11,10 @@ import argparse
 import logging
 import sys
 from collections.abc import Callable, Sequence
-from types import ModuleType
 
 from scopelink import __version__
-from scopelink.cli import (
-    config_command,
-    decode_command,
-    emulate_command,
-    goto_command,
-    info_command,
-    motion_commands,
-    ports_command,
-    serve_command,
-    setup_commands,
-    status_command,
-)
+from scopelink.cli.commands import add_commands
 from scopelink.cli.errors import CommandError
-
-SUBCOMMANDS: tuple[ModuleType, ...] = (
-    serve_command,
-    emulate_command,
-    decode_command,
-    ports_command,
-    info_command,
-    status_command,
-    goto_command,
-    motion_commands,
-    setup_commands,
-    config_command,
-)
 
 EXIT_USAGE = 2
 
@@ -56,9 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="more detail; -v shows the byte trace of every link",
     )
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in SUBCOMMANDS:
-        module.register(subparsers)
+    add_commands(parser)
     return parser
 
 

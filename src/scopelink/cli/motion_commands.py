@@ -7,10 +7,13 @@ import asyncio
 import contextlib
 from typing import Final
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.display import position_text
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
-from scopelink.cli.options import until_stopped
+from scopelink.cli.mount_session import run_on_mount
+from scopelink.cli.options import add_device_arguments
+from scopelink.cli.stopping import until_stopped
 from scopelink.cli.targets import accept_negative_values
 from scopelink.mount import (
     AlignmentMode,
@@ -19,7 +22,6 @@ from scopelink.mount import (
     MountAxis,
     TrackingMode,
 )
-from scopelink.sim import SIDEREAL_RATE_DEG_S
 
 __all__ = ["AXES", "parse_rate", "register"]
 
@@ -38,27 +40,20 @@ _GUIDE_END_MARGIN_S: Final = 5.0
 
 
 def _add(
-    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
-    name: str,
-    *,
-    help: str,
-    description: str,
-    examples: str,
+    commands: CommandParsers, name: str, *, description: str, examples: str
 ) -> argparse.ArgumentParser:
-    return subparsers.add_parser(
+    return commands.parser(
         name,
-        help=help,
         description=description,
         epilog="examples:\n" + examples,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(commands: CommandParsers) -> None:
     move = _add(
-        subparsers,
+        commands,
         "move",
-        help="turn one axis at a rate until Ctrl-C (or for --for seconds), then stop it",
         description=(
             "Turn AXIS (ra/az = primary, dec/alt = secondary) at RATE: degrees per second, "
             "signed (the sign is the direction the axis turns), or a multiple of the sidereal "
@@ -77,9 +72,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     move.set_defaults(run=_run_move)
 
     stop = _add(
-        subparsers,
+        commands,
         "stop",
-        help="stop every motion now (gotos and manual moves)",
         description="Abort any slew and stop both axes. Tracking keeps its setting where the "
         "protocol allows.",
         examples=("  scopelink stop\n"),
@@ -88,9 +82,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     stop.set_defaults(run=_run_stop)
 
     track = _add(
-        subparsers,
+        commands,
         "track",
-        help="tracking on, off, or a mode (sidereal, lunar, solar, altaz, pec)",
         description=(
             "Set tracking: 'on' picks sidereal for an equatorial mount and altaz for an alt-az "
             "one; 'off' stops it; or name a mode this mount supports."
@@ -107,9 +100,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     track.set_defaults(run=_run_track)
 
     park = _add(
-        subparsers,
+        commands,
         "park",
-        help="move to the park position and stop tracking",
         description="Park: slew to the park position, stop tracking, refuse motion until "
         "'scopelink unpark'. Waits for the slew (Ctrl-C stops the mount).",
         examples=("  scopelink park\n  scopelink park --no-wait\n"),
@@ -119,9 +111,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     park.set_defaults(run=_run_park)
 
     unpark = _add(
-        subparsers,
+        commands,
         "unpark",
-        help="allow motion again after park",
         description="Unpark: the mount accepts motion commands again.",
         examples=("  scopelink unpark && scopelink track on\n"),
     )
@@ -129,9 +120,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     unpark.set_defaults(run=_run_unpark)
 
     guide = _add(
-        subparsers,
+        commands,
         "guide",
-        help="one guide pulse: DIRECTION (north/south/east/west) for MS milliseconds",
         description="Nudge the mount at the guide rate towards DIRECTION for MS milliseconds "
         "(0-60000) and wait for the pulse to end.",
         examples=("  scopelink guide north 500\n  scopelink guide w 1200\n"),

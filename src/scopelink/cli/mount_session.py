@@ -1,8 +1,9 @@
 """What every device command shares: its options, the config merge, and one run on a mount.
 
-A device command declares its options with :func:`add_device_arguments` and runs its body with
-:func:`run_on_mount`, which reads the config, opens the device, calls the body with the connected
-mount, disconnects, and turns every expected failure into one :class:`CommandError` line.
+A device command declares its options with :func:`scopelink.cli.options.add_device_arguments`
+and runs its body with :func:`run_on_mount`, which reads the config, opens the device, calls the
+body with the connected mount, disconnects, and turns every expected failure into one
+:class:`CommandError` line.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
 from scopelink.cli.devices import EXAMPLES, DeviceError, DeviceSpec, open_mount, parse_device
 from scopelink.cli.errors import CommandError
-from scopelink.cli.options import parse_site, positive_rate
+from scopelink.cli.options import positive_rate
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (
@@ -35,9 +36,9 @@ from scopelink.mount import (
 
 __all__ = [
     "DeviceCommand",
-    "add_device_arguments",
     "mount_error",
     "open_device",
+    "parse_site",
     "read_config",
     "run_on_mount",
 ]
@@ -50,44 +51,6 @@ _HINTS: dict[type[MountError], str] = {
     ParkedError: "run 'scopelink unpark' first",
     NotSupportedError: "'scopelink info' shows what this mount can do",
 }
-
-
-def add_device_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--device``, ``--site``, ``--timeout``, ``--clock-rate`` and ``-v`` for a device command."""
-    group = parser.add_argument_group("device")
-    group.add_argument(
-        "-d",
-        "--device",
-        metavar="DEVICE",
-        help=f"what to talk to ({EXAMPLES}); default: the config file's device",
-    )
-    group.add_argument(
-        "--site",
-        metavar="LAT,LON",
-        help="site latitude and east longitude in degrees (default: the config file's site, "
-        "else Greenwich)",
-    )
-    group.add_argument(
-        "--timeout",
-        type=float,
-        metavar="S",
-        help="seconds to wait for each reply of a real device (default: the driver's, 5 s)",
-    )
-    group.add_argument(
-        "--clock-rate",
-        type=float,
-        default=1.0,
-        metavar="X",
-        help="sim devices only: simulated time runs X times faster (1 = real time)",
-    )
-    group.add_argument(
-        "-v",
-        "--verbose",
-        dest="trace",
-        action="count",
-        default=0,
-        help="show every byte on the link (logger scopelink.links.trace) on stderr",
-    )
 
 
 def read_config() -> Config:
@@ -131,6 +94,14 @@ class DeviceCommand:
         if args.timeout is not None and not args.timeout > 0:
             raise CommandError(f"--timeout must be positive, not {args.timeout}")
         return cls(spec, site, config, positive_rate(args.clock_rate), args.timeout)
+
+
+def parse_site(text: str) -> Site:
+    try:
+        latitude, longitude = (float(part) for part in text.split(","))
+        return Site(latitude, longitude)
+    except ValueError as error:
+        raise CommandError(f"bad --site {text!r}: {error}", "give LAT,LON like 40.4,-3.7") from None
 
 
 def mount_error(error: Exception) -> CommandError:

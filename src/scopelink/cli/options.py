@@ -1,14 +1,14 @@
-"""Option values shared by several subcommands, parsed with errors that say what to type."""
+"""Options shared by several subcommands, parsed with errors that say what to type.
+
+Imported to build a command's parser (``scopelink status --help``), so it imports nothing heavy:
+no numpy, astronomy, mount or server modules (docs/cli.md, "Start-up").
+"""
 
 from __future__ import annotations
 
 import argparse
-import asyncio
-import contextlib
-import signal
-from collections.abc import AsyncIterator
 
-from scopelink.astro import Site
+from scopelink.cli.devices import EXAMPLES
 from scopelink.cli.errors import CommandError
 
 DEFAULT_SITE = "51.4779,-0.0015"
@@ -27,12 +27,42 @@ def add_site_and_clock_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def parse_site(text: str) -> Site:
-    try:
-        latitude, longitude = (float(part) for part in text.split(","))
-        return Site(latitude, longitude)
-    except ValueError as error:
-        raise CommandError(f"bad --site {text!r}: {error}", "give LAT,LON like 40.4,-3.7") from None
+def add_device_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--device``, ``--site``, ``--timeout``, ``--clock-rate`` and ``-v`` for a device command."""
+    group = parser.add_argument_group("device")
+    group.add_argument(
+        "-d",
+        "--device",
+        metavar="DEVICE",
+        help=f"what to talk to ({EXAMPLES}); default: the config file's device",
+    )
+    group.add_argument(
+        "--site",
+        metavar="LAT,LON",
+        help="site latitude and east longitude in degrees (default: the config file's site, "
+        "else Greenwich)",
+    )
+    group.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="seconds to wait for each reply of a real device (default: the driver's, 5 s)",
+    )
+    group.add_argument(
+        "--clock-rate",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="sim devices only: simulated time runs X times faster (1 = real time)",
+    )
+    group.add_argument(
+        "-v",
+        "--verbose",
+        dest="trace",
+        action="count",
+        default=0,
+        help="show every byte on the link (logger scopelink.links.trace) on stderr",
+    )
 
 
 def positive_rate(rate: float) -> float:
@@ -46,26 +76,3 @@ def parse_host_port(text: str, option: str) -> tuple[str, int]:
     if not host or not port.isdigit():
         raise CommandError(f"bad {option} {text!r}", "give HOST:PORT, e.g. 127.0.0.1:0")
     return host, int(port)
-
-
-@contextlib.asynccontextmanager
-async def until_stopped() -> AsyncIterator[asyncio.Event]:
-    """An event set by Ctrl-C or SIGTERM, so a long-running command can shut down cleanly."""
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    previous: dict[int, object] = {}
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        try:
-            loop.add_signal_handler(signum, stop.set)
-        except NotImplementedError:
-            # Windows event loops have no signal handlers: a plain handler wakes the loop.
-            previous[signum] = signal.signal(signum, lambda *_: loop.call_soon_threadsafe(stop.set))
-    try:
-        yield stop
-    finally:
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            if signum in previous:
-                signal.signal(signum, previous[signum])  # type: ignore[arg-type]
-                continue
-            with contextlib.suppress(ValueError, NotImplementedError):
-                loop.remove_signal_handler(signum)

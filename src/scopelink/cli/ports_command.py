@@ -12,6 +12,8 @@ from rich.console import Console
 from rich.table import Table
 from serial.tools import list_ports
 
+from scopelink.cli.commands import CommandParsers
+
 __all__ = ["LIKELY_ADAPTERS", "SerialPort", "find_ports", "register", "run"]
 
 LIKELY_ADAPTERS: Final[Mapping[tuple[int, int], str]] = {
@@ -67,10 +69,9 @@ def find_ports() -> list[SerialPort]:
     return sorted(ports, key=lambda port: (port.adapter is None, port.device))
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "ports",
-        help="list serial ports, flagging likely hand-control cables",
         description=(
             "List the serial ports with their USB vendor:product ids. Ports on a USB-serial chip "
             "that telescope cables use (Prolific PL2303 067b:2303, FTDI 0403:6001, CH340 "

@@ -23,15 +23,16 @@ from typing import TypeVar
 
 import segno
 
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
-    add_device_arguments,
     mount_error,
     open_device,
 )
-from scopelink.cli.options import until_stopped
+from scopelink.cli.options import add_device_arguments
+from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
@@ -73,10 +74,9 @@ Stellarium 10001, SynScan 11880, dashboard 8080.
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "serve",
-        help="run a mount with its servers (the simulated mount when no device is given)",
         description=(
             "Run a mount and the servers that let astronomy software drive it (ASCOM Alpaca, "
             "LX200, Stellarium, SynScan, and the web dashboard), until Ctrl-C. "

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import argparse
 
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, read_config, run_on_mount
+from scopelink.cli.mount_session import read_config, run_on_mount
+from scopelink.cli.options import add_device_arguments
 from scopelink.mount import Mount, utc_now
 
 __all__ = ["register"]
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    time_parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    time_parser = commands.parser(
         "time",
-        help="set the mount's clock from this computer's (UTC)",
         description="Send this computer's clock (UTC) to the mount. Keep the PC on NTP.",
         epilog="examples:\n  scopelink time\n",
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -22,9 +23,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     add_device_arguments(time_parser)
     time_parser.set_defaults(run=_run_time)
 
-    site_parser = subparsers.add_parser(
+    site_parser = commands.parser(
         "site",
-        help="send the configured site (or --site) to the mount",
         description=(
             "Send the site (latitude, longitude) to the mount: --site if given, else the config "
             "file's [site]. Refuses to send the built-in default (Greenwich) by accident."

@@ -1,22 +1,16 @@
-"""``scopelink status [--watch]``: where the mount points and what it is doing."""
+"""``scopelink status [--watch]``: where the mount points and what it is doing.
+
+Its options only: ``scopelink status --help`` loads no numpy or mount code; what it runs is in
+:mod:`scopelink.cli.status_view`, imported by :func:`run` (docs/cli.md, "Start-up").
+"""
 
 from __future__ import annotations
 
 import argparse
-import asyncio
-import contextlib
-import json
-import time
-from contextlib import aclosing
 
-from rich.console import Console
-from rich.live import Live
-
-from scopelink.cli.display import state_json, state_table
+from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
-from scopelink.cli.mount_session import add_device_arguments, run_on_mount
-from scopelink.cli.options import until_stopped
-from scopelink.mount import Mount, MountState
+from scopelink.cli.options import add_device_arguments
 
 __all__ = ["register", "run"]
 
@@ -28,10 +22,9 @@ examples:
 """
 
 
-def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    parser = subparsers.add_parser(
+def register(commands: CommandParsers) -> None:
+    parser = commands.parser(
         "status",
-        help="show RA/Dec, Alt/Az, pier side, slewing and tracking (live with --watch)",
         description=(
             "Read the mount and show RA/Dec (J2000 and of date), Alt/Az, pier side, slewing, "
             "tracking and parked. With --watch the table stays live until Ctrl-C."
@@ -56,46 +49,6 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(args: argparse.Namespace) -> int:
     if not args.interval > 0:
         raise CommandError(f"--interval must be positive, not {args.interval}")
+    from scopelink.cli.status_view import show_status  # noqa: PLC0415 - heavy: only to run
 
-    async def body(mount: Mount) -> int:
-        if not args.watch:
-            _show_once(mount, await mount.refresh(), as_json=args.json)
-            return 0
-        async with until_stopped() as stop:
-            watcher = asyncio.create_task(_watch(mount, args.interval, as_json=args.json))
-            stopper = asyncio.create_task(stop.wait())
-            done, _ = await asyncio.wait({watcher, stopper}, return_when=asyncio.FIRST_COMPLETED)
-            for task in (watcher, stopper):
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
-            if watcher in done:
-                watcher.result()  # re-raise what ended the watch
-        return 0
-
-    return run_on_mount(args, body)
-
-
-def _show_once(mount: Mount, state: MountState, *, as_json: bool) -> None:
-    if as_json:
-        print(json.dumps(state_json(state)), flush=True)
-    else:
-        Console(highlight=False).print(state_table(mount, state))
-
-
-async def _watch(mount: Mount, interval_s: float, *, as_json: bool) -> None:
-    console = Console(highlight=False)
-    live_table = console.is_terminal and not as_json
-    shown_at = -interval_s
-    async with aclosing(mount.states()) as states:
-        if not live_table:
-            async for state in states:
-                if time.monotonic() - shown_at >= interval_s:
-                    shown_at = time.monotonic()
-                    _show_once(mount, state, as_json=as_json)
-            return
-        with Live(state_table(mount, mount.state), console=console, auto_refresh=False) as live:
-            async for state in states:
-                if time.monotonic() - shown_at >= interval_s:
-                    shown_at = time.monotonic()
-                    live.update(state_table(mount, state), refresh=True)
+    return show_status(args)

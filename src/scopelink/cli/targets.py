@@ -16,7 +16,7 @@ from typing import Final
 from scopelink.astro import parse_degrees, parse_hours
 from scopelink.cli.errors import CommandError
 
-__all__ = ["Coordinates", "Named", "Target", "accept_negative_values", "parse_target"]
+__all__ = ["AltAz", "Named", "RaDec", "Target", "accept_negative_values", "parse_target"]
 
 _ANGLE_WORD: Final = re.compile(r"^[+-]?[0-9][0-9.:hmsd°'\"′″]*$")
 _NEGATIVE_VALUE: Final = re.compile(r"^-[0-9][0-9.:hmsdx°'\"′″ ]*$")
@@ -42,15 +42,22 @@ class Named:
 
 
 @dataclass(frozen=True, slots=True)
-class Coordinates:
-    """Two angles: J2000 RA (hours) and Dec (degrees), or observed Alt and Az (degrees)."""
+class RaDec:
+    """J2000 right ascension (hours) and declination (degrees)."""
 
-    first: float
-    second: float
-    altaz: bool = False
+    ra_hours: float
+    dec_deg: float
 
 
-Target = Named | Coordinates
+@dataclass(frozen=True, slots=True)
+class AltAz:
+    """Observed altitude and azimuth (degrees; North = 0, East = 90), given with ``--altaz``."""
+
+    alt_deg: float
+    az_deg: float
+
+
+Target = Named | RaDec | AltAz
 
 
 def parse_target(words: list[str], *, altaz: bool = False) -> Target:
@@ -75,18 +82,19 @@ def _not_two_angles(text: str, altaz: bool, why: str = "") -> CommandError:
     )
 
 
-def _split_angles(text: str, tokens: list[str], altaz: bool) -> Coordinates:
+def _split_angles(text: str, tokens: list[str], altaz: bool) -> RaDec | AltAz:
     """The one way to cut the words into two angles: where the second carries a sign, else in
     half, else the only cut that reads; several readable cuts and no sign are ambiguous."""
     first_parser = parse_degrees if altaz else parse_hours
-    readings: dict[int, Coordinates] = {}
+    kind = AltAz if altaz else RaDec
+    readings: dict[int, RaDec | AltAz] = {}
     for cut in range(1, len(tokens)):
         try:
             first = first_parser(" ".join(tokens[:cut]))
             second = parse_degrees(" ".join(tokens[cut:]))
         except ValueError:
             continue
-        readings[cut] = Coordinates(first, second, altaz)
+        readings[cut] = kind(first, second)
     signed = [cut for cut in readings if tokens[cut][0] in "+-"]
     if len(signed) == 1:
         return readings[signed[0]]

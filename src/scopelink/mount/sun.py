@@ -31,6 +31,7 @@ from functools import lru_cache
 import numpy as np
 
 from scopelink.astro import (
+    SOLAR_RATE_DEG_S,
     PierSide,
     Site,
     altaz_to_hadec,
@@ -59,9 +60,6 @@ _LEAVING_TOLERANCE_DEG = 0.01
 _NEAR_MERIDIAN_HOURS = 1.0
 """Within this of the meridian a German mount may end a goto on either side of the pier."""
 _SUN = SolarSystemBody("sun")
-_SUN_HOUR_ANGLE_RATE = 15.0 / 3600.0
-"""How fast the Sun's hour angle grows (degrees per second: a solar day is 24 h; the stars',
-one sidereal day of 23 h 56 min, is 0.3 % faster, which is the Sun's 1° a day eastwards)."""
 
 
 @lru_cache(maxsize=256)
@@ -122,7 +120,7 @@ class SunZone:
         if later_s == 0.0:
             return float(angular_separation_deg(az_deg, alt_deg, self.az_deg, self.alt_deg))
         ha, dec = altaz_to_hadec(alt_deg, az_deg, self.site.latitude_deg)
-        sun_ha = self._ha_hours * 15.0 + _SUN_HOUR_ANGLE_RATE * later_s
+        sun_ha = self._ha_hours * 15.0 + SOLAR_RATE_DEG_S * later_s
         return float(angular_separation_deg(ha * 15.0, dec, sun_ha, self._dec_deg))
 
     def minutes_until_reached(self, alt_deg: float, az_deg: float, within_min: int) -> int | None:
@@ -130,7 +128,7 @@ class SunZone:
         position (a mount standing still), or None."""
         ha, dec = altaz_to_hadec(alt_deg, az_deg, self.site.latitude_deg)
         minutes = np.arange(1, within_min + 1)
-        sun_ha = self._ha_hours * 15.0 + _SUN_HOUR_ANGLE_RATE * 60.0 * minutes
+        sun_ha = self._ha_hours * 15.0 + SOLAR_RATE_DEG_S * 60.0 * minutes
         distances = angular_separation_deg(ha * 15.0, dec, sun_ha, self._dec_deg)
         inside = np.flatnonzero(np.asarray(distances) < self.radius_deg)
         return int(minutes[inside[0]]) if inside.size else None

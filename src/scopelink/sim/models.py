@@ -1,8 +1,7 @@
 """Mount presets and the SynScan hand control's speed table.
 
-Rates are in degrees per second. ``SIDEREAL_RATE_DEG_S`` is one turn per sidereal day
-(360° / 86164.0905 s = 15.0411 arcsec/s). The tracking rates for the Moon and the Sun are
-ASCOM's (``DriveRates``: lunar 14.685 arcsec/s, solar 15.0 arcsec/s).
+Rates are in degrees per second; the sidereal, lunar and solar rates are
+:mod:`scopelink.astro.rates`'s.
 
 The SynScan fixed slew rates are the hand control's speed keys. Sky-Watcher's SynScan V3/V4 hand
 control manual (section "Slew the mount with the direction keys") lists ten speeds as multiples
@@ -17,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.mount import AlignmentMode
 
 __all__ = [
@@ -24,20 +24,14 @@ __all__ = [
     "DOB_GOTO",
     "EQ6",
     "HEQ5",
-    "LUNAR_RATE_DEG_S",
     "PRESETS",
-    "SIDEREAL_RATE_DEG_S",
     "SKY_TRACKER",
-    "SOLAR_RATE_DEG_S",
     "SYNSCAN_FIXED_RATES_DEG_S",
     "SYNSCAN_FIXED_RATE_MULTIPLES",
     "MountModel",
     "synscan_fixed_rate_deg_s",
 ]
 
-SIDEREAL_RATE_DEG_S = 360.0 / 86164.0905
-LUNAR_RATE_DEG_S = 14.685 / 3600.0
-SOLAR_RATE_DEG_S = 15.0 / 3600.0
 
 SYNSCAN_FIXED_RATE_MULTIPLES: tuple[float, ...] = (
     2.0,

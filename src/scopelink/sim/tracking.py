@@ -13,10 +13,16 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
-from scopelink.astro import PierSide, Site, j2000_to_observed
+from scopelink.astro import (
+    LUNAR_RATE_DEG_S,
+    SIDEREAL_RATE_DEG_S,
+    SOLAR_RATE_DEG_S,
+    PierSide,
+    Site,
+    j2000_to_observed,
+)
 from scopelink.mount import TrackingMode
 from scopelink.sim.geometry import Geometry
-from scopelink.sim.models import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, SOLAR_RATE_DEG_S
 
 __all__ = ["PolarAxisPath", "SkyPath", "SkyTarget", "ra_drift_hours_per_s", "tracking_rate_deg_s"]
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.astro.catalog import EphemerisRangeError
 from scopelink.mount import Limits, Mount, MountState, SlewTarget, TrackingMode
 from scopelink.mount.sun import SunZone
@@ -142,6 +143,7 @@ def describe_mount(mount: Mount) -> dict[str, object]:
             "can_set_site": caps.can_set_site,
             "can_set_time": caps.can_set_time,
         },
+        "sidereal_rate_deg_s": SIDEREAL_RATE_DEG_S,  # the unit of the pad's "8x" speeds
         "site": {
             "latitude_deg": site.latitude_deg,
             "longitude_deg": site.longitude_deg,

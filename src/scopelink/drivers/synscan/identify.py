@@ -9,21 +9,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.mount import AlignmentMode, Capabilities, Identity, TrackingMode
 from scopelink.protocol.synscan import Model, Tracking, Version, VersionDialect
 
 __all__ = [
     "MAX_SLEW_RATE_DEG_S",
-    "SIDEREAL_RATE_DEG_S",
     "HandControlInfo",
     "capabilities_for",
     "firmware_text",
     "mount_tracking",
     "synscan_tracking",
 ]
-
-SIDEREAL_RATE_DEG_S = 360.0 / 86164.0905
-"""One turn per sidereal day."""
 
 MAX_SLEW_RATE_DEG_S = 800.0 * SIDEREAL_RATE_DEG_S
 """The hand control's top speed (key 9, 800x sidereal, 3.34°/s): the fastest rate offered."""

@@ -25,6 +25,7 @@ from datetime import UTC, datetime, timedelta, timezone
 from typing import Any, Self, TypeVar
 
 from scopelink.astro import (
+    SIDEREAL_RATE_DEG_S,
     PierSide,
     Site,
     angular_separation_deg,
@@ -32,7 +33,6 @@ from scopelink.astro import (
     j2000_to_observed,
 )
 from scopelink.drivers.synscan.identify import (
-    SIDEREAL_RATE_DEG_S,
     HandControlInfo,
     capabilities_for,
     mount_tracking,

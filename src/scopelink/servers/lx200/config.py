@@ -7,11 +7,10 @@ import math
 from dataclasses import dataclass, field
 
 from scopelink import __version__
+from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.protocol.lx200 import SlewRate
 
 __all__ = ["DEFAULT_RATES_SIDEREAL", "LX200Config", "SyncReply"]
-
-SIDEREAL_RATE_DEG_S = 360.0 / 86164.0905
 
 DEFAULT_RATES_SIDEREAL = {
     SlewRate.GUIDE: 0.5,

@@ -13,7 +13,7 @@ from dataclasses import replace
 from datetime import UTC, datetime, timedelta, timezone
 from typing import Protocol, runtime_checkable
 
-from scopelink.astro import angular_separation_deg, observed_to_j2000
+from scopelink.astro import SIDEREAL_RATE_DEG_S, angular_separation_deg, observed_to_j2000
 from scopelink.mount import (
     AlignmentMode,
     InvalidValueError,
@@ -70,7 +70,7 @@ from scopelink.protocol.synscan import (
 )
 from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
 from scopelink.servers.synscan.config import SynScanConfig
-from scopelink.sim import SIDEREAL_RATE_DEG_S, synscan_fixed_rate_deg_s
+from scopelink.sim import synscan_fixed_rate_deg_s
 
 __all__ = ["AxisPositioning", "NoReply", "SynScanHandControl"]
 

@@ -2,12 +2,11 @@
 // (never innerHTML), commands go to the JSON API, live state comes over the WebSocket.
 "use strict";
 
-const SIDEREAL_DEG_S = 360 / 86164.0905;
 const LOWEST_ALT = -10; // the chart shows a little below the horizon, where limits may lie
 const $ = (id) => document.getElementById(id);
 
 const view = {
-  mount: null, // the hello's description: identity, capabilities, site, limits
+  mount: null, // the hello's description: identity, capabilities, site, limits, sidereal rate
   state: null,
   sky: [],
   selected: null, // {name} of an object, or {alt, az} of a point
@@ -528,10 +527,11 @@ async function gotoSelection() {
 }
 
 function rateDegS() {
+  if (!view.mount) return 0;
   const choice = $("rate").value;
-  const max = view.mount ? view.mount.capabilities.max_axis_rate_deg_s : 0;
+  const max = view.mount.capabilities.max_axis_rate_deg_s;
   if (choice === "max") return max;
-  return Math.min(max, Number(choice) * SIDEREAL_DEG_S);
+  return Math.min(max, Number(choice) * view.mount.sidereal_rate_deg_s); // the server's constant
 }
 
 const KEYS = { ArrowUp: "pad-up", ArrowDown: "pad-down", ArrowLeft: "pad-left", ArrowRight: "pad-right" };
