@@ -4,6 +4,7 @@ drift from the benchmarks or from docs/benchmarks.md)."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -25,21 +26,34 @@ def test_every_benchmark_is_in_the_plan() -> None:
     assert benchmarks <= {step.module for step in PLAN}
 
 
+def _heading(step: Step) -> int:
+    """Where the section of ``step``'s benchmark starts (a module, or a package)."""
+    for name in (f"(`bench/{step.module}.py`)", f"(`bench/{step.module}/`)"):
+        if name in DOCS:
+            return DOCS.index(name)
+    raise AssertionError(f"docs/benchmarks.md has no section for bench/{step.module}")
+
+
 def test_the_docs_show_every_command_of_the_plan_in_its_order() -> None:
     positions = []
     for step in PLAN:
-        if not present(step):  # bench/startup.py, until it lands with its own section
+        if not present(step):  # a benchmark not written yet
             continue
         assert step.command in DOCS, step.command
         if not step.long:  # a long run is documented in its benchmark's section, run last
-            positions.append(DOCS.index(f"(`bench/{step.module}.py`)"))
+            positions.append(_heading(step))
     assert positions == sorted(positions), (
         "docs/benchmarks.md's sections are not in bench.all's order"
     )
-    # Every section waits for its figures from the command it names.
+    # Every section either waits for its figures from the command it names, or shows figures
+    # with the commit they were measured on.
     for step in PLAN:
         if present(step) and not step.long and not step.options:
-            assert f"_pending: paste the report of `{step.command}` here" in DOCS, step.command
+            start = _heading(step)
+            end = DOCS.find("\n## ", start)
+            section = DOCS[start : end if end != -1 else len(DOCS)]
+            waiting = f"_pending: paste the report of `{step.command}` here" in section
+            assert waiting or re.search(r"commit [0-9a-f]{7}", section), step.command
 
 
 def test_the_summary_marks_every_missed_goal() -> None:
