@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 from bench.alpaca_wrk import parse_wrk
 
-from tests.bench_support import run_quick_bench
-from tests.conftest import require_executable
+from tests.support.programs import require_executable
+from tests.support.quick_bench import run_quick_bench
 
 WRK_REPORT = """Running 3s test @ http://127.0.0.1:1/api/v1/telescope/0/rightascension
   2 threads and 8 connections

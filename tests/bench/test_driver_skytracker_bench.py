@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.bench_support import run_quick_bench
+from tests.support.quick_bench import run_quick_bench
 
 
 @pytest.mark.timeout(90)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tests.bench_support import run_quick_bench
+from tests.support.quick_bench import run_quick_bench
 
 
 def test_quick_reconnect_benchmark_prints_its_table() -> None:

@@ -18,7 +18,7 @@ from scopelink.cli.config import (
     load_config,
 )
 from scopelink.cli.config_command import EXAMPLE_CONFIG, show
-from tests.test_cli_support import scopelink
+from tests.support.cli import scopelink
 
 
 def write(tmp_path: Path, text: str) -> Path:

@@ -22,7 +22,7 @@ from scopelink.cli.ports_command import SerialPort
 from scopelink.cli.targets import Coordinates, Named, parse_target
 from scopelink.mount import MountState, SlewProgress
 from scopelink.sim import SIDEREAL_RATE_DEG_S
-from tests.test_cli_support import scopelink
+from tests.support.cli import scopelink
 
 # --- targets ---------------------------------------------------------------------------------
 

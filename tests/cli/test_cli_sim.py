@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from scopelink.cli.main import main
-from tests.test_cli_support import degrees_in, environment, scopelink
+from tests.support.cli import degrees_in, environment, scopelink
 
 GREENWICH_LATITUDE = 51.4779
 

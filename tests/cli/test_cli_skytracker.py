@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_cli_support import emulator, scopelink
+from tests.support.cli import emulator, scopelink
 
 
 @pytest.fixture(scope="module")

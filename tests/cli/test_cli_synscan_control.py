@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_cli_support import (
+from tests.support.cli import (
     read_line_matching,
     scopelink,
     scopelink_here,

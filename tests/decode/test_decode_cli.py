@@ -13,7 +13,7 @@ import pytest
 
 from scopelink.cli.main import main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 _SCRIPT = Path(sys.executable).with_name("scopelink")
 
 

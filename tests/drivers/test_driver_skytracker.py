@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -28,49 +27,21 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.protocol.skytracker import TrackerMode
-
-from .test_driver_skytracker_support import (
+from tests.support.skytracker_driver import (
+    POSITION_TOLERANCE_DEG,
     SITE,
     TRANSPORTS,
     Rig,
+    assert_position_matches_sim,
+    box_mode,
+    driver_position,
+    eventually,
     rig,
     separation_deg,
     sky_at,
 )
 
 pytestmark = pytest.mark.parametrize("transport", TRANSPORTS)
-
-POSITION_TOLERANCE_DEG = 0.02
-"""The Sky Commander rounds RA/Dec to 3 decimals (RA 0.001 h = 0.015°·cos δ) both ways (``L99``
-and position), and tracks in 0.5 s ticks."""
-
-
-async def eventually(condition: Callable[[], bool], timeout_s: float = 5.0) -> None:
-    """Wait until ``condition()`` holds (the emulator runs on its own)."""
-    async with asyncio.timeout(timeout_s):
-        while not condition():  # noqa: ASYNC110 - the emulator offers no event to wait on
-            await asyncio.sleep(0.01)
-
-
-def box_mode(rig_: Rig) -> TrackerMode:
-    """The emulated box's mode (a function, so type checkers do not narrow it between reads)."""
-    return rig_.emulator.tracker.mode
-
-
-def driver_position(rig_: Rig) -> tuple[float, float]:
-    state = rig_.driver.state
-    assert state.ra_j2000_hours is not None
-    assert state.dec_j2000_deg is not None
-    return state.ra_j2000_hours, state.dec_j2000_deg
-
-
-async def assert_position_matches_sim(rig_: Rig) -> None:
-    """A refresh reads where the simulator points, between readings of the sim around it."""
-    before = rig_.sim_j2000()
-    await rig_.driver.refresh()
-    after = rig_.sim_j2000()
-    read = driver_position(rig_)
-    assert min(separation_deg(read, before), separation_deg(read, after)) < POSITION_TOLERANCE_DEG
 
 
 async def goto_and_land(rig_: Rig, target: tuple[float, float]) -> None:

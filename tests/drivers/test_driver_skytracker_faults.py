@@ -20,9 +20,9 @@ from scopelink.drivers.skytracker import (
 )
 from scopelink.mount import DeviceError, MountError, NotConnectedError, TrackingMode
 from scopelink.servers.faults import Fault, FaultKind
-
-from .test_driver_skytracker import assert_position_matches_sim, driver_position
-from .test_driver_skytracker_support import (
+from tests.support.skytracker_driver import (
+    assert_position_matches_sim,
+    driver_position,
     rig,
     separation_deg,
 )

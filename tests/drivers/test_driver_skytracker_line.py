@@ -21,12 +21,12 @@ from scopelink.links import Link, open_serial, open_tcp
 from scopelink.mount import MountError, NotConnectedError
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.skytracker.tracker import DEFAULT_CALIBRATION
-
-from .test_driver_skytracker import assert_position_matches_sim, driver_position
-from .test_driver_skytracker_support import (
+from tests.support.skytracker_driver import (
     FAST,
     SITE,
     TRANSPORTS,
+    assert_position_matches_sim,
+    driver_position,
     rig,
     separation_deg,
     serve,

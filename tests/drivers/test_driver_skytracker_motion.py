@@ -17,9 +17,14 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.protocol.skytracker import Direction, TrackerMode
-
-from .test_driver_skytracker import assert_position_matches_sim, box_mode, eventually
-from .test_driver_skytracker_support import TRANSPORTS, Rig, rig
+from tests.support.skytracker_driver import (
+    TRANSPORTS,
+    Rig,
+    assert_position_matches_sim,
+    box_mode,
+    eventually,
+    rig,
+)
 
 pytestmark = pytest.mark.parametrize("transport", TRANSPORTS)
 

@@ -26,7 +26,7 @@ from scopelink.mount import (
 from scopelink.protocol.synscan import AnyCommand, AnyReply, CancelGoto
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, SimClock
-from tests.test_driver_synscan_support import (
+from tests.support.synscan_driver import (
     MADRID,
     PRECISE_UNIT_DEG,
     START,

@@ -17,7 +17,7 @@ from scopelink.mount import MountAxis, TrackingMode
 from scopelink.mount.blocking import BlockingMount
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.test_driver_synscan_support import MADRID, START
+from tests.support.synscan_driver import MADRID, START
 
 
 @contextmanager

@@ -13,7 +13,7 @@ import pytest
 from scopelink.drivers.synscan.mount import FULL_READ_EVERY
 from scopelink.mount import DeviceError
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
-from tests.test_driver_synscan_support import TRANSPORTS, Rig, assert_position_matches, rig
+from tests.support.synscan_driver import TRANSPORTS, Rig, assert_position_matches, rig
 
 TIMEOUT_S = 0.5
 

@@ -14,7 +14,7 @@ from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import GuideDirection, MountAxis, TrackingMode
 from scopelink.protocol.synscan import AnyCommand, AnyReply, Axis, FixedRateSlew, VariableRateSlew
 from scopelink.sim import SimClock
-from tests.test_driver_synscan_support import MADRID, START, TRANSPORTS, rig
+from tests.support.synscan_driver import MADRID, START, TRANSPORTS, rig
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)

@@ -16,7 +16,7 @@ from scopelink.protocol.synscan import (
 from scopelink.protocol.synscan import VersionDialect as Dialect
 from scopelink.servers.faults import Fault, FaultKind
 from scopelink.servers.synscan import Quirks, SynScanConfig
-from tests.test_driver_synscan_support import TRANSPORTS, assert_position_matches, rig
+from tests.support.synscan_driver import TRANSPORTS, assert_position_matches, rig
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)

@@ -10,10 +10,9 @@ import pytest
 
 from scopelink.servers.skytracker import SkyCommanderEmulator
 from scopelink.sim import SimulatedMount
-from tests.conftest import require_executable
-from tests.indi_support import IndiDriver
-
-from .test_emulator_skytracker_support import sky_tracker_mount
+from tests.support.indi import IndiDriver
+from tests.support.programs import require_executable
+from tests.support.skytracker_emulator import sky_tracker_mount
 
 DRIVER = "indi_skycommander_telescope"
 TOLERANCE = 0.0015  # the wire's three decimals, and INDI's sexagesimal rounding

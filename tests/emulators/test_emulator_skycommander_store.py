@@ -12,8 +12,7 @@ from pathlib import Path
 from scopelink.links import open_tcp
 from scopelink.protocol.skytracker import Acknowledge, LoadObject, PositionReply, ReadPosition
 from scopelink.servers.skytracker import ObjectStore, SkyCommanderEmulator, StoredObject
-
-from .test_emulator_skytracker_support import CommanderSession, sky_tracker_mount
+from tests.support.skytracker_emulator import CommanderSession, sky_tracker_mount
 
 
 async def test_stored_objects_survive_a_restart(tmp_path: Path) -> None:

@@ -42,8 +42,7 @@ from scopelink.protocol.skytracker import (
 )
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.skytracker.tracker import DEFAULT_CALIBRATION
-
-from .test_emulator_skytracker_support import PcSession, pty_client, running_tracker
+from tests.support.skytracker_emulator import PcSession, pty_client, running_tracker
 
 TRANSPORTS = ("pty", "tcp")
 

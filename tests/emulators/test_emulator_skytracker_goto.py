@@ -24,8 +24,7 @@ from scopelink.protocol.skytracker import (
     TrackerMode,
 )
 from scopelink.servers.skytracker.tracker import UTILITY_RATE_DEG_S
-
-from .test_emulator_skytracker_support import SITE, PcSession, pty_client, running_tracker
+from tests.support.skytracker_emulator import SITE, PcSession, pty_client, running_tracker
 
 # 08:00 UTC on 1 Jan 2026 at 11° E: Capella (5.278 h, +45.998°) is high in the north-west.
 TARGET = (5.278, 45.998)

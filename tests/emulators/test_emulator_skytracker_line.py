@@ -18,8 +18,7 @@ from scopelink.protocol.skytracker import (
 )
 from scopelink.servers.skytracker import StrictReceiver, resample
 from scopelink.servers.skytracker.line import DEVICE_LINE
-
-from .test_emulator_skytracker_support import PcSession, pty_client, running_tracker
+from tests.support.skytracker_emulator import PcSession, pty_client, running_tracker
 
 LINE = LoadObject.current(12.345, 67.890)
 

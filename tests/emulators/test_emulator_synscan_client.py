@@ -57,7 +57,7 @@ from scopelink.protocol.synscan import (
 )
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.synscan_support import ask
+from tests.support.synscan import ask
 
 PRECISE_UNIT_DEG = 360.0 / 2**24
 MADRID = Site(40.4, 3.7, pressure_hpa=0.0)

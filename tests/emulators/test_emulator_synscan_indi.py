@@ -27,8 +27,8 @@ from scopelink.astro import (
 from scopelink.mount import TrackingMode
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.conftest import require_executable
-from tests.indi_support import IndiDriver, IndiProperty
+from tests.support.indi import IndiDriver, IndiProperty
+from tests.support.programs import require_executable
 
 DRIVER = "indi_synscan_telescope"
 SITE = Site(40.4, 3.7)  # east longitude: INDI 1.9 sends the E/W flag of W in the wrong byte

@@ -263,7 +263,7 @@ def test_the_docs_state_the_batching_and_reuse_defaults_the_code_uses() -> None:
     from scopelink.links.pacing import MAX_BATCH_SECONDS
     from scopelink.servers.hosting import USB_SERIAL_BATCH_S
 
-    docs = Path(__file__).resolve().parent.parent / "docs"
+    docs = Path(__file__).resolve().parents[2] / "docs"
     links = (docs / "links.md").read_text()
     emulators = (docs / "emulators.md").read_text()
     astronomy = (docs / "astronomy.md").read_text()

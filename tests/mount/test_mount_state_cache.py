@@ -278,7 +278,7 @@ def test_the_blocking_facade_drives_a_mount_from_plain_code() -> None:
 async def test_leaving_watching_mid_poll_lets_the_exchange_finish() -> None:
     # Cancelling a poll mid-exchange would make the driver resynchronise before its next command
     # (a guard watching only while a motion runs enters and leaves all the time).
-    from tests.test_driver_synscan_support import rig
+    from tests.support.synscan_driver import rig
 
     async with rig("tcp") as bench:
         mount = bench.mount

@@ -27,9 +27,9 @@ from scopelink.mount.polling import (
 )
 from scopelink.sim import EQ6, SimulatedMount
 from scopelink.web import Dashboard
-from tests.test_polling_demand import LINE_BYTES_PER_S, skytracker_driver, synscan_driver
+from tests.support.polling import LINE_BYTES_PER_S, skytracker_driver, synscan_driver
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0)
 
 

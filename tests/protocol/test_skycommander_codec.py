@@ -34,8 +34,7 @@ from scopelink.protocol.skytracker import (
     UnknownCommand,
 )
 from scopelink.protocol.skytracker.coordinates import format_dec_degrees, format_ra_hours
-
-from .test_skytracker_support import calfloat_values, chunk_cuts, drain, feed, wire_length
+from tests.support.skytracker_codec import calfloat_values, chunk_cuts, drain, feed, wire_length
 
 ra_on_grid = st.integers(0, 23999).map(lambda n: n / 1000)
 dec_on_grid = st.integers(-90000, 90000).map(lambda n: n / 1000)

@@ -32,8 +32,7 @@ from scopelink.protocol.skytracker import (
     TrackerMode,
     TrackerServer,
 )
-
-from .test_skytracker_support import drain
+from tests.support.skytracker_codec import drain
 
 
 @dataclass

@@ -21,8 +21,7 @@ from scopelink.protocol.skytracker import (
     ground_board_diameter_in,
     is_canonical_calfloat,
 )
-
-from .test_skytracker_support import canonical_calfloat_bytes
+from tests.support.skytracker_codec import canonical_calfloat_bytes
 
 
 @pytest.mark.parametrize(

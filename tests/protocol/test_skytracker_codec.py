@@ -44,8 +44,7 @@ from scopelink.protocol.skytracker import (
     UnknownCommand,
     VersionReply,
 )
-
-from .test_skytracker_support import (
+from tests.support.skytracker_codec import (
     calfloat_values,
     canonical_calfloat_bytes,
     chunk_cuts,

@@ -12,9 +12,10 @@ the row names, the command runs, and then, whatever happened:
   true position, mode and guide speeds again within one reply timeout (plus the resync).
 
 A dozen cells run side by side (each waits on timeouts, not on the CPU), so the whole matrix
-takes about 12 s. ``.venv/bin/python -m tests.test_fault_matrix_skytracker [--spec-timing]
-[ROW ...]`` prints it as a Markdown table (``docs/reliability-faults-skytracker.md``); with
-``--spec-timing`` on the driver's default timeouts and a reply 6 s late.
+takes about 12 s. ``.venv/bin/python -m tests.reliability.test_fault_matrix_skytracker
+[--spec-timing] [ROW ...]`` prints it as a Markdown table
+(``docs/reliability-faults-skytracker.md``); with ``--spec-timing`` on the driver's default
+timeouts and a reply 6 s late.
 """
 
 from __future__ import annotations
@@ -43,8 +44,7 @@ from scopelink.mount import (
 )
 from scopelink.protocol.skytracker import Direction, GuideSpeedReply, ReadGuideSpeed, TrackerMode
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
-
-from .test_driver_skytracker_support import Rig, rig, separation_deg, sky_at
+from tests.support.skytracker_driver import Rig, rig, separation_deg, sky_at
 
 CLOCK_RATE = 5.0
 """Simulated seconds per real second: slow enough that a dozen emulators side by side keep up
@@ -696,7 +696,7 @@ async def test_a_deaf_box_cannot_be_stopped_until_it_listens_again(tmp_path: Pat
     async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
         r.point(*START_ALTAZ)
         # Not this test's subject: blind for seconds at 4°/s, the guard's Sun budget would stop
-        # the azimuth motion itself (tests/test_safety_sun_noisy.py), reopening the link.
+        # the azimuth motion itself (tests/safety/test_safety_sun_noisy.py), reopening the link.
         r.driver.limits = dataclasses.replace(r.driver.limits, sun_avoidance_deg=0.0)
         await r.driver.move_axis(MountAxis.PRIMARY, 4.0)  # UTILITY arrow, 4°/s
         r.emulator.faults.add(Fault(FaultKind.HALT, "R"))  # deaf after the next status read

@@ -48,7 +48,7 @@ from scopelink.mount import (
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.test_driver_synscan_support import (
+from tests.support.synscan_driver import (
     MADRID,
     START,
     Rig,

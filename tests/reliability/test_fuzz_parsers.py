@@ -41,11 +41,10 @@ from scopelink.protocol.synscan import AnyCommand as SynScanCommand
 from scopelink.servers.synscan.device import SynScanHandControl
 from scopelink.servers.synscan.server import SynScanServer
 from scopelink.web.params import BadRequestError, Body
-from tests.bench_support import run_quick_bench
-from tests.synscan_support import ask
-from tests.test_alpaca_http_layer import API, read_reply
-from tests.test_alpaca_support import serve, sim_mount
-from tests.test_web_support import served
+from tests.support.alpaca import API, read_reply, serve, sim_mount
+from tests.support.quick_bench import run_quick_bench
+from tests.support.synscan import ask
+from tests.support.web import served
 
 EXAMPLES = 150
 

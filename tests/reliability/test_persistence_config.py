@@ -23,7 +23,7 @@ from scopelink.servers.storage import (
     temporaries_of,
     write_atomically,
 )
-from tests.test_cli_support import scopelink_here
+from tests.support.cli import scopelink_here
 
 
 def example(tmp_path: Path) -> Path:

@@ -1,7 +1,7 @@
 """``kill -9`` at random points loses nothing: the settings file, Alpaca's UniqueID, the Sky
 Commander's object store (docs/reliability-persistence.md).
 
-Each test kills a real child process that writes in a loop (tests/test_persistence_support.py)
+Each test kills a real child process that writes in a loop (tests/support/persistence.py)
 dozens of times at seeded random delays and checks, after every kill, that the file is whole and
 parseable, holds the last acknowledged write or the one in flight, and that at most one
 temporary file was left behind (removed by the next write).
@@ -24,8 +24,7 @@ from scopelink.servers.alpaca.identity import UNIQUE_ID_FILE, load_or_create_uni
 from scopelink.servers.skytracker import ObjectStore, StoredObject
 from scopelink.servers.skytracker.objects import OBJECTS_FILE
 from scopelink.servers.storage import temporaries_of
-
-from .test_persistence_support import KillRound, Zygote, delays, devices_for, stored_object_for
+from tests.support.persistence import KillRound, Zygote, delays, devices_for, stored_object_for
 
 KILLS = int(os.environ.get("SCOPELINK_KILLS", "30"))
 """Kills per writer; the soak in docs/reliability-persistence.md sets more."""

@@ -16,7 +16,7 @@ from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
 from scopelink.mount import MountAxis, MountState, TrackingMode
 from scopelink.servers.faults import ANY, Fault, FaultKind
 from scopelink.servers.skytracker import SkyTrackerEmulator
-from tests.test_driver_skytracker_support import SITE, sky_tracker_mount
+from tests.support.skytracker_driver import SITE, sky_tracker_mount
 
 OPTIONS = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.05, 0.1, 0.2))
 RECONNECT_WITHIN_S = 5.0

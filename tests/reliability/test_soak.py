@@ -18,7 +18,7 @@ import pytest
 
 from scopelink.decode import Protocol
 from scopelink.web.traffic import TrafficMonitor
-from tests.bench_support import run_quick_bench
+from tests.support.quick_bench import run_quick_bench
 
 CHECKS = (
     "every fault kind fired",

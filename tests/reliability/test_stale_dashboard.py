@@ -15,7 +15,7 @@ from scopelink.servers.faults import ANY, Fault, FaultKind
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
-from tests.conftest import require_executable
+from tests.support.programs import require_executable
 
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0)
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)

@@ -27,7 +27,7 @@ from scopelink.servers.stellarium import StellariumServer
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web.snapshot import state_json
-from tests.synscan_support import ask
+from tests.support.synscan import ask
 
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0)
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)

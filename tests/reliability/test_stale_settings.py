@@ -25,7 +25,7 @@ from scopelink.mount.polling import (
 from scopelink.mount.types import MountState
 from scopelink.sim import EQ6, SimulatedMount
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 SITE = Site(latitude_deg=48.0, longitude_deg=11.0)
 
 

@@ -14,7 +14,7 @@ from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Limits, MountAxis, NotSupportedError, ParkedError, ParkPosition
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.test_alpaca_support import (
+from tests.support.alpaca import (
     WATCHABLE_SPEED_UP,
     blocking,
     client,
@@ -22,10 +22,10 @@ from tests.test_alpaca_support import (
     sim_mount,
     wait_until,
 )
-from tests.test_driver_skytracker_support import rig as skytracker_rig
-from tests.test_driver_synscan_support import MADRID, START
-from tests.test_driver_synscan_support import rig as synscan_rig
-from tests.test_web_support import served
+from tests.support.skytracker_driver import rig as skytracker_rig
+from tests.support.synscan_driver import MADRID, START
+from tests.support.synscan_driver import rig as synscan_rig
+from tests.support.web import served
 
 SLEW_TIMEOUT_S = 20.0
 

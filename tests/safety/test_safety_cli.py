@@ -6,8 +6,8 @@ from __future__ import annotations
 import asyncio
 from pathlib import Path
 
-from tests.test_cli_support import start_scopelink
-from tests.test_safety_support import (
+from tests.support.cli import start_scopelink
+from tests.support.safety import (
     HORIZON_DEG,
     TOLERANCE_DEG,
     Rig,

@@ -36,8 +36,7 @@ from scopelink.servers.stellarium import StellariumServer
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import AZ_GTI
 from scopelink.web import Dashboard
-from tests.synscan_support import ask
-from tests.test_safety_support import (
+from tests.support.safety import (
     HORIZON_DEG,
     TOLERANCE_DEG,
     Rig,
@@ -45,6 +44,7 @@ from tests.test_safety_support import (
     synscan_rig,
     wait_until_still,
 )
+from tests.support.synscan import ask
 
 LOW = (2.0, 200.0)
 """A target below scopelink's horizon (alt, az) that the device itself would slew to."""

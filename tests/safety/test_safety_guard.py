@@ -10,7 +10,7 @@ import pytest
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import LimitError, Limits, MountAxis, TrackingMode
 from scopelink.sim import AZ_GTI
-from tests.test_safety_support import (
+from tests.support.safety import (
     HORIZON_DEG,
     TOLERANCE_DEG,
     synscan_rig,

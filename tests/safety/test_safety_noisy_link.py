@@ -99,7 +99,7 @@ async def test_a_stop_the_device_did_not_take_is_sent_again_until_confirmed() ->
 
 
 def test_the_documented_guard_settings_are_the_defaults() -> None:
-    text = (Path(__file__).parents[1] / "docs" / "reliability-safety.md").read_text()
+    text = (Path(__file__).parents[2] / "docs" / "reliability-safety.md").read_text()
     documented = {
         name: float(value)
         for name, value in re.findall(r"^\| `(\w+)`[^|]*\| ([0-9.]+) \|", text, re.MULTILINE)

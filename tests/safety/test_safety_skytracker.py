@@ -9,7 +9,7 @@ import pytest
 
 from scopelink.mount import LimitError, MountAxis
 from scopelink.protocol.skytracker import LoadObject, SelectMode, TrackerMode
-from tests.test_safety_support import (
+from tests.support.safety import (
     HORIZON_DEG,
     TOLERANCE_DEG,
     j2000_at,

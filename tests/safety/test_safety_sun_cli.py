@@ -16,9 +16,9 @@ from scopelink.cli.config import load_config
 from scopelink.cli.config_command import EXAMPLE_CONFIG
 from scopelink.mount.limits import SUN_AVOIDANCE_DEG
 from scopelink.mount.sun import sun_j2000
-from tests.test_cli_support import scopelink
+from tests.support.cli import scopelink
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
 def sunny_site() -> tuple[float, float]:

@@ -43,8 +43,8 @@ from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import StellariumServer
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, EQ6, MountModel, SimClock, SimulatedMount
-from tests.synscan_support import ask
-from tests.test_safety_support import Rig, place
+from tests.support.safety import Rig, place
+from tests.support.synscan import ask
 
 SITE = Site(51.5, 0.0, pressure_hpa=0.0)
 """No refraction: the driver's and the simulator's altitudes are the same geometry."""

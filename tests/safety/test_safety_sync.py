@@ -21,11 +21,11 @@ from scopelink.mount import LimitError, Limits, MountAxis
 from scopelink.mount.limits import DEFAULT_MAX_SYNC_DEG
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import AZ_GTI, EQ6, MountModel, SimClock, SimulatedMount
-from tests.test_alpaca_support import blocking, client, serve, sim_mount, wait_until
-from tests.test_web_support import served
+from tests.support.alpaca import blocking, client, serve, sim_mount, wait_until
+from tests.support.web import served
 
 SITE = Site(latitude_deg=50.0, longitude_deg=10.0, elevation_m=300.0)
-DOCS = Path(__file__).parent.parent / "docs"
+DOCS = Path(__file__).parents[2] / "docs"
 
 
 async def stepped_mount(

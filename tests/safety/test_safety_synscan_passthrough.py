@@ -22,7 +22,7 @@ from scopelink.protocol.synscan import (
 )
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, SimClock, SimulatedMount
-from tests.synscan_support import ask
+from tests.support.synscan import ask
 
 SITE = Site(51.5, 0.0, pressure_hpa=0.0)
 NIGHT = datetime(2026, 1, 10, 23, 0, tzinfo=UTC)

@@ -24,9 +24,9 @@ from scopelink.mount.setters import EARLIEST_UTC, LATEST_UTC
 from scopelink.servers.alpaca import AlpacaServer, ErrorNumber
 from scopelink.servers.alpaca.telescope import MAX_SETTLE_TIME_S
 from scopelink.sim import AZ_GTI, EQ6
-from tests.test_alpaca_support import sim_mount
-from tests.test_driver_skytracker_support import rig as skytracker_rig
-from tests.test_driver_synscan_support import rig as synscan_rig
+from tests.support.alpaca import sim_mount
+from tests.support.skytracker_driver import rig as skytracker_rig
+from tests.support.synscan_driver import rig as synscan_rig
 
 API = "/api/v1/telescope/0"
 KINDS = ["sim-eq6", "sim-azgti", "synscan", "skytracker"]
@@ -194,7 +194,7 @@ def test_the_park_position_setter_checks_ranges_and_limits() -> None:
 
 
 def test_the_docs_give_the_ranges_the_code_uses() -> None:
-    docs = Path(__file__).parent.parent / "docs"
+    docs = Path(__file__).parents[2] / "docs"
     safety = (docs / "reliability-safety.md").read_text(encoding="utf-8")
     alpaca_md = (docs / "alpaca.md").read_text(encoding="utf-8")
     span = f"{EARLIEST_UTC:%Y-%m-%d} to {LATEST_UTC:%Y-%m-%dT%H:%M:%S} UTC"

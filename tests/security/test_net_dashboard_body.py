@@ -7,7 +7,7 @@ from __future__ import annotations
 import asyncio
 
 from scopelink.web import Dashboard
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
 
 async def test_a_command_body_split_across_segments_is_read_whole() -> None:

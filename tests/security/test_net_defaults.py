@@ -15,9 +15,9 @@ from scopelink.cli.serve_command import plan_from
 from scopelink.servers.access import DEFAULT_POLICY
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.http_guard import MAX_BODY_BYTES, MAX_HEADER_BYTES, MAX_REQUEST_LINE_BYTES
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 PROPERTIES = [
     "rightascension",
     "declination",
@@ -155,7 +155,7 @@ async def test_a_client_beyond_its_rate_is_paced_never_queued_beyond_the_hold(
     """16 connections (the most one address may open) pipelining twice the burst: each waits
     at most 16 requests' worth of the rate (64 ms at 250/s), under the 0.25 s hold, so the
     client is paced (answers come at the rate), every request answered, none queued for
-    seconds; 429 is for what would wait longer (tests/test_security_access.py)."""
+    seconds; 429 is for what would wait longer (tests/security/test_security_access.py)."""
     policy = DEFAULT_POLICY
     assert policy.max_connections_per_client / policy.requests_per_s <= policy.max_delay_s
     async with AlpacaServer(

@@ -13,7 +13,7 @@ from scopelink.servers.access import DEFAULT_POLICY, OPEN_POLICY, AccessPolicy
 from scopelink.servers.hosting import HostedDevice
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.synscan import SynScanEmulator
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
 SHORT = AccessPolicy(idle_timeout_s=0.5)
 # a command each protocol answers without moving anything

@@ -20,7 +20,7 @@ from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.http_guard import EVICTABLE_AFTER_S
 from scopelink.web import Dashboard
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
 Connect = Callable[[], Awaitable[tuple[asyncio.StreamReader, asyncio.StreamWriter]]]
 

@@ -16,7 +16,7 @@ import pytest
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.sim import SimulatedMount
 from scopelink.web import Dashboard
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
 MOVE = b'{"axis":"primary","rate_deg_s":0.5}'
 

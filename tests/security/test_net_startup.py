@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from scopelink.web import Dashboard
-from tests.test_alpaca_support import sim_mount
+from tests.support.alpaca import sim_mount
 
 SCOPELINK = Path(sys.executable).parent / "scopelink"
 ONLY_ALPACA = [

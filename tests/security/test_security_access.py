@@ -40,14 +40,14 @@ from scopelink.servers.stellarium import StellariumServer
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
-from tests.synscan_support import ask
-from tests.test_security_access_support import (
+from tests.support.access import (
     ELSEWHERE_ONLY,
     READ_ONLY,
     HttpClient,
     closed_without_a_byte,
     read_answer,
 )
+from tests.support.synscan import ask
 
 SITE = Site(48.2, 16.4)
 START = datetime(2026, 3, 1, 22, 0, tzinfo=UTC)

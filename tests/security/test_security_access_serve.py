@@ -6,8 +6,8 @@ from __future__ import annotations
 import asyncio
 from pathlib import Path
 
-from tests.test_security_access_support import HttpClient
-from tests.test_serve_cli import ALL_OFF, listening, run_serve, serving
+from tests.support.access import HttpClient
+from tests.support.serve import ALL_OFF, listening, run_serve, serving
 
 DEVICE = "/api/v1/telescope/0"
 

@@ -32,8 +32,8 @@ from scopelink.servers.lx200 import LX200Server
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
 from scopelink.web.dashboard import static_dir
-from tests.conftest import require_executable
-from tests.test_web_support import SITE, START
+from tests.support.programs import require_executable
+from tests.support.web import SITE, START
 
 SCRIPT = "<script>window.pwned=1</script>"
 HOSTILE = [

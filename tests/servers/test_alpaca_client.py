@@ -30,7 +30,7 @@ from scopelink.astro import angular_separation_deg, j2000_to_apparent
 from scopelink.mount import Limits, TrackingMode
 from scopelink.servers.alpaca import EquatorialSystem, TelescopeConfig
 from scopelink.sim import AZ_GTI, SimulatedMount
-from tests.test_alpaca_support import (
+from tests.support.alpaca import (
     WATCHABLE_SPEED_UP,
     blocking,
     client,

@@ -15,7 +15,7 @@ import pytest
 from scopelink.mount import MountState
 from scopelink.servers.alpaca import AlpacaServer, ErrorNumber, TelescopeConfig
 from scopelink.sim import SimulatedMount
-from tests.test_alpaca_support import SITE, serve, sim_mount
+from tests.support.alpaca import SITE, serve, sim_mount
 
 API = "/api/v1/telescope/0"
 

@@ -14,20 +14,7 @@ from scopelink.servers.access import AccessControl
 from scopelink.servers.alpaca.http import AlpacaHttpFront, HttpReply, HttpRequest
 from scopelink.servers.hosts import HostAllowList
 from scopelink.servers.http_guard import GuardedServer, HttpGuard
-from tests.test_alpaca_support import serve
-
-API = "/api/v1/telescope/0"
-
-
-async def read_reply(reader: asyncio.StreamReader) -> tuple[int, dict[str, str], bytes]:
-    head = (await reader.readuntil(b"\r\n\r\n")).decode("latin-1")
-    status = int(head.split(" ", 2)[1])
-    headers = {
-        name.strip().lower(): value.strip()
-        for name, value in (line.split(":", 1) for line in head.split("\r\n")[1:] if ":" in line)
-    }
-    body = await reader.readexactly(int(headers.get("content-length", "0")))
-    return status, headers, body
+from tests.support.alpaca import API, read_reply, serve
 
 
 async def raw(port: int) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:

@@ -16,7 +16,7 @@ from alpaca.telescope import Telescope
 
 from scopelink.servers.alpaca import DISCOVERY_MESSAGE, AlpacaServer, TelescopeConfig
 from scopelink.servers.alpaca.identity import UNIQUE_ID_FILE, load_or_create_unique_id
-from tests.test_alpaca_support import blocking, serve, sim_mount
+from tests.support.alpaca import blocking, serve, sim_mount
 
 
 async def test_management_api_through_alpyca(tmp_path: Path) -> None:

@@ -34,9 +34,9 @@ from scopelink.protocol.synscan import (
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import SKY_TRACKER, SimClock, SimulatedMount
-from tests.conftest import require_executable
-from tests.indi_support import IndiDriver, IndiProperty
-from tests.synscan_support import ask
+from tests.support.indi import IndiDriver, IndiProperty
+from tests.support.programs import require_executable
+from tests.support.synscan import ask
 
 DRIVER = "indi_synscan_telescope"
 SITE = Site(48.0, 11.0)

@@ -24,8 +24,8 @@ from scopelink.astro import (
 )
 from scopelink.servers.lx200 import LX200Server
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.conftest import require_executable
-from tests.indi_support import IndiDriver, IndiProperty
+from tests.support.indi import IndiDriver, IndiProperty
+from tests.support.programs import require_executable
 
 SITE = Site(40.4, 3.7)
 TOLERANCE_DEG = 0.01

@@ -75,3 +75,17 @@ async def wait_until(predicate: Callable[[], bool], timeout_s: float, what: str)
             raise AssertionError(f"{what} did not happen within {timeout_s} s")
         await asyncio.sleep(0.05)
     return loop.time() - start
+
+
+API = "/api/v1/telescope/0"
+
+
+async def read_reply(reader: asyncio.StreamReader) -> tuple[int, dict[str, str], bytes]:
+    head = (await reader.readuntil(b"\r\n\r\n")).decode("latin-1")
+    status = int(head.split(" ", 2)[1])
+    headers = {
+        name.strip().lower(): value.strip()
+        for name, value in (line.split(":", 1) for line in head.split("\r\n")[1:] if ":" in line)
+    }
+    body = await reader.readexactly(int(headers.get("content-length", "0")))
+    return status, headers, body

@@ -5,7 +5,7 @@ command line, the Alpaca server's start, the Sky Commander's serial protocol ove
 appends an acknowledgement line to a file after each write *returns*: a write acknowledged before
 the SIGKILL must be on disk.
 
-Children are forked by a "zygote" (``python -m tests.test_persistence_support``: a
+Children are forked by a "zygote" (``python -m tests.support.persistence``: a
 single-threaded process that has imported scopelink already), so a kill round costs a few
 milliseconds instead of a 1-second interpreter start; that is what lets a test kill each writer
 dozens of times in a few seconds. The zygote also does the killing, at the requested delay after
@@ -38,7 +38,7 @@ Acknowledger = Callable[[str], None]
 
 _CHILD_DEADLINE_S = 20.0
 """A child nobody kills stops by itself (a test that failed half-way leaves no orphans)."""
-_REPOSITORY = Path(__file__).resolve().parent.parent
+_REPOSITORY = Path(__file__).resolve().parents[2]
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,7 +54,7 @@ class Zygote:
 
     def __init__(self) -> None:
         self._process = subprocess.Popen(
-            [sys.executable, "-m", "tests.test_persistence_support"],
+            [sys.executable, "-m", "tests.support.persistence"],
             cwd=_REPOSITORY,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
@@ -151,7 +151,7 @@ def commander_writer(data_dir: str, first: int, acknowledge: Acknowledger) -> No
     (over TCP) and acknowledge each once the device has acknowledged it."""
     from scopelink.links import open_tcp
     from scopelink.servers.skytracker import SkyCommanderEmulator
-    from tests.test_emulator_skytracker_support import CommanderSession, sky_tracker_mount
+    from tests.support.skytracker_emulator import CommanderSession, sky_tracker_mount
 
     async def store() -> None:
         emulator = SkyCommanderEmulator(sky_tracker_mount(), Path(data_dir), pace=False)
@@ -218,7 +218,7 @@ def serve_forks() -> None:
     import scopelink.cli.main
     import scopelink.servers.alpaca
     import scopelink.sim  # noqa: F401
-    import tests.test_emulator_skytracker_support  # noqa: F401
+    import tests.support.skytracker_emulator  # noqa: F401
 
     _say({"ready": True})
     for line in sys.stdin:

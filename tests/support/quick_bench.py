@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def run_quick_bench(module: str, *, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:

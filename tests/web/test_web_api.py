@@ -10,7 +10,7 @@ import aiohttp
 import pytest
 
 from scopelink.mount import Limits, TrackingMode
-from tests.test_web_support import HIGH_UP, NEVER_UP, SITE, served, sim_mount
+from tests.support.web import HIGH_UP, NEVER_UP, SITE, served, sim_mount
 
 
 async def test_page_and_static_files_are_served_with_protective_headers() -> None:

@@ -7,62 +7,17 @@ from __future__ import annotations
 
 import asyncio
 import re
-from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
-from pathlib import Path
 
 import pytest
-import pytest_asyncio
-from playwright.async_api import Browser, Page, async_playwright, expect
+from playwright.async_api import Browser, Page, expect
 
 from scopelink.astro import angular_separation_deg
 from scopelink.astro.catalog import lookup
-from tests.conftest import require_executable
-from tests.test_web_support import HIGH_UP, NEVER_UP, Served, served, sim_mount
-
-ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts" / "web"
-TIMEOUT_MS = 10_000
-
+from tests.support.browser import TIMEOUT_MS, open_page, screenshot
+from tests.support.web import HIGH_UP, NEVER_UP, Served, served, sim_mount
 
 # One browser for the whole file (launching costs a second or two): the tests share its loop.
 pytestmark = pytest.mark.asyncio(loop_scope="module")
-
-
-@pytest_asyncio.fixture(loop_scope="module", scope="module")
-async def browser() -> AsyncIterator[Browser]:
-    executable = require_executable("chromium")
-    async with async_playwright() as playwright:
-        launched = await playwright.chromium.launch(executable_path=executable)
-        try:
-            yield launched
-        finally:
-            await launched.close()
-
-
-async def screenshot(page: Page, name: str) -> None:
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    path = ARTIFACTS / f"{name}.png"
-    await page.screenshot(path=str(path), full_page=True)
-    print(f"screenshot: {path}")
-
-
-@asynccontextmanager
-async def open_page(
-    browser: Browser, s: Served, width: int = 1300, height: int = 1000
-) -> AsyncIterator[Page]:
-    """A fresh browser context on the dashboard, live; no script error may happen meanwhile."""
-    context = await browser.new_context(viewport={"width": width, "height": height})
-    try:
-        page = await context.new_page()
-        errors: list[str] = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        await page.goto(s.dashboard.url)
-        await expect(page.locator("#link-status")).to_have_text("live", timeout=TIMEOUT_MS)
-        await expect(page.locator("#hl-connected")).to_have_text("yes", timeout=TIMEOUT_MS)
-        yield page
-        assert errors == []
-    finally:
-        await context.close()
 
 
 async def click_object(page: Page, name: str) -> None:

@@ -22,7 +22,7 @@ from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import SimClock, SimulatedMount
 from scopelink.web import Dashboard
 from scopelink.web.traffic import TrafficMonitor, parse_trace_line, protocol_by_port
-from tests.test_web_support import HIGH_UP, SITE, START, served, sim_mount
+from tests.support.web import HIGH_UP, SITE, START, served, sim_mount
 
 
 def polling(mount: Mount) -> bool:

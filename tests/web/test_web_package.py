@@ -11,7 +11,7 @@ from pathlib import Path
 
 from hatchling.builders.wheel import WheelBuilder
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STATIC = ("index.html", "app.js", "style.css")
 
 SERVE_FROM_INSTALLED_COPY = """

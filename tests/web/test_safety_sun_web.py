@@ -15,10 +15,8 @@ from playwright.async_api import Browser, Page, expect
 
 from scopelink.mount import Limits, TrackingMode
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.test_web_browser import TIMEOUT_MS, browser, open_page, screenshot
-from tests.test_web_support import SITE, served
-
-__all__ = ["browser"]  # the module-scoped fixture, shared with test_web_browser's pattern
+from tests.support.browser import TIMEOUT_MS, open_page, screenshot
+from tests.support.web import SITE, served
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
