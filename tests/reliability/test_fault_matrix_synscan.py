@@ -48,6 +48,7 @@ from scopelink.mount import (
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
+from tests.support.quick_bench import run_bench
 from tests.support.synscan_driver import (
     MADRID,
     START,
@@ -771,17 +772,14 @@ async def test_a_time_re_sent_after_a_fault_is_moved_on_by_the_time_the_retry_to
         assert abs(gap.total_seconds()) <= 1.0, gap
 
 
-async def test_the_fault_recovery_benchmark_runs_and_prints_its_tables(
-    capsys: pytest.CaptureFixture[str],
-) -> None:
+def test_the_fault_recovery_benchmark_runs_and_prints_its_tables() -> None:
     """A tiny run of ``bench.fault_recovery_synscan`` (so the benchmark code cannot rot); it exits
     on a wrong position or a motion left running."""
-    from bench.fault_recovery_synscan import CASES, main
-
-    await main(0.3)
-    lines = capsys.readouterr().out.splitlines()
+    result = run_bench("bench.fault_recovery_synscan", "--timeout", "0.3", timeout_s=60)
+    lines = result.stdout.splitlines()
     assert lines[0].startswith("SynScan driver fault recovery, timeout 0.3 s")
-    rows = {line[:22].strip(): line.split() for line in lines[2 : 2 + len(CASES)]}
+    cases = lines.index("", 2) - 2  # one row per case, then a blank line
+    rows = {line[:22].strip(): line.split() for line in lines[2 : 2 + cases]}
     assert rows["no fault"][2] == "answered"
     assert rows["stall"][1] == "error"
     assert rows["close and reopen"][3] == "recovered"

@@ -1,4 +1,4 @@
-"""Run a benchmark module's quick mode as a user would (so the benchmark code cannot rot)."""
+"""Run a benchmark module as a user would (so the benchmark code cannot rot)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def run_quick_bench(module: str, *, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:
-    """``python -m MODULE --quick`` from the repository root; fails the test on a non-zero exit."""
+def run_bench(module: str, *args: str, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:
+    """``python -m MODULE ARGS...`` from the repository root; fails the test on a non-zero exit."""
     result = subprocess.run(
-        [sys.executable, "-m", module, "--quick"],
+        [sys.executable, "-m", module, *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -21,3 +21,8 @@ def run_quick_bench(module: str, *, timeout_s: float = 60) -> subprocess.Complet
     )
     assert result.returncode == 0, result.stderr
     return result
+
+
+def run_quick_bench(module: str, *, timeout_s: float = 60) -> subprocess.CompletedProcess[str]:
+    """``python -m MODULE --quick`` from the repository root; fails the test on a non-zero exit."""
+    return run_bench(module, "--quick", timeout_s=timeout_s)
