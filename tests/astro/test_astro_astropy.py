@@ -6,7 +6,6 @@ off (astropy also applies polar motion, which we neglect), 1" with refraction ab
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import erfa
@@ -25,14 +24,6 @@ SITES = [
     Site(78.2232, 15.6267, 10.0, temperature_c=-15.0),
 ]
 TIMES = ["2005-03-20T04:00:00", "2012-07-01T12:30:00", "2019-11-11T23:59:30"]
-
-
-@pytest.fixture(scope="module", autouse=True)
-def offline_astropy() -> Iterator[None]:
-    from astropy.utils import iers
-
-    with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
-        yield
 
 
 @pytest.fixture(scope="module")

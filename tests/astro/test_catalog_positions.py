@@ -4,7 +4,6 @@ proper motion against astropy's space motion (offline)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from datetime import UTC, datetime
 
 import erfa
@@ -17,14 +16,6 @@ from scopelink.astro.timescales import tt_jd
 
 J2000 = datetime(2000, 1, 1, 11, 58, 55, 816000, tzinfo=UTC)  # J2000.0 = 2000-01-01 12:00 TT
 IN_2026 = datetime(2026, 6, 1, tzinfo=UTC)
-
-
-@pytest.fixture(scope="module", autouse=True)
-def offline_astropy() -> Iterator[None]:
-    from astropy.utils import iers
-
-    with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
-        yield
 
 
 def separation_arcsec(ra1_h: float, dec1_deg: float, ra2_h: float, dec2_deg: float) -> float:

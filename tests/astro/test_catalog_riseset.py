@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
@@ -21,14 +20,6 @@ WASHINGTON = Site(38.8894, -77.0352, 10.0)
 BOSTON = Site(42.3333, -71.0833)
 SOLSTICE_2024 = datetime(2024, 6, 21, 4, 0, tzinfo=UTC)  # local midnight, EDT = UTC - 4 h
 MINUTE = timedelta(minutes=1)
-
-
-@pytest.fixture(scope="module", autouse=True)
-def offline_astropy() -> Iterator[None]:
-    from astropy.utils import iers
-
-    with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
-        yield
 
 
 def astropy_airless_altitude(body: str, site: Site, when: datetime) -> float:

@@ -12,7 +12,6 @@ The required accuracy is 10"; what is seen is written beside each check.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from datetime import UTC, datetime
 from typing import Any
 
@@ -30,14 +29,6 @@ TIMES = [
 ]
 SITES = [Site(48.8, 2.35, 60.0), Site(-33.87, 151.21, 30.0), Site(19.82, -155.47, 4205.0)]
 TOLERANCE_ARCSEC = 10.0
-
-
-@pytest.fixture(scope="module", autouse=True)
-def offline_astropy() -> Iterator[None]:
-    from astropy.utils import iers
-
-    with iers.conf.set_temp("auto_download", False), iers.conf.set_temp("auto_max_age", None):
-        yield
 
 
 def separation_arcsec(ra1_h: Any, dec1_deg: Any, ra2_h: Any, dec2_deg: Any) -> float:

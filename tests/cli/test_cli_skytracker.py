@@ -18,11 +18,6 @@ def device(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield spec
 
 
-@pytest.fixture
-def config(tmp_path: Path) -> Path:
-    return tmp_path / "absent.toml"
-
-
 def test_info_reports_the_version_and_the_sky_commander(config: Path, device: str) -> None:
     result = scopelink(config, "info", device, "--json")
     assert result.returncode == 0, result.stderr

@@ -32,11 +32,6 @@ def device() -> Iterator[str]:
         yield spec
 
 
-@pytest.fixture
-def config(tmp_path: Path) -> Path:
-    return tmp_path / "absent.toml"
-
-
 def test_info_names_the_firmware_and_model(config: Path, device: str) -> None:
     result = scopelink(config, "info", device, "--json")
     assert result.returncode == 0, result.stderr

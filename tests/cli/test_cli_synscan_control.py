@@ -30,11 +30,6 @@ def device() -> Iterator[str]:
         yield spec
 
 
-@pytest.fixture
-def config(tmp_path: Path) -> Path:
-    return tmp_path / "absent.toml"
-
-
 def test_goto_no_wait_then_stop_from_another_command(config: Path, device: str) -> None:
     started = scopelink(config, "goto", "--altaz", "60", "90", "--no-wait", "--device", device)
     assert started.returncode == 0, started.stderr
