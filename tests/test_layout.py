@@ -101,9 +101,14 @@ def files_without_tests(root: Path) -> list[str]:
     ]
 
 
+TOP_LEVEL_TESTS = {"test_ci_policy.py", "test_layering.py", "test_layout.py"}
+"""The only test files above the layer directories: they test the suite and the package's shape."""
+
+
 def misplaced_modules(root: Path) -> list[str]:
     """Python files outside ``support/`` that pytest would not collect and that are no
-    ``conftest.py`` or ``__init__.py``; and test directories that are not packages."""
+    ``conftest.py`` or ``__init__.py``; test files at the top that belong in a layer's directory;
+    and test directories that are not packages."""
     wrong = []
     for path in sorted(root.rglob("*.py")):
         relative = path.relative_to(root)
@@ -111,6 +116,8 @@ def misplaced_modules(root: Path) -> list[str]:
             continue
         if not path.name.startswith("test_"):
             wrong.append(relative.as_posix())
+        elif len(relative.parts) == 1 and path.name not in TOP_LEVEL_TESTS:
+            wrong.append(f"{relative.as_posix()} (belongs in a layer's directory)")
     for directory in sorted({path.parent for path in root.rglob("*.py")}):
         if directory.name != "__pycache__" and not (directory / "__init__.py").exists():
             wrong.append(f"{directory.relative_to(root).as_posix()}/ (no __init__.py)")
@@ -173,11 +180,14 @@ def test_the_checks_catch_bench_imports_empty_tests_and_stray_helpers(tmp_path: 
             "web/helpers.py": "from tests.support.web import served\n",
             "support/web.py": "from tests.support import quick_bench\n",
             "sim/test_fine.py": "from benches import x\nclass TestAxis:\n    def test_a(self): ...",
+            "test_flat.py": "def test_flat(): pass\n",
+            "test_layout.py": "def test_layout(): pass\n",
         },
     )
     assert importers_of_bench(root) == {"web/test_bench.py"}
     assert files_without_tests(root) == ["web/test_helpers.py"]
     assert misplaced_modules(root) == [
+        "test_flat.py (belongs in a layer's directory)",
         "web/helpers.py",
         "sim/ (no __init__.py)",
         "support/ (no __init__.py)",
