@@ -13,7 +13,7 @@ bytes, deletions, duplications, truncations, splices) and streams of valid frame
 a random chunking. Why not hypothesis or atheris here: atheris does not build for this Python,
 and hypothesis' generation and shrinking machinery costs ~1 ms per example, a thousand times the
 cost of most parsers under test; the test suite runs the same checks under hypothesis
-(tests/test_fuzz_parsers.py) where shrinking matters.
+(tests/reliability/test_fuzz_parsers.py) where shrinking matters.
 
 Each input runs under a 1 s watchdog (``signal.setitimer``): an input still running after it is a
 hang. The slowest input of each target is reported.

@@ -12,7 +12,7 @@ rename and a directory fsync to the second.
     .venv/bin/python -m bench.persistence --dir /mnt/sdcard   # on the disk you care about
 
 The ``kill -9`` soak is the test itself with more kills per writer:
-``SCOPELINK_KILLS=500 .venv/bin/pytest tests/test_persistence_kill.py -s``.
+``SCOPELINK_KILLS=500 .venv/bin/pytest tests/reliability/test_persistence_kill.py -s``.
 """
 
 from __future__ import annotations

@@ -7,7 +7,6 @@ skipped real-client test would let a broken install pass unnoticed.
 from __future__ import annotations
 
 import os
-import shutil
 from collections.abc import Generator
 
 import pytest
@@ -15,14 +14,6 @@ import pytest
 pytest_plugins = ["pytester"]
 
 IN_CI = os.environ.get("CI", "").lower() in {"1", "true", "yes"}
-
-
-def require_executable(name: str) -> str:
-    """The path of program ``name``; the test skips (fails, in CI) when it is missing."""
-    path = shutil.which(name)
-    if path is None:
-        pytest.skip(f"{name} is not installed (bash scripts/test.sh installs it)")
-    return path
 
 
 @pytest.hookimpl(wrapper=True)

@@ -1,4 +1,4 @@
-"""What `bench.fuzz` and tests/test_fuzz_parsers.py fuzz: one `Target` per parser.
+"""What `bench.fuzz` and tests/reliability/test_fuzz_parsers.py fuzz: one `Target` per parser.
 
 A target is a few valid inputs (its seeds: frames, requests, files) and a `check` that feeds one
 input to the parser, in chunks the given `random.Random` chooses, and raises `FuzzFailureError`

@@ -135,7 +135,7 @@ def _observed_from_vectors(
     The same arithmetic as ERFA, with the Earth rotation and polar motion folded into one
     matrix and none of atioq's unused outputs (observed HA, Dec, RA) or its CIRS RA/Dec
     round trip: a third of its cost for 10,000 positions. Equal to atioq to 1e-9 arcsec
-    (``tests/test_astro_fast_path.py``)."""
+    (``tests/astro/test_astro_fast_path.py``)."""
     x, y, z = np.moveaxis(cirs @ _earth_rotation(astrom).T, -1, 0)
     diurnal = float(astrom["diurab"])
     shrink = 1.0 - diurnal * y

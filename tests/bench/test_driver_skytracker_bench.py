@@ -1,0 +1,28 @@
+"""The Sky Tracker driver benchmark still runs and prints its tables (so the code cannot rot)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.support.quick_bench import assert_provenance, run_quick_bench
+
+
+@pytest.mark.timeout(90)
+def test_quick_benchmark_prints_its_tables() -> None:
+    result = run_quick_bench("bench.drivers_skytracker", timeout_s=90)
+    assert_provenance(result.stdout)
+    lines = result.stdout.splitlines()
+    wire = [line for line in lines if line.startswith("position poll") and line.endswith("%")]
+    assert len(wire) == 1, result.stdout
+    driver, bare, limit = (float(field) for field in wire[0].split()[-5:-2])
+    assert 0 < driver <= limit * 1.02  # the emulated line never beats the wire
+    assert 0 < bare <= limit * 1.02
+    assert any(line.startswith("status (R)") and line.endswith("x") for line in lines)
+    # One verdict for every CPU row the goal (issue #14 part 2) speaks for.
+    goals = [line for line in lines if line.startswith("goal ")]
+    assert [line.split(":")[0] for line in goals] == [
+        "goal position poll (Q \\r q)",
+        "goal refresh (R + position)",
+        "goal status (R)",
+    ], result.stdout
+    assert all(line.split(": ")[-1].split()[0] in {"PASS", "MISS"} for line in goals), goals
