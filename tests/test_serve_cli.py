@@ -25,6 +25,7 @@ from scopelink.mount import MountAxis
 from scopelink.protocol.synscan import (
     GetRaDec,
     GetVersion,
+    GotoInProgress,
     GotoRaDec,
     IsAligned,
     IsGotoInProgress,
@@ -32,7 +33,6 @@ from scopelink.protocol.synscan import (
     SynScanClientConnection,
     Version,
 )
-from scopelink.protocol.synscan.messages import GotoInProgress
 from scopelink.servers.faults import Fault, FaultInjector
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.synscan import SynScanEmulator

@@ -66,9 +66,9 @@ from scopelink.protocol.synscan import (
     SlowGoto,
     SyncRaDec,
     Tracking,
+    TrackingModeReply,
     VariableRateSlew,
 )
-from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
 from scopelink.servers.synscan.config import SynScanConfig
 from scopelink.sim import SIDEREAL_RATE_DEG_S, synscan_fixed_rate_deg_s
 
