@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import datetime as dt
 import inspect
+import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import cast
 
 import pytest
 
@@ -23,6 +25,7 @@ from scopelink.protocol.synscan import (
     Axis,
     CancelGoto,
     Command,
+    CommandHandler,
     Complete,
     DateTime,
     Echo,
@@ -184,3 +187,42 @@ def test_each_command_reads_its_own_reply_by_its_own_shape(command: AnyCommand) 
         failed = PassthroughFailed(data[:-1], 0x01)
         assert len(failed.encode()) in command.reply_shape().lengths
         assert parse_reply(command, failed.encode()) == failed
+
+
+class _NamingHandler:
+    """Answers every command with the name of the handler method it was dispatched to."""
+
+    def __getattr__(self, name: str) -> Callable[[AnyCommand], str]:
+        return lambda command: name
+
+
+def _snake(name: str) -> str:
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", name).lower()
+
+
+@pytest.mark.parametrize("command", SAMPLES, ids=repr)
+def test_each_command_dispatches_to_the_handler_method_named_after_it(command: AnyCommand) -> None:
+    handler = cast(CommandHandler[str], _NamingHandler())
+    assert command.dispatch(handler) == _snake(type(command).__name__)
+
+
+def test_the_handler_protocol_has_one_method_per_command_class() -> None:
+    protocol_methods = {name for name in vars(CommandHandler) if not name.startswith("_")}
+    assert protocol_methods == {_snake(cls.__name__) for cls in COMMANDS}
+
+
+def test_exactly_the_commands_that_move_or_set_something_change_the_mount() -> None:
+    """What a read-only server refuses (answering a plain '#')."""
+    assert {cls for cls in COMMANDS if cls.changes_mount} == {
+        GotoRaDec,
+        GotoAzAlt,
+        SyncRaDec,
+        SetTrackingMode,
+        FixedRateSlew,
+        VariableRateSlew,
+        SlowGoto,
+        SetAxisPosition,
+        SetLocation,
+        SetTime,
+        CancelGoto,
+    }

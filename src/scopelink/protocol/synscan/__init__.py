@@ -49,6 +49,7 @@ from scopelink.protocol.synscan.events import (
     UnexpectedData,
     UnknownCommand,
 )
+from scopelink.protocol.synscan.handler import CommandHandler
 from scopelink.protocol.synscan.message import (
     Command,
     Complete,
@@ -122,6 +123,7 @@ __all__ = [
     "ClientError",
     "ClientState",
     "Command",
+    "CommandHandler",
     "CommandParser",
     "Complete",
     "DateTime",

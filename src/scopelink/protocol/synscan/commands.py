@@ -8,7 +8,7 @@ by a terminator: binary payloads (``W``, ``H``, ``K``, ``T``) may hold any byte.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Self
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 from scopelink.protocol.synscan import angles
 from scopelink.protocol.synscan.message import (
@@ -16,6 +16,7 @@ from scopelink.protocol.synscan.message import (
     FieldError,
     ReplyShape,
     ScanResult,
+    T,
     letter_frames,
 )
 from scopelink.protocol.synscan.replies import (
@@ -50,6 +51,9 @@ from scopelink.protocol.synscan.values import (
     precision_word,
     ra_dec_units,
 )
+
+if TYPE_CHECKING:
+    from scopelink.protocol.synscan.handler import CommandHandler
 
 _ACK_SHAPE = ReplyShape((1,), "'#'")
 
@@ -139,6 +143,9 @@ class GetRaDec(_PositionQuery):
     frames = letter_frames(letters, 1)
     frame = Frame.EQUATORIAL
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_ra_dec(self)
+
     def describe(self) -> str:
         return f"get {precision_word(self.precise)}RA/Dec"
 
@@ -150,6 +157,9 @@ class GetAzAlt(_PositionQuery):
     letters = b"Zz"
     frames = letter_frames(letters, 1)
     frame = Frame.HORIZONTAL
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_az_alt(self)
 
     def describe(self) -> str:
         return f"get {precision_word(self.precise)}Az/Alt"
@@ -219,6 +229,9 @@ class GotoRaDec(_RaDecTarget):
     frames = _pair_frames(letters)
     _VERB = "goto"
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.goto_ra_dec(self)
+
 
 class SyncRaDec(_RaDecTarget):
     """``S`` (or ``s`` when precise): sync on RA/Dec (J2000)."""
@@ -227,6 +240,9 @@ class SyncRaDec(_RaDecTarget):
     letters = b"Ss"
     frames = _pair_frames(letters)
     _VERB = "sync"
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.sync_ra_dec(self)
 
 
 @dataclass(frozen=True, slots=True)
@@ -271,6 +287,9 @@ class GotoAzAlt(_Precise, _Acknowledged):
         """Altitude in degrees, two's complement read: [-180, 180)."""
         return angles.units_to_signed_degrees(self.alt_units, self.precise)
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.goto_az_alt(self)
+
     def describe(self) -> str:
         detail = describe_az_alt(self.az_units, self.alt_units, self.precise)
         return f"{precision_word(self.precise)}goto {detail}"
@@ -290,6 +309,9 @@ class GetTrackingMode(_Letter):
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return scan_terminated(buffer, 1, None, lambda body: TrackingModeReply(body[0]))
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_tracking_mode(self)
 
     def describe(self) -> str:
         return "get tracking mode"
@@ -313,6 +335,9 @@ class SetTrackingMode(_Acknowledged):
     def encode(self) -> bytes:
         return bytes((ord("T"), self.mode))
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.set_tracking_mode(self)
+
     def describe(self) -> str:
         return f"set tracking mode {describe_tracking(self.mode)}"
 
@@ -334,6 +359,9 @@ class GetLocation(_Letter):
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return scan_terminated(buffer, 8, flag_check(3, 7), Location.from_body)
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_location(self)
+
     def describe(self) -> str:
         return "get location"
 
@@ -354,6 +382,9 @@ class SetLocation(_Acknowledged):
     def encode(self) -> bytes:
         return b"W" + self.location.body()
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.set_location(self)
+
     def describe(self) -> str:
         return f"set location {self.location.describe()}"
 
@@ -369,6 +400,9 @@ class GetTime(_Letter):
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return scan_terminated(buffer, 8, flag_check(7), DateTime.from_body)
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_time(self)
 
     def describe(self) -> str:
         return "get time"
@@ -389,6 +423,9 @@ class SetTime(_Acknowledged):
 
     def encode(self) -> bytes:
         return b"H" + self.time.body()
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.set_time(self)
 
     def describe(self) -> str:
         return f"set time {self.time.describe()}"
@@ -411,6 +448,9 @@ class GetVersion(_Letter):
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return Version.scan(buffer)
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_version(self)
+
     def describe(self) -> str:
         return "get hand control version"
 
@@ -426,6 +466,9 @@ class GetModel(_Letter):
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return Model.scan(buffer)
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_model(self)
 
     def describe(self) -> str:
         return "get mount model"
@@ -456,6 +499,9 @@ class Echo(Command):
         check = allowed_bytes(bytes((self.value,)))
         return scan_terminated(buffer, 1, check, lambda body: EchoReply(body[0]))
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.echo(self)
+
     def describe(self) -> str:
         return f"echo {describe_byte(self.value)}"
 
@@ -472,6 +518,9 @@ class IsAligned(_Letter):
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         check = allowed_bytes(b"\x00\x01")
         return scan_terminated(buffer, 1, check, lambda body: Aligned(body[0] == 1))
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.is_aligned(self)
 
     def describe(self) -> str:
         return "is alignment complete?"
@@ -490,6 +539,9 @@ class IsGotoInProgress(_Letter):
         check = allowed_bytes(b"01")
         return scan_terminated(buffer, 1, check, lambda body: GotoInProgress(body == b"1"))
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.is_goto_in_progress(self)
+
     def describe(self) -> str:
         return "is goto in progress?"
 
@@ -499,6 +551,9 @@ class CancelGoto(_Letter, _Acknowledged):
     """``M``: cancel a GOTO."""
 
     letter = b"M"
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.cancel_goto(self)
 
     def describe(self) -> str:
         return "cancel goto"
@@ -520,6 +575,9 @@ class GetPointingState(_Letter):
             allowed_bytes(b"EW"),
             lambda body: PointingState(PointingSide(body.decode())),
         )
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_pointing_state(self)
 
     def describe(self) -> str:
         return "get pointing state"

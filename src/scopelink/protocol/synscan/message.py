@@ -3,7 +3,8 @@
 A `Command` carries everything about one command: the first bytes it may start with and the
 length of its frame (`Command.frames`), its encoding (`Command.encode`), its decoding from a frame
 (`Command.decode`), the shape of its reply (`Command.reply_shape`) and how that reply is read
-(`Command.scan_reply`). A `Reply` knows its bytes (`Reply.encode`). The dispatch tables of the
+(`Command.scan_reply`), and which method of a `CommandHandler` answers it
+(`Command.dispatch`). A `Reply` knows its bytes (`Reply.encode`). The dispatch tables of the
 codec (`scopelink.protocol.synscan.tables`) are derived from these classes."""
 
 from __future__ import annotations
@@ -11,13 +12,16 @@ from __future__ import annotations
 from abc import abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Self
+from typing import TYPE_CHECKING, ClassVar, Self, TypeVar
 
 from scopelink.protocol.base import Message, NeedData
 from scopelink.protocol.synscan.angles import HASH
 
 if TYPE_CHECKING:
+    from scopelink.protocol.synscan.handler import CommandHandler
     from scopelink.protocol.synscan.tables import AnyReply
+
+T = TypeVar("T")
 
 TERMINATOR: bytes = bytes((HASH,))
 """The ``#`` that ends every reply, as bytes."""
@@ -89,6 +93,11 @@ class Command(Message):
     @abstractmethod
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         """Look for this command's reply at the start of ``buffer``, as far as its bytes go."""
+
+    @abstractmethod
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        """Call the method of ``handler`` that answers this command (`GetRaDec` calls
+        ``handler.get_ra_dec(self)``)."""
 
 
 class Reply(Message):

@@ -20,6 +20,7 @@ from scopelink.protocol.synscan.message import (
     Mismatch,
     ReplyShape,
     ScanResult,
+    T,
     letter_frames,
 )
 from scopelink.protocol.synscan.replies import (
@@ -31,6 +32,7 @@ from scopelink.protocol.synscan.replies import (
 from scopelink.protocol.synscan.values import Axis, check_range
 
 if TYPE_CHECKING:
+    from scopelink.protocol.synscan.handler import CommandHandler
     from scopelink.protocol.synscan.tables import AnyReply
 
 PASSTHROUGH_PAYLOAD_LENGTH: Final = 7
@@ -149,6 +151,9 @@ class VariableRateSlew(PassthroughCommand):
         rate = angles.units_to_rate(self.rate_units)
         return rate if self.positive else -rate
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.variable_rate_slew(self)
+
     def describe(self) -> str:
         sign = "+" if self.positive else "-"
         rate = angles.units_to_rate(self.rate_units)
@@ -188,6 +193,9 @@ class FixedRateSlew(PassthroughCommand):
         direction = _POSITIVE_FIXED if self.positive else _NEGATIVE_FIXED
         return bytes((_FIXED_SLEW_LENGTH, self.axis, direction, self.rate, 0, 0, 0))
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.fixed_rate_slew(self)
+
     def describe(self) -> str:
         if self.rate == 0:
             return f"stop {self.axis.label} (fixed rate 0)"
@@ -222,6 +230,9 @@ class GetDeviceVersion(PassthroughCommand):
 
     def success_reply(self, data: bytes) -> AnyReply:
         return DeviceVersion(data[0], data[1])
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.get_device_version(self)
 
     def describe(self) -> str:
         return f"get {self.axis.label} motor controller version"
@@ -274,6 +285,9 @@ class SlowGoto(_AxisPositionCommand):
     _CODE = _SLOW_GOTO
     _VERB = "slow goto"
 
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.slow_goto(self)
+
 
 class SetAxisPosition(_AxisPositionCommand):
     """``P 4 axis 4 h m l 0``: redefine one axis's current position (24-bit)."""
@@ -281,6 +295,9 @@ class SetAxisPosition(_AxisPositionCommand):
     __slots__ = ()
     _CODE = _SET_POSITION
     _VERB = "set position of"
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.set_axis_position(self)
 
 
 TYPED_PASSTHROUGH: Final[tuple[type[PassthroughCommand], ...]] = (
@@ -329,6 +346,9 @@ class Passthrough(PassthroughCommand):
 
     def success_reply(self, data: bytes) -> AnyReply:
         return PassthroughReply(data)
+
+    def dispatch(self, handler: CommandHandler[T]) -> T:
+        return handler.passthrough(self)
 
     def describe(self) -> str:
         return f"passthrough {self.payload.hex(' ').upper()} (reply {self.reply_length} bytes)"
