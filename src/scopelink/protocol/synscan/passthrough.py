@@ -38,15 +38,10 @@ if TYPE_CHECKING:
 PASSTHROUGH_PAYLOAD_LENGTH: Final = 7
 """Bytes after the ``P``."""
 
-_VARIABLE_SLEW_LENGTH = 3
-_FIXED_SLEW_LENGTH = 2
-_VERSION_QUERY_LENGTH = 1
-_POSITION_LENGTH = 4
 _POSITIVE_VARIABLE, _NEGATIVE_VARIABLE = 6, 7
 _POSITIVE_FIXED, _NEGATIVE_FIXED = 36, 37
 _GET_VERSION = 254
 _SLOW_GOTO, _SET_POSITION = 23, 4
-_DEVICE_VERSION_REPLY_LENGTH = 2
 _MAX_FIXED_RATE = 9
 
 
@@ -104,12 +99,46 @@ class PassthroughCommand(Command):
         return Ack()
 
 
-def _axis(address: int) -> Axis | None:
-    return Axis(address) if address in (Axis.AZM_RA, Axis.ALT_DEC) else None
+class _AxisCommand(PassthroughCommand):
+    """A typed passthrough to one motor controller: ``P length axis code d1 d2 d3 reply_length``.
+
+    A subclass names its ``length``, the codes it may carry and its reply length; it reads and
+    writes only its code and three data bytes."""
+
+    __slots__ = ()
+    axis: Axis
+
+    _LENGTH: ClassVar[int]
+    _CODES: ClassVar[tuple[int, ...]]
+    _REPLY_LENGTH: ClassVar[int] = 0
+
+    @classmethod
+    def from_payload(cls, payload: bytes) -> Self | None:
+        length, address, code, *data, reply_length = payload
+        if (
+            address not in (Axis.AZM_RA, Axis.ALT_DEC)
+            or length != cls._LENGTH
+            or code not in cls._CODES
+            or reply_length != cls._REPLY_LENGTH
+        ):
+            return None
+        return cls._from_data(Axis(address), code, bytes(data))
+
+    @classmethod
+    @abstractmethod
+    def _from_data(cls, axis: Axis, code: int, data: bytes) -> Self | None:
+        """This command from its code and 3 data bytes, or None when they are not its shape."""
+
+    @abstractmethod
+    def _code_and_data(self) -> tuple[int, int, int, int]:
+        """Its code and 3 data bytes."""
+
+    def encode_payload(self) -> bytes:
+        return bytes((self._LENGTH, self.axis, *self._code_and_data(), self._REPLY_LENGTH))
 
 
 @dataclass(frozen=True, slots=True)
-class VariableRateSlew(PassthroughCommand):
+class VariableRateSlew(_AxisCommand):
     """``P 3 axis 6|7 hi lo 0 0``: slew one axis at a variable rate (quarter arcsec/s units)."""
 
     axis: Axis
@@ -117,6 +146,8 @@ class VariableRateSlew(PassthroughCommand):
     rate_units: int
 
     changes_mount = True
+    _LENGTH = 3
+    _CODES = (_POSITIVE_VARIABLE, _NEGATIVE_VARIABLE)
 
     def __post_init__(self) -> None:
         check_range("rate_units", self.rate_units, 0, angles.MAX_RATE_UNITS)
@@ -127,23 +158,13 @@ class VariableRateSlew(PassthroughCommand):
         return cls(axis, arcsec_per_second >= 0, angles.rate_to_units(arcsec_per_second))
 
     @classmethod
-    def from_payload(cls, payload: bytes) -> Self | None:
-        length, address, code, high, low, data3, reply_length = payload
-        axis = _axis(address)
-        if (
-            axis is None
-            or length != _VARIABLE_SLEW_LENGTH
-            or code not in (_POSITIVE_VARIABLE, _NEGATIVE_VARIABLE)
-            or data3 != 0
-            or reply_length != 0
-        ):
-            return None
-        return cls(axis, code == _POSITIVE_VARIABLE, (high << 8) | low)
+    def _from_data(cls, axis: Axis, code: int, data: bytes) -> Self | None:
+        high, low, last = data
+        return None if last else cls(axis, code == _POSITIVE_VARIABLE, (high << 8) | low)
 
-    def encode_payload(self) -> bytes:
+    def _code_and_data(self) -> tuple[int, int, int, int]:
         high, low = angles.rate_units_to_bytes(self.rate_units)
-        direction = _POSITIVE_VARIABLE if self.positive else _NEGATIVE_VARIABLE
-        return bytes((_VARIABLE_SLEW_LENGTH, self.axis, direction, high, low, 0, 0))
+        return (_POSITIVE_VARIABLE if self.positive else _NEGATIVE_VARIABLE), high, low, 0
 
     @property
     def arcsec_per_second(self) -> float:
@@ -161,7 +182,7 @@ class VariableRateSlew(PassthroughCommand):
 
 
 @dataclass(frozen=True, slots=True)
-class FixedRateSlew(PassthroughCommand):
+class FixedRateSlew(_AxisCommand):
     """``P 2 axis 36|37 rate 0 0 0``: slew one axis at a hand-control speed 1-9; 0 stops."""
 
     axis: Axis
@@ -169,29 +190,21 @@ class FixedRateSlew(PassthroughCommand):
     rate: int
 
     changes_mount = True
+    _LENGTH = 2
+    _CODES = (_POSITIVE_FIXED, _NEGATIVE_FIXED)
 
     def __post_init__(self) -> None:
         check_range("rate", self.rate, 0, _MAX_FIXED_RATE)
 
     @classmethod
-    def from_payload(cls, payload: bytes) -> Self | None:
-        length, address, code, rate, data2, data3, reply_length = payload
-        axis = _axis(address)
-        if (
-            axis is None
-            or length != _FIXED_SLEW_LENGTH
-            or code not in (_POSITIVE_FIXED, _NEGATIVE_FIXED)
-            or rate > _MAX_FIXED_RATE
-            or data2 != 0
-            or data3 != 0
-            or reply_length != 0
-        ):
+    def _from_data(cls, axis: Axis, code: int, data: bytes) -> Self | None:
+        rate, *rest = data
+        if rate > _MAX_FIXED_RATE or any(rest):
             return None
         return cls(axis, code == _POSITIVE_FIXED, rate)
 
-    def encode_payload(self) -> bytes:
-        direction = _POSITIVE_FIXED if self.positive else _NEGATIVE_FIXED
-        return bytes((_FIXED_SLEW_LENGTH, self.axis, direction, self.rate, 0, 0, 0))
+    def _code_and_data(self) -> tuple[int, int, int, int]:
+        return (_POSITIVE_FIXED if self.positive else _NEGATIVE_FIXED), self.rate, 0, 0
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.fixed_rate_slew(self)
@@ -204,29 +217,21 @@ class FixedRateSlew(PassthroughCommand):
 
 
 @dataclass(frozen=True, slots=True)
-class GetDeviceVersion(PassthroughCommand):
+class GetDeviceVersion(_AxisCommand):
     """``P 1 axis 254 0 0 0 2``: read a motor controller's firmware version."""
 
     axis: Axis
 
-    @classmethod
-    def from_payload(cls, payload: bytes) -> Self | None:
-        length, address, code, data1, data2, data3, reply_length = payload
-        axis = _axis(address)
-        if (
-            axis is None
-            or length != _VERSION_QUERY_LENGTH
-            or code != _GET_VERSION
-            or (data1, data2, data3) != (0, 0, 0)
-            or reply_length != _DEVICE_VERSION_REPLY_LENGTH
-        ):
-            return None
-        return cls(axis)
+    _LENGTH = 1
+    _CODES = (_GET_VERSION,)
+    _REPLY_LENGTH = 2
 
-    def encode_payload(self) -> bytes:
-        return bytes(
-            (_VERSION_QUERY_LENGTH, self.axis, _GET_VERSION, 0, 0, 0, _DEVICE_VERSION_REPLY_LENGTH)
-        )
+    @classmethod
+    def _from_data(cls, axis: Axis, code: int, data: bytes) -> Self | None:
+        return None if any(data) else cls(axis)
+
+    def _code_and_data(self) -> tuple[int, int, int, int]:
+        return _GET_VERSION, 0, 0, 0
 
     def success_reply(self, data: bytes) -> AnyReply:
         return DeviceVersion(data[0], data[1])
@@ -239,14 +244,14 @@ class GetDeviceVersion(PassthroughCommand):
 
 
 @dataclass(frozen=True, slots=True)
-class _AxisPositionCommand(PassthroughCommand):
+class _AxisPositionCommand(_AxisCommand):
     """Shared shape of the passthrough commands that carry one 24-bit axis position."""
 
     axis: Axis
     position: int
 
     changes_mount = True
-    _CODE: ClassVar[int]
+    _LENGTH = 4
     _VERB: ClassVar[str] = ""
 
     def __post_init__(self) -> None:
@@ -258,16 +263,11 @@ class _AxisPositionCommand(PassthroughCommand):
         return cls(axis, angles.degrees_to_position24(degrees))
 
     @classmethod
-    def from_payload(cls, payload: bytes) -> Self | None:
-        length, address, code, data1, data2, data3, reply_length = payload
-        axis = _axis(address)
-        if axis is None or length != _POSITION_LENGTH or code != cls._CODE or reply_length != 0:
-            return None
-        return cls(axis, angles.bytes_to_position24(data1, data2, data3))
+    def _from_data(cls, axis: Axis, code: int, data: bytes) -> Self | None:
+        return cls(axis, angles.bytes_to_position24(*data))
 
-    def encode_payload(self) -> bytes:
-        position = angles.position24_to_bytes(self.position)
-        return bytes((_POSITION_LENGTH, self.axis, self._CODE, *position, 0))
+    def _code_and_data(self) -> tuple[int, int, int, int]:
+        return self._CODES[0], *angles.position24_to_bytes(self.position)
 
     @property
     def degrees(self) -> float:
@@ -282,7 +282,7 @@ class SlowGoto(_AxisPositionCommand):
     """``P 4 axis 23 h m l 0``: slow goto of one axis to a 24-bit position."""
 
     __slots__ = ()
-    _CODE = _SLOW_GOTO
+    _CODES = (_SLOW_GOTO,)
     _VERB = "slow goto"
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
@@ -293,7 +293,7 @@ class SetAxisPosition(_AxisPositionCommand):
     """``P 4 axis 4 h m l 0``: redefine one axis's current position (24-bit)."""
 
     __slots__ = ()
-    _CODE = _SET_POSITION
+    _CODES = (_SET_POSITION,)
     _VERB = "set position of"
 
     def dispatch(self, handler: CommandHandler[T]) -> T:

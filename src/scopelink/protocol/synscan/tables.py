@@ -10,95 +10,52 @@ from __future__ import annotations
 from typing import Final, get_args
 
 from scopelink.protocol.base import NEED_DATA
-from scopelink.protocol.synscan.commands import (
-    CancelGoto,
-    Echo,
-    GetAzAlt,
-    GetLocation,
-    GetModel,
-    GetPointingState,
-    GetRaDec,
-    GetTime,
-    GetTrackingMode,
-    GetVersion,
-    GotoAzAlt,
-    GotoRaDec,
-    IsAligned,
-    IsGotoInProgress,
-    SetLocation,
-    SetTime,
-    SetTrackingMode,
-    SyncRaDec,
-)
+from scopelink.protocol.synscan import commands, passthrough, replies
 from scopelink.protocol.synscan.message import FieldError, Mismatch, ReplyShape, ScanResult
-from scopelink.protocol.synscan.passthrough import (
-    FixedRateSlew,
-    GetDeviceVersion,
-    Passthrough,
-    SetAxisPosition,
-    SlowGoto,
-    VariableRateSlew,
-)
-from scopelink.protocol.synscan.replies import (
-    Ack,
-    Aligned,
-    DateTime,
-    DeviceVersion,
-    EchoReply,
-    GotoInProgress,
-    Location,
-    Model,
-    PassthroughFailed,
-    PassthroughReply,
-    PointingState,
-    Position,
-    TrackingModeReply,
-    Version,
-)
 
 AnyCommand = (
-    GetRaDec
-    | GetAzAlt
-    | GotoRaDec
-    | GotoAzAlt
-    | SyncRaDec
-    | GetTrackingMode
-    | SetTrackingMode
-    | VariableRateSlew
-    | FixedRateSlew
-    | GetDeviceVersion
-    | SlowGoto
-    | SetAxisPosition
-    | Passthrough
-    | GetLocation
-    | SetLocation
-    | GetTime
-    | SetTime
-    | GetVersion
-    | GetModel
-    | Echo
-    | IsAligned
-    | IsGotoInProgress
-    | CancelGoto
-    | GetPointingState
+    commands.GetRaDec
+    | commands.GetAzAlt
+    | commands.GotoRaDec
+    | commands.GotoAzAlt
+    | commands.SyncRaDec
+    | commands.GetTrackingMode
+    | commands.SetTrackingMode
+    | passthrough.VariableRateSlew
+    | passthrough.FixedRateSlew
+    | passthrough.GetDeviceVersion
+    | passthrough.SlowGoto
+    | passthrough.SetAxisPosition
+    | passthrough.Passthrough
+    | commands.GetLocation
+    | commands.SetLocation
+    | commands.GetTime
+    | commands.SetTime
+    | commands.GetVersion
+    | commands.GetModel
+    | commands.Echo
+    | commands.IsAligned
+    | commands.IsGotoInProgress
+    | commands.CancelGoto
+    | commands.GetPointingState
 )
 """The closed union of every SynScan command (for exhaustive ``match``)."""
 
 AnyReply = (
-    Ack
-    | Position
-    | TrackingModeReply
-    | Location
-    | DateTime
-    | Version
-    | Model
-    | EchoReply
-    | Aligned
-    | GotoInProgress
-    | PointingState
-    | DeviceVersion
-    | PassthroughReply
-    | PassthroughFailed
+    replies.Ack
+    | replies.Position
+    | replies.TrackingModeReply
+    | replies.Location
+    | replies.DateTime
+    | replies.Version
+    | replies.Model
+    | replies.EchoReply
+    | replies.Aligned
+    | replies.GotoInProgress
+    | replies.PointingState
+    | replies.DeviceVersion
+    | replies.PassthroughReply
+    | replies.PassthroughFailed
 )
 """The closed union of every SynScan reply."""
 
