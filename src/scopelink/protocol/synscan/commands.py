@@ -7,6 +7,7 @@ by a terminator: binary payloads (``W``, ``H``, ``K``, ``T``) may hold any byte.
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Self
 
@@ -347,17 +348,46 @@ class SetTrackingMode(_Acknowledged):
 _EIGHT_BYTES = ReplyShape((9,), "8 binary bytes, '#'")
 
 
-@dataclass(frozen=True, slots=True)
-class GetLocation(_Letter):
-    """``w``: read the site location."""
+class _ReadEightBytes(_Letter):
+    """Reads a value of 8 binary bytes (`Location`, `DateTime`); its flag bytes are 0 or 1."""
 
-    letter = b"w"
+    __slots__ = ()
+    _VALUE: ClassVar[type[Location] | type[DateTime]]
+    _FLAGS: ClassVar[tuple[int, ...]]
 
     def reply_shape(self) -> ReplyShape:
         return _EIGHT_BYTES
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
-        return scan_terminated(buffer, 8, flag_check(3, 7), Location.from_body)
+        return scan_terminated(buffer, 8, flag_check(*self._FLAGS), self._VALUE.from_body)
+
+
+class _SetEightBytes(_Acknowledged):
+    """Sets a value of 8 binary bytes: its letter, then the bytes of its reply form."""
+
+    __slots__ = ()
+    _LETTER: ClassVar[bytes]
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "_LETTER" in cls.__dict__:
+            cls.frames = letter_frames(cls._LETTER, 9)
+
+    @abstractmethod
+    def _value(self) -> Location | DateTime:
+        """The value set."""
+
+    def encode(self) -> bytes:
+        return self._LETTER + self._value().body()
+
+
+@dataclass(frozen=True, slots=True)
+class GetLocation(_ReadEightBytes):
+    """``w``: read the site location."""
+
+    letter = b"w"
+    _VALUE = Location
+    _FLAGS = (3, 7)
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.get_location(self)
@@ -367,20 +397,20 @@ class GetLocation(_Letter):
 
 
 @dataclass(frozen=True, slots=True)
-class SetLocation(_Acknowledged):
+class SetLocation(_SetEightBytes):
     """``W`` + 8 bytes: set the site location."""
 
     location: Location
 
-    frames = letter_frames(b"W", 9)
+    _LETTER = b"W"
 
     @classmethod
     def decode(cls, frame: bytes) -> Self | FieldError:
         location = Location.from_body(frame[1:])
         return location.shifted(1) if isinstance(location, FieldError) else cls(location)
 
-    def encode(self) -> bytes:
-        return b"W" + self.location.body()
+    def _value(self) -> Location:
+        return self.location
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.set_location(self)
@@ -390,16 +420,12 @@ class SetLocation(_Acknowledged):
 
 
 @dataclass(frozen=True, slots=True)
-class GetTime(_Letter):
+class GetTime(_ReadEightBytes):
     """``h``: read the local date, time and time zone."""
 
     letter = b"h"
-
-    def reply_shape(self) -> ReplyShape:
-        return _EIGHT_BYTES
-
-    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
-        return scan_terminated(buffer, 8, flag_check(7), DateTime.from_body)
+    _VALUE = DateTime
+    _FLAGS = (7,)
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.get_time(self)
@@ -409,20 +435,20 @@ class GetTime(_Letter):
 
 
 @dataclass(frozen=True, slots=True)
-class SetTime(_Acknowledged):
+class SetTime(_SetEightBytes):
     """``H`` + 8 bytes: set the local date, time and time zone."""
 
     time: DateTime
 
-    frames = letter_frames(b"H", 9)
+    _LETTER = b"H"
 
     @classmethod
     def decode(cls, frame: bytes) -> Self | FieldError:
         time = DateTime.from_body(frame[1:])
         return time.shifted(1) if isinstance(time, FieldError) else cls(time)
 
-    def encode(self) -> bytes:
-        return b"H" + self.time.body()
+    def _value(self) -> DateTime:
+        return self.time
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.set_time(self)
