@@ -108,7 +108,7 @@ def _sample_reply(command: synscan.AnyCommand) -> synscan.AnyReply:
     """A reply the hand control may send to ``command``."""
     if isinstance(command, synscan.GetRaDec | synscan.GetAzAlt):
         return synscan.Position(
-            command.frame, 0x1234 << 8 if command.precise else 0x1234, 0, command.precise
+            command.coordinates, 0x1234 << 8 if command.precise else 0x1234, 0, command.precise
         )
     if isinstance(command, synscan.Echo):
         return synscan.EchoReply(command.value)

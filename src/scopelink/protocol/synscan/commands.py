@@ -119,7 +119,8 @@ class _PositionQuery(_Precise):
 
     precise: bool = True
 
-    frame: ClassVar[Frame]
+    coordinates: ClassVar[Frame]
+    """Which pair of coordinates the reply carries."""
 
     @classmethod
     def decode(cls, frame: bytes) -> Self:
@@ -133,7 +134,7 @@ class _PositionQuery(_Precise):
         return ReplyShape((2 * width + 2,), f"{width} hex, ',', {width} hex, '#'")
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
-        return Position.scan(buffer, self.frame, self.precise)
+        return Position.scan(buffer, self.coordinates, self.precise)
 
 
 class GetRaDec(_PositionQuery):
@@ -142,7 +143,7 @@ class GetRaDec(_PositionQuery):
     __slots__ = ()
     letters = b"Ee"
     frames = letter_frames(letters, 1)
-    frame = Frame.EQUATORIAL
+    coordinates = Frame.EQUATORIAL
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.get_ra_dec(self)
@@ -157,7 +158,7 @@ class GetAzAlt(_PositionQuery):
     __slots__ = ()
     letters = b"Zz"
     frames = letter_frames(letters, 1)
-    frame = Frame.HORIZONTAL
+    coordinates = Frame.HORIZONTAL
 
     def dispatch(self, handler: CommandHandler[T]) -> T:
         return handler.get_az_alt(self)
