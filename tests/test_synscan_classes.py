@@ -104,7 +104,7 @@ def test_a_frame_decodes_to_exactly_one_class() -> None:
             assert sum(isinstance(d, synscan.Command) for d in decoded) <= 1, (frame, decoded)
 
 
-def _sample_reply(command: synscan.AnyCommand) -> synscan.AnyReply:
+def _sample_reply(command: synscan.AnyCommand) -> synscan.Reply:
     """A reply the hand control may send to ``command``."""
     if isinstance(command, synscan.GetRaDec | synscan.GetAzAlt):
         return synscan.Position(
@@ -160,12 +160,13 @@ def test_each_command_dispatches_to_the_handler_method_named_after_it(
     command: synscan.AnyCommand,
 ) -> None:
     handler = cast(synscan.CommandHandler[str], _NamingHandler())
-    assert command.dispatch(handler) == _snake(type(command).__name__)
+    assert synscan.dispatch(command, handler) == _snake(type(command).__name__)
 
 
 def test_the_handler_protocol_has_one_method_per_command_class() -> None:
     protocol_methods = {name for name in vars(synscan.CommandHandler) if not name.startswith("_")}
-    assert protocol_methods == {_snake(cls.__name__) for cls in synscan.COMMANDS}
+    assert protocol_methods == {cls.handler_name for cls in synscan.COMMANDS}
+    assert len(protocol_methods) == len(synscan.COMMANDS)
 
 
 def test_exactly_the_commands_that_move_or_set_something_change_the_mount() -> None:

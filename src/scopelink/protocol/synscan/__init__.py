@@ -49,7 +49,7 @@ from scopelink.protocol.synscan.events import (
     UnexpectedData,
     UnknownCommand,
 )
-from scopelink.protocol.synscan.handler import CommandHandler
+from scopelink.protocol.synscan.handler import CommandHandler, dispatch
 from scopelink.protocol.synscan.message import (
     Command,
     Complete,
@@ -182,6 +182,7 @@ __all__ = [
     "Version",
     "VersionDialect",
     "decode_command_frame",
+    "dispatch",
     "encode_command",
     "encode_reply",
     "frame_length",

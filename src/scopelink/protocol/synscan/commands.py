@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, Self
+from typing import Any, ClassVar, Self
 
 from scopelink.protocol.synscan import angles
 from scopelink.protocol.synscan.message import (
@@ -17,7 +17,6 @@ from scopelink.protocol.synscan.message import (
     FieldError,
     ReplyShape,
     ScanResult,
-    T,
     letter_frames,
 )
 from scopelink.protocol.synscan.replies import (
@@ -52,9 +51,6 @@ from scopelink.protocol.synscan.values import (
     precision_word,
     ra_dec_units,
 )
-
-if TYPE_CHECKING:
-    from scopelink.protocol.synscan.handler import CommandHandler
 
 _ACK_SHAPE = ReplyShape((1,), "'#'")
 
@@ -145,9 +141,6 @@ class GetRaDec(_PositionQuery):
     frames = letter_frames(letters, 1)
     coordinates = Frame.EQUATORIAL
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_ra_dec(self)
-
     def describe(self) -> str:
         return f"get {precision_word(self.precise)}RA/Dec"
 
@@ -159,9 +152,6 @@ class GetAzAlt(_PositionQuery):
     letters = b"Zz"
     frames = letter_frames(letters, 1)
     coordinates = Frame.HORIZONTAL
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_az_alt(self)
 
     def describe(self) -> str:
         return f"get {precision_word(self.precise)}Az/Alt"
@@ -231,9 +221,6 @@ class GotoRaDec(_RaDecTarget):
     frames = _pair_frames(letters)
     _VERB = "goto"
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.goto_ra_dec(self)
-
 
 class SyncRaDec(_RaDecTarget):
     """``S`` (or ``s`` when precise): sync on RA/Dec (J2000)."""
@@ -242,9 +229,6 @@ class SyncRaDec(_RaDecTarget):
     letters = b"Ss"
     frames = _pair_frames(letters)
     _VERB = "sync"
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.sync_ra_dec(self)
 
 
 @dataclass(frozen=True, slots=True)
@@ -289,9 +273,6 @@ class GotoAzAlt(_Precise, _Acknowledged):
         """Altitude in degrees, two's complement read: [-180, 180)."""
         return angles.units_to_signed_degrees(self.alt_units, self.precise)
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.goto_az_alt(self)
-
     def describe(self) -> str:
         detail = describe_az_alt(self.az_units, self.alt_units, self.precise)
         return f"{precision_word(self.precise)}goto {detail}"
@@ -311,9 +292,6 @@ class GetTrackingMode(_Letter):
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return scan_terminated(buffer, 1, None, lambda body: TrackingModeReply(body[0]))
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_tracking_mode(self)
 
     def describe(self) -> str:
         return "get tracking mode"
@@ -336,9 +314,6 @@ class SetTrackingMode(_Acknowledged):
 
     def encode(self) -> bytes:
         return bytes((ord("T"), self.mode))
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.set_tracking_mode(self)
 
     def describe(self) -> str:
         return f"set tracking mode {describe_tracking(self.mode)}"
@@ -390,9 +365,6 @@ class GetLocation(_ReadEightBytes):
     _VALUE = Location
     _FLAGS = (3, 7)
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_location(self)
-
     def describe(self) -> str:
         return "get location"
 
@@ -413,9 +385,6 @@ class SetLocation(_SetEightBytes):
     def _value(self) -> Location:
         return self.location
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.set_location(self)
-
     def describe(self) -> str:
         return f"set location {self.location.describe()}"
 
@@ -427,9 +396,6 @@ class GetTime(_ReadEightBytes):
     letter = b"h"
     _VALUE = DateTime
     _FLAGS = (7,)
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_time(self)
 
     def describe(self) -> str:
         return "get time"
@@ -450,9 +416,6 @@ class SetTime(_SetEightBytes):
 
     def _value(self) -> DateTime:
         return self.time
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.set_time(self)
 
     def describe(self) -> str:
         return f"set time {self.time.describe()}"
@@ -475,9 +438,6 @@ class GetVersion(_Letter):
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return Version.scan(buffer)
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_version(self)
-
     def describe(self) -> str:
         return "get hand control version"
 
@@ -493,9 +453,6 @@ class GetModel(_Letter):
 
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         return Model.scan(buffer)
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_model(self)
 
     def describe(self) -> str:
         return "get mount model"
@@ -526,9 +483,6 @@ class Echo(Command):
         check = allowed_bytes(bytes((self.value,)))
         return scan_terminated(buffer, 1, check, lambda body: EchoReply(body[0]))
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.echo(self)
-
     def describe(self) -> str:
         return f"echo {describe_byte(self.value)}"
 
@@ -545,9 +499,6 @@ class IsAligned(_Letter):
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         check = allowed_bytes(b"\x00\x01")
         return scan_terminated(buffer, 1, check, lambda body: Aligned(body[0] == 1))
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.is_aligned(self)
 
     def describe(self) -> str:
         return "is alignment complete?"
@@ -566,9 +517,6 @@ class IsGotoInProgress(_Letter):
         check = allowed_bytes(b"01")
         return scan_terminated(buffer, 1, check, lambda body: GotoInProgress(body == b"1"))
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.is_goto_in_progress(self)
-
     def describe(self) -> str:
         return "is goto in progress?"
 
@@ -578,9 +526,6 @@ class CancelGoto(_Letter, _Acknowledged):
     """``M``: cancel a GOTO."""
 
     letter = b"M"
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.cancel_goto(self)
 
     def describe(self) -> str:
         return "cancel goto"
@@ -602,9 +547,6 @@ class GetPointingState(_Letter):
             allowed_bytes(b"EW"),
             lambda body: PointingState(PointingSide(body.decode())),
         )
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_pointing_state(self)
 
     def describe(self) -> str:
         return "get pointing state"

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections import deque
 from enum import Enum
+from typing import cast
 
 from scopelink.protocol.base import NEED_DATA, LocalProtocolError, NeedData
 from scopelink.protocol.synscan.angles import HASH
@@ -108,7 +109,7 @@ class SynScanClientConnection:
         self._take(result.length)
         self._state = ClientState.IDLE
         self._resynchronising = False
-        return result.reply
+        return cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
 
     def reset(self) -> bytes:
         """Forget the command in flight and drop buffered bytes (returned); start

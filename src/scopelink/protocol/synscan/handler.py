@@ -1,14 +1,17 @@
-"""The other end of `Command.dispatch`: whatever answers SynScan commands (an emulated hand
-control) implements one method per command class, named after the class in snake case
-(`GetRaDec` -> ``get_ra_dec``). A new command class adds a method here, so a type checker finds
-every handler that does not answer it yet."""
+"""Answering SynScan commands: whatever answers them (an emulated hand control) implements
+`CommandHandler`, one method per command class named after it (`Command.handler_name`: `GetRaDec`
+-> ``get_ra_dec``), and calls `dispatch`. A new command class adds a method here, so a type checker
+finds every handler that does not answer it yet."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol, TypeVar
 
 from scopelink.protocol.synscan import commands, passthrough
+from scopelink.protocol.synscan.tables import AnyCommand
 
+T = TypeVar("T")
 T_co = TypeVar("T_co", covariant=True)
 
 
@@ -62,3 +65,9 @@ class CommandHandler(Protocol[T_co]):
     def cancel_goto(self, command: commands.CancelGoto, /) -> T_co: ...
 
     def get_pointing_state(self, command: commands.GetPointingState, /) -> T_co: ...
+
+
+def dispatch(command: AnyCommand, handler: CommandHandler[T]) -> T:
+    """Call the method of ``handler`` that answers ``command`` (`Command.handler_name`)."""
+    answer: Callable[[AnyCommand], T] = getattr(handler, command.handler_name)
+    return answer(command)

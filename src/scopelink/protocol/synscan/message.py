@@ -4,24 +4,19 @@ A `Command` carries everything about one command: the first bytes it may start w
 length of its frame (`Command.frames`), its encoding (`Command.encode`), its decoding from a frame
 (`Command.decode`), the shape of its reply (`Command.reply_shape`) and how that reply is read
 (`Command.scan_reply`), and which method of a `CommandHandler` answers it
-(`Command.dispatch`). A `Reply` knows its bytes (`Reply.encode`). The dispatch tables of the
+(`Command.handler_name`). A `Reply` knows its bytes (`Reply.encode`). The dispatch tables of the
 codec (`scopelink.protocol.synscan.tables`) are derived from these classes."""
 
 from __future__ import annotations
 
+import re
 from abc import abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Self, TypeVar
+from typing import Any, ClassVar, Self
 
 from scopelink.protocol.base import Message, NeedData
 from scopelink.protocol.synscan.angles import HASH
-
-if TYPE_CHECKING:
-    from scopelink.protocol.synscan.handler import CommandHandler
-    from scopelink.protocol.synscan.tables import AnyReply
-
-T = TypeVar("T")
 
 TERMINATOR: bytes = bytes((HASH,))
 """The ``#`` that ends every reply, as bytes."""
@@ -53,7 +48,7 @@ class FieldError:
 class Complete:
     """A whole reply was found at the start of the buffer; it took ``length`` bytes."""
 
-    reply: AnyReply
+    reply: Reply
     length: int
 
 
@@ -80,6 +75,14 @@ class Command(Message):
     changes_mount: ClassVar[bool] = False
     """Whether it moves the mount or changes a setting (a read-only server refuses it)."""
 
+    handler_name: ClassVar[str]
+    """The method of a `CommandHandler` that answers it: the class name in snake case
+    (`GetRaDec` -> ``get_ra_dec``)."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.handler_name = re.sub(r"(?<!^)(?=[A-Z])", "_", cls.__name__.lstrip("_")).lower()
+
     @classmethod
     @abstractmethod
     def decode(cls, frame: bytes) -> Self | FieldError | None:
@@ -93,11 +96,6 @@ class Command(Message):
     @abstractmethod
     def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
         """Look for this command's reply at the start of ``buffer``, as far as its bytes go."""
-
-    @abstractmethod
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        """Call the method of ``handler`` that answers this command (`GetRaDec` calls
-        ``handler.get_ra_dec(self)``)."""
 
 
 class Reply(Message):

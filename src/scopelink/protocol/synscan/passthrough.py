@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Final, Self
+from typing import ClassVar, Final, Self
 
 from scopelink.protocol.base import NEED_DATA
 from scopelink.protocol.synscan import angles
@@ -18,9 +18,9 @@ from scopelink.protocol.synscan.message import (
     Command,
     Complete,
     Mismatch,
+    Reply,
     ReplyShape,
     ScanResult,
-    T,
     letter_frames,
 )
 from scopelink.protocol.synscan.replies import (
@@ -30,10 +30,6 @@ from scopelink.protocol.synscan.replies import (
     PassthroughReply,
 )
 from scopelink.protocol.synscan.values import Axis, check_range
-
-if TYPE_CHECKING:
-    from scopelink.protocol.synscan.handler import CommandHandler
-    from scopelink.protocol.synscan.tables import AnyReply
 
 PASSTHROUGH_PAYLOAD_LENGTH: Final = 7
 """Bytes after the ``P``."""
@@ -94,7 +90,7 @@ class PassthroughCommand(Command):
             )
         return Complete(PassthroughFailed(data, buffer[count]), count + 2)
 
-    def success_reply(self, data: bytes) -> AnyReply:
+    def success_reply(self, data: bytes) -> Reply:
         """The reply when the motor controller answered ``data``."""
         return Ack()
 
@@ -172,9 +168,6 @@ class VariableRateSlew(_AxisCommand):
         rate = angles.units_to_rate(self.rate_units)
         return rate if self.positive else -rate
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.variable_rate_slew(self)
-
     def describe(self) -> str:
         sign = "+" if self.positive else "-"
         rate = angles.units_to_rate(self.rate_units)
@@ -206,9 +199,6 @@ class FixedRateSlew(_AxisCommand):
     def _code_and_data(self) -> tuple[int, int, int, int]:
         return (_POSITIVE_FIXED if self.positive else _NEGATIVE_FIXED), self.rate, 0, 0
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.fixed_rate_slew(self)
-
     def describe(self) -> str:
         if self.rate == 0:
             return f"stop {self.axis.label} (fixed rate 0)"
@@ -233,11 +223,8 @@ class GetDeviceVersion(_AxisCommand):
     def _code_and_data(self) -> tuple[int, int, int, int]:
         return _GET_VERSION, 0, 0, 0
 
-    def success_reply(self, data: bytes) -> AnyReply:
+    def success_reply(self, data: bytes) -> Reply:
         return DeviceVersion(data[0], data[1])
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.get_device_version(self)
 
     def describe(self) -> str:
         return f"get {self.axis.label} motor controller version"
@@ -285,9 +272,6 @@ class SlowGoto(_AxisPositionCommand):
     _CODES = (_SLOW_GOTO,)
     _VERB = "slow goto"
 
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.slow_goto(self)
-
 
 class SetAxisPosition(_AxisPositionCommand):
     """``P 4 axis 4 h m l 0``: redefine one axis's current position (24-bit)."""
@@ -295,9 +279,6 @@ class SetAxisPosition(_AxisPositionCommand):
     __slots__ = ()
     _CODES = (_SET_POSITION,)
     _VERB = "set position of"
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.set_axis_position(self)
 
 
 TYPED_PASSTHROUGH: Final[tuple[type[PassthroughCommand], ...]] = (
@@ -344,11 +325,8 @@ class Passthrough(PassthroughCommand):
     def encode_payload(self) -> bytes:
         return self.payload
 
-    def success_reply(self, data: bytes) -> AnyReply:
+    def success_reply(self, data: bytes) -> Reply:
         return PassthroughReply(data)
-
-    def dispatch(self, handler: CommandHandler[T]) -> T:
-        return handler.passthrough(self)
 
     def describe(self) -> str:
         return f"passthrough {self.payload.hex(' ').upper()} (reply {self.reply_length} bytes)"

@@ -8,15 +8,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Final
+from typing import Final
 
 from scopelink.protocol.base import NEED_DATA
 from scopelink.protocol.synscan import angles
 from scopelink.protocol.synscan.angles import HASH
-from scopelink.protocol.synscan.message import Complete, FieldError, Mismatch, ScanResult
-
-if TYPE_CHECKING:
-    from scopelink.protocol.synscan.tables import AnyReply
+from scopelink.protocol.synscan.message import Complete, FieldError, Mismatch, Reply, ScanResult
 
 ByteCheck = Callable[[int, int], str | None]
 """Checks payload byte ``value`` at ``index``; returns why it is wrong, or None."""
@@ -26,7 +23,7 @@ def scan_terminated(
     buffer: bytes | bytearray,
     body_length: int,
     check: ByteCheck | None,
-    build: Callable[[bytes], AnyReply | FieldError],
+    build: Callable[[bytes], Reply | FieldError],
 ) -> ScanResult:
     """A fixed-length body, each byte checked as it arrives, then ``#``."""
     for index, value in enumerate(buffer[: body_length + 1]):

@@ -158,7 +158,7 @@ class SynScanHandControl:
         ``#`` where 18 bytes are due, or an old position, would be read as data.
         """
         try:
-            return await command.dispatch(self)
+            return await synscan.dispatch(command, self)
         except SunAvoidanceError as error:  # shown at the default log level: it matters by day
             logger.warning("%s refused: %s", command.describe(), error)
             return synscan.Ack()
