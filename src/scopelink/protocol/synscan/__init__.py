@@ -10,6 +10,7 @@ One concern per module:
 - `commands`: the command classes (letters, frame lengths, encoding, decoding, reply shape);
 - `passthrough`: the ``P`` + 7 bytes commands;
 - `tables`: `AnyCommand`, `AnyReply` and the tables derived from the classes;
+- `handler`: `CommandHandler`, one method per command, and `dispatch`;
 - `parser`: length-framed parsing of the command stream (`CommandParser`);
 - `events`: the error events;
 - `connection`: `SynScanClientConnection` (PC side) and `SynScanServerConnection` (hand-control
