@@ -96,7 +96,7 @@ class _Precise(Command):
 
     precise: bool
 
-    def letter(self) -> bytes:
+    def sent_letter(self) -> bytes:
         """The letter this command is sent with."""
         return self.letters[1:] if self.precise else self.letters[:1]
 
@@ -123,7 +123,7 @@ class _PositionQuery(_Precise):
         return cls(precise=cls.is_precise(frame))
 
     def encode(self) -> bytes:
-        return self.letter()
+        return self.sent_letter()
 
     def reply_shape(self) -> ReplyShape:
         width = angles.hex_width(self.precise)
@@ -196,7 +196,7 @@ class _RaDecTarget(_Precise, _Acknowledged):
         return pair if isinstance(pair, FieldError) else cls(*pair)
 
     def encode(self) -> bytes:
-        return self.letter() + encode_hex_pair(self.ra_units, self.dec_units, self.precise)
+        return self.sent_letter() + encode_hex_pair(self.ra_units, self.dec_units, self.precise)
 
     @property
     def ra_hours(self) -> float:
@@ -261,7 +261,7 @@ class GotoAzAlt(_Precise, _Acknowledged):
         return pair if isinstance(pair, FieldError) else cls(*pair)
 
     def encode(self) -> bytes:
-        return self.letter() + encode_hex_pair(self.az_units, self.alt_units, self.precise)
+        return self.sent_letter() + encode_hex_pair(self.az_units, self.alt_units, self.precise)
 
     @property
     def az_degrees(self) -> float:
