@@ -21,7 +21,7 @@ _SYNSCAN_EXCHANGES: tuple[tuple[synscan.AnyCommand, synscan.AnyReply], ...] = (
     (synscan.GotoRaDec(0x34AB0500, 0x12CE0500), synscan.Ack()),
     (synscan.SyncRaDec(0x1234, 0x4321, False), synscan.Ack()),
     (synscan.GotoAzAlt(0x8000, 0x0400, False), synscan.Ack()),
-    (synscan.GetTrackingMode(), synscan.TrackingMode(2)),
+    (synscan.GetTrackingMode(), synscan.TrackingModeReply(2)),
     (synscan.SetTrackingMode(1), synscan.Ack()),
     (synscan.VariableRateSlew(synscan.Axis.AZM_RA, True, 1200), synscan.Ack()),
     (synscan.FixedRateSlew(synscan.Axis.ALT_DEC, False, 9), synscan.Ack()),

@@ -19,6 +19,7 @@ from scopelink.mount import MountAxis
 from scopelink.protocol.synscan import (
     GetRaDec,
     GetVersion,
+    GotoInProgress,
     GotoRaDec,
     IsAligned,
     IsGotoInProgress,
@@ -26,7 +27,6 @@ from scopelink.protocol.synscan import (
     SynScanClientConnection,
     Version,
 )
-from scopelink.protocol.synscan.messages import GotoInProgress
 from scopelink.servers.faults import Fault, FaultInjector
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.synscan import SynScanEmulator

@@ -50,7 +50,7 @@ from scopelink.protocol.synscan import (
     SlowGoto,
     SyncRaDec,
     SynScanClientConnection,
-    TrackingMode,
+    TrackingModeReply,
     VariableRateSlew,
     Version,
     VersionDialect,
@@ -103,7 +103,7 @@ async def test_identity_and_queries(transport: str) -> None:
         assert await s.ask(IsAligned()) == Aligned(True)
         assert await s.ask(IsGotoInProgress()) == GotoInProgress(False)
         assert await s.ask(GetPointingState()) == PointingState(PointingSide.EAST)
-        assert await s.ask(GetTrackingMode()) == TrackingMode(0)
+        assert await s.ask(GetTrackingMode()) == TrackingModeReply(0)
         assert await s.ask(GetDeviceVersion(Axis.AZM_RA)) == DeviceVersion(3, 39)
         state = s.mount.snapshot()
         position = await s.ask(GetRaDec())
@@ -129,7 +129,7 @@ async def test_goto_lands_within_one_precise_unit_and_tracking_holds(transport: 
         assert await s.ask(IsGotoInProgress()) == GotoInProgress(True)
         s.mount.step(120.0)
         assert await s.ask(IsGotoInProgress()) == GotoInProgress(False)
-        assert await s.ask(GetTrackingMode()) == TrackingMode(2)  # a goto enables tracking
+        assert await s.ask(GetTrackingMode()) == TrackingModeReply(2)  # a goto enables tracking
         for _hours in range(3):
             position = await s.ask(GetRaDec())
             assert isinstance(position, Position)
@@ -182,9 +182,9 @@ async def test_slews_tracking_site_and_time(transport: str) -> None:
         await s.ask(VariableRateSlew.from_arcsec_per_second(Axis.AZM_RA, 0.0))
 
         await s.ask(SetTrackingMode(2))
-        assert await s.ask(GetTrackingMode()) == TrackingMode(2)
+        assert await s.ask(GetTrackingMode()) == TrackingModeReply(2)
         await s.ask(SetTrackingMode(0))
-        assert await s.ask(GetTrackingMode()) == TrackingMode(0)
+        assert await s.ask(GetTrackingMode()) == TrackingModeReply(0)
 
         home = Location.from_degrees(28.3, 16.5)
         await s.ask(SetLocation(home))

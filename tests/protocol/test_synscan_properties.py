@@ -55,7 +55,7 @@ from scopelink.protocol.synscan import (
     SlowGoto,
     SyncRaDec,
     SynScanClientConnection,
-    TrackingMode,
+    TrackingModeReply,
     UnexpectedData,
     UnknownCommand,
     VariableRateSlew,
@@ -158,7 +158,7 @@ def replies_for(command: AnyCommand) -> st.SearchStrategy[AnyReply]:
                 Position, st.just(frame), units(precise), units(precise), st.just(precise)
             )
         case GetTrackingMode():
-            return st.builds(TrackingMode, bytes_)
+            return st.builds(TrackingModeReply, bytes_)
         case GetLocation():
             return locations
         case GetTime():

@@ -51,7 +51,7 @@ from scopelink.protocol.synscan import (
     SlowGoto,
     SyncRaDec,
     Tracking,
-    TrackingMode,
+    TrackingModeReply,
     UnknownCommand,
     VariableRateSlew,
     Version,
@@ -349,9 +349,9 @@ def test_j_is_binary_and_l_is_ascii() -> None:
 def test_pointing_state_and_tracking_mode() -> None:
     assert parse_reply(GetPointingState(), b"W#") == PointingState(PointingSide.WEST)
     assert encode_reply(PointingState(PointingSide.EAST)) == b"E#"
-    assert parse_reply(GetTrackingMode(), b"\x02#") == TrackingMode(Tracking.EQUATORIAL)
+    assert parse_reply(GetTrackingMode(), b"\x02#") == TrackingModeReply(Tracking.EQUATORIAL)
     assert encode_command(SetTrackingMode(Tracking.OFF)) == b"T\x00"
-    assert "equatorial" in TrackingMode(2).describe()
+    assert "equatorial" in TrackingModeReply(2).describe()
 
 
 def test_device_version_reply() -> None:

@@ -13,7 +13,6 @@ from collections.abc import Iterable
 from scopelink.decode.model import (
     Annotation,
     Chunk,
-    DecodedMessage,
     Direction,
     Kind,
     Peer,
@@ -35,7 +34,6 @@ from scopelink.decode.trace_text import (
 __all__ = [
     "Annotation",
     "Chunk",
-    "DecodedMessage",
     "Direction",
     "Kind",
     "Peer",

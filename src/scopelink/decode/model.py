@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from scopelink.protocol import skytracker, synscan
+from scopelink.protocol.base import Message
 
 
 class Protocol(enum.Enum):
@@ -60,10 +60,6 @@ class Chunk:
     flushes_input: bool = False
 
 
-DecodedMessage = synscan.Message | skytracker.Message
-"""A typed message of either codec."""
-
-
 @dataclass(frozen=True, slots=True)
 class Annotation:
     """One message, note or error, and where its bytes sit in the trace.
@@ -81,7 +77,7 @@ class Annotation:
     kind: Kind
     meaning: str
     error_offset: int | None = None
-    message: DecodedMessage | None = None
+    message: Message | None = None
     answers: int | None = None
 
     @property

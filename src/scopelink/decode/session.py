@@ -5,7 +5,8 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 
-from scopelink.decode.model import Annotation, DecodedMessage, Direction, Kind, Peer
+from scopelink.decode.model import Annotation, Direction, Kind, Peer
+from scopelink.protocol.base import Message
 
 
 class Session(ABC):
@@ -65,7 +66,7 @@ class Session(ABC):
         direction: Direction,
         peer: Peer,
         error_offset: int | None = None,
-        message: DecodedMessage | None = None,
+        message: Message | None = None,
         answers: int | None = None,
     ) -> None:
         self.annotations.append(

@@ -9,7 +9,7 @@ from scopelink.decode.model import Direction, Kind, Peer
 from scopelink.decode.session import Session, describe_byte
 from scopelink.protocol import synscan
 from scopelink.protocol.synscan.angles import HASH
-from scopelink.protocol.synscan.replies import Complete, Mismatch
+from scopelink.protocol.synscan.message import Complete, Mismatch
 
 _PEER = Peer.SYNSCAN
 

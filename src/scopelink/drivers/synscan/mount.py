@@ -93,11 +93,11 @@ from scopelink.protocol.synscan import (
     SetTime,
     SetTrackingMode,
     SyncRaDec,
+    TrackingModeReply,
     VariableRateSlew,
     Version,
     VersionDialect,
 )
-from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
 
 __all__ = ["DEFAULT_GUIDE_RATE_DEG_S", "NotAlignedError", "SynScanMount"]
 

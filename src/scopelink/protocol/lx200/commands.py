@@ -15,6 +15,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from scopelink.protocol.base import Event
 from scopelink.protocol.lx200.angles import (
     format_dec,
     format_ra,
@@ -217,7 +218,7 @@ class SetLocalDate:
 
 
 @dataclass(frozen=True, slots=True)
-class UnknownCommand:
+class UnknownCommand(Event):
     """A ``:...#`` command outside our set; a real handset ignores it, so we do too."""
 
     text: str
@@ -227,7 +228,7 @@ class UnknownCommand:
 
 
 @dataclass(frozen=True, slots=True)
-class MalformedCommand:
+class MalformedCommand(Event):
     """A known command whose argument is missing, does not parse or is out of range."""
 
     code: str

@@ -11,9 +11,9 @@ at the next ``#``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
-from typing import Final, Literal
+from typing import Final
 
+from scopelink.protocol.base import NEED_DATA, Event, NeedData
 from scopelink.protocol.lx200.commands import (
     ACK_BYTE,
     Ack,
@@ -38,16 +38,8 @@ _COLON = ord(":")
 _HASH = ord("#")
 
 
-class _Sentinel(Enum):
-    NEED_DATA = "NEED_DATA"
-
-
-NEED_DATA: Final = _Sentinel.NEED_DATA
-NeedData = Literal[_Sentinel.NEED_DATA]
-
-
 @dataclass(frozen=True, slots=True)
-class StrayBytes:
+class StrayBytes(Event):
     """Bytes between commands that start none; they were skipped."""
 
     data: bytes

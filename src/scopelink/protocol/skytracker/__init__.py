@@ -3,6 +3,8 @@
 See ``docs/protocol-notes-skytracker.md`` for every decision the spec leaves open.
 """
 
+from scopelink.protocol.base import NEED_DATA, PAUSED, LocalProtocolError, Message, Wait
+
 from .calfloat import (
     CALFLOAT_MAX,
     CALFLOAT_MIN_NORMAL,
@@ -54,21 +56,16 @@ from .messages import (
 from .status import Direction, ModeFlag, TrackerMode, TrackerStatus
 from .tracker import BusState, TrackerClient, TrackerServer
 from .wire import (
-    NEED_DATA,
-    PAUSED,
     Acknowledge,
     BadReply,
     Command,
     ErrorEvent,
     IncompleteFrame,
     LineTooLong,
-    LocalProtocolError,
     MalformedCommand,
-    Message,
     Reply,
     StrayByte,
     UnknownCommand,
-    Wait,
 )
 
 __all__ = [

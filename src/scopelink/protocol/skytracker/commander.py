@@ -6,10 +6,11 @@ at most :data:`MAX_LINE_LENGTH` bytes, so garbage can never make the parser wait
 
 from __future__ import annotations
 
+from scopelink.protocol.base import NEED_DATA, Wait
+
 from .commander_messages import SINGLE_BYTE_COMMANDS, CommanderCommand, LoadObject
 from .stream import ByteStream, ReplyReader
 from .wire import (
-    NEED_DATA,
     BadReply,
     ErrorEvent,
     IncompleteFrame,
@@ -18,7 +19,6 @@ from .wire import (
     Reply,
     StrayByte,
     UnknownCommand,
-    Wait,
 )
 
 MAX_LINE_LENGTH = 32

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from .wire import NEED_DATA, BadReply, Command, LocalProtocolError, Reply, StrayByte, Wait
+from scopelink.protocol.base import NEED_DATA, LocalProtocolError, Wait
+
+from .wire import BadReply, Command, Reply, StrayByte
 
 
 class ByteStream:

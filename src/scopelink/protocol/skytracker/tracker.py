@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import enum
 
+from scopelink.protocol.base import NEED_DATA, PAUSED, LocalProtocolError, Wait
+
 from .commander_messages import CommanderCommand
 from .messages import (
     PAYLOAD_SIZES,
@@ -21,17 +23,7 @@ from .messages import (
     decode_payload_command,
 )
 from .stream import ByteStream, ReplyReader
-from .wire import (
-    NEED_DATA,
-    PAUSED,
-    BadReply,
-    IncompleteFrame,
-    LocalProtocolError,
-    Reply,
-    StrayByte,
-    UnknownCommand,
-    Wait,
-)
+from .wire import BadReply, IncompleteFrame, Reply, StrayByte, UnknownCommand
 
 _RELEASE = ord("q")
 

@@ -2,44 +2,11 @@
 
 from __future__ import annotations
 
-import enum
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
-
-class Wait(enum.Enum):
-    """What :meth:`next_event` returns when it has no event to give."""
-
-    NEED_DATA = "NEED_DATA"
-    """More bytes are needed: call ``receive_data``."""
-    PAUSED = "PAUSED"
-    """The peer must decide something first (the Sky Tracker device answering a bus request)."""
-
-
-NEED_DATA = Wait.NEED_DATA
-PAUSED = Wait.PAUSED
-
-
-class LocalProtocolError(Exception):
-    """Our own side asked for something the protocol does not allow in the current state."""
-
-
-class Message(ABC):
-    """A unit on the wire that knows its bytes and its meaning in plain units."""
-
-    __slots__ = ()
-
-    @abstractmethod
-    def encode(self) -> bytes:
-        """The exact bytes of this message on the wire."""
-
-    @abstractmethod
-    def describe(self) -> str:
-        """One line saying what this message means, in plain units."""
-
-    def __str__(self) -> str:
-        return self.describe()
+from scopelink.protocol.base import Event, Message
 
 
 class Reply(Message):
@@ -81,7 +48,7 @@ class Acknowledge(Reply):
 
 
 @dataclass(frozen=True, slots=True)
-class ErrorEvent:
+class ErrorEvent(Event):
     """Bytes that could not be understood. The codec has consumed them and carries on.
 
     ``offset`` is the stream position of ``data[0]`` (counted from the first byte ever given to
@@ -94,9 +61,6 @@ class ErrorEvent:
 
     def describe(self) -> str:
         return f"error at byte {self.offset}: {self.reason} [{self.data.hex(' ')}]"
-
-    def __str__(self) -> str:
-        return self.describe()
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
-from enum import Enum
-from typing import Final, Literal
+from typing import Final
 
+from scopelink.protocol.base import NEED_DATA, Event, NeedData
 from scopelink.protocol.stellarium.messages import (
     CURRENT_POSITION_LENGTH,
     GOTO_LENGTH,
@@ -39,18 +39,8 @@ MAX_MESSAGE_LENGTH: Final = 120
 _HEADER = struct.Struct("<HH")
 
 
-class _Sentinel(Enum):
-    NEED_DATA = "NEED_DATA"
-
-
-NEED_DATA: Final = _Sentinel.NEED_DATA
-"""Returned by ``next_event()`` when more bytes are needed."""
-
-NeedData = Literal[_Sentinel.NEED_DATA]
-
-
 @dataclass(frozen=True, slots=True)
-class SkippedMessage:
+class SkippedMessage(Event):
     """A well-framed message this side does not understand; it was skipped whole."""
 
     message_type: int
@@ -63,7 +53,7 @@ class SkippedMessage:
 
 
 @dataclass(frozen=True, slots=True)
-class BadLength:
+class BadLength(Event):
     """A LENGTH field no message can have: the stream is out of step and the peer must go."""
 
     length: int

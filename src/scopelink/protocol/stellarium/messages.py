@@ -16,6 +16,8 @@ import struct
 from dataclasses import dataclass
 from typing import Final
 
+from scopelink.protocol.base import Message
+
 __all__ = [
     "CURRENT_POSITION_LENGTH",
     "DEC_UNITS_PER_DEGREE",
@@ -69,7 +71,7 @@ def dec_from_wire(units: int) -> float:
 
 
 @dataclass(frozen=True, slots=True)
-class GotoMessage:
+class GotoMessage(Message):
     """Client -> server: slew to this position (J2000 unless the client is set to JNow).
 
     Wire units are stored exactly; ``ra_hours`` and ``dec_deg`` give plain units.
@@ -91,6 +93,9 @@ class GotoMessage:
     def dec_deg(self) -> float:
         return dec_from_wire(self.dec_units)
 
+    def describe(self) -> str:
+        return f"goto RA {self.ra_hours:.5f} h, Dec {self.dec_deg:+.5f}°"
+
     def encode(self) -> bytes:
         return _GOTO.pack(
             GOTO_LENGTH, MESSAGE_TYPE_POSITION, self.client_time_us, self.ra_units, self.dec_units
@@ -104,7 +109,7 @@ class GotoMessage:
 
 
 @dataclass(frozen=True, slots=True)
-class CurrentPosition:
+class CurrentPosition(Message):
     """Server -> client: where the telescope points now; ``status`` 0 is ok, below 0 an error."""
 
     ra_units: int
@@ -125,6 +130,10 @@ class CurrentPosition:
     @property
     def dec_deg(self) -> float:
         return dec_from_wire(self.dec_units)
+
+    def describe(self) -> str:
+        state = "ok" if self.status == 0 else f"error {self.status}"
+        return f"at RA {self.ra_hours:.5f} h, Dec {self.dec_deg:+.5f}° ({state})"
 
     def encode(self) -> bytes:
         return _POSITION.pack(

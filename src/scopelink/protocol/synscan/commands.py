@@ -1,342 +1,552 @@
-"""SynScan commands on the wire: encoding (client side) and length-framed parsing (server side).
+"""SynScan commands (PC -> hand control), one class each, except the passthrough (``P``) family
+(`scopelink.protocol.synscan.passthrough`).
 
-A command is framed by the length its first letter implies, never by a terminator: binary payloads
-(``W``, ``H``, ``P``, ``K``, ``T``) may hold any byte. A malformed frame is discarded whole, so its
-payload bytes are never read as commands."""
+A class carries its letters and frame lengths (`frames`), its encoding and decoding, and the shape
+of its reply and how it is read. A command is framed by the length its first letter implies, never
+by a terminator: binary payloads (``W``, ``H``, ``K``, ``T``) may hold any byte."""
 
 from __future__ import annotations
 
-import re
+from abc import abstractmethod
 from dataclasses import dataclass
-from typing import Final
+from typing import Any, ClassVar, Self
 
 from scopelink.protocol.synscan import angles
-from scopelink.protocol.synscan.angles import HASH
-from scopelink.protocol.synscan.events import (
-    NEED_DATA,
-    MalformedCommand,
-    NeedData,
-    ServerError,
-    UnknownCommand,
+from scopelink.protocol.synscan.message import (
+    Command,
+    FieldError,
+    ReplyShape,
+    ScanResult,
+    letter_frames,
 )
-from scopelink.protocol.synscan.messages import (
-    YEAR_BASE,
-    AnyCommand,
-    CancelGoto,
+from scopelink.protocol.synscan.replies import (
+    Ack,
+    Aligned,
     DateTime,
-    Echo,
-    FixedRateSlew,
-    GetAzAlt,
-    GetDeviceVersion,
-    GetLocation,
-    GetModel,
-    GetPointingState,
-    GetRaDec,
-    GetTime,
-    GetTrackingMode,
-    GetVersion,
-    GotoAzAlt,
-    GotoRaDec,
-    IsAligned,
-    IsGotoInProgress,
+    EchoReply,
+    GotoInProgress,
     Location,
-    Passthrough,
-    SetAxisPosition,
-    SetLocation,
-    SetTime,
-    SetTrackingMode,
-    SlowGoto,
-    SyncRaDec,
-    VariableRateSlew,
-    passthrough_command,
-    passthrough_payload,
+    Model,
+    PointingState,
+    Position,
+    TrackingModeReply,
+    Version,
+)
+from scopelink.protocol.synscan.scanning import (
+    allowed_bytes,
+    decode_hex_pair,
+    encode_hex_pair,
+    flag_check,
+    scan_terminated,
+)
+from scopelink.protocol.synscan.values import (
+    Frame,
+    PointingSide,
+    check_byte,
+    check_units,
+    describe_az_alt,
+    describe_byte,
+    describe_ra_dec,
+    describe_tracking,
+    precision_word,
+    ra_dec_units,
 )
 
-FRAME_LENGTHS: Final[dict[int, int]] = {
-    **dict.fromkeys(b"EeZztVmJLMpwh", 1),
-    **dict.fromkeys(b"KT", 2),
-    **dict.fromkeys(b"WH", 9),
-    **dict.fromkeys(b"RBS", 10),
-    **dict.fromkeys(b"rbs", 18),
-    ord("P"): 8,
-}
-"""Total length in bytes (letter included) of each command, by its first byte."""
+_ACK_SHAPE = ReplyShape((1,), "'#'")
 
 
-def frame_length(first_byte: int) -> int | None:
-    """Length of the command that starts with this byte, or None if no command does."""
-    return FRAME_LENGTHS.get(first_byte)
+class _Acknowledged(Command):
+    """A command answered by a bare ``#`` that moves the mount or changes a setting."""
+
+    __slots__ = ()
+    changes_mount = True
+
+    def reply_shape(self) -> ReplyShape:
+        return _ACK_SHAPE
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return scan_terminated(buffer, 0, None, lambda body: Ack())
 
 
-# ---------------------------------------------------------------------------------------- encoding
+class _Letter(Command):
+    """A command that is its letter alone (`letter`)."""
+
+    __slots__ = ()
+    letter: ClassVar[bytes]
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "letter" in cls.__dict__:
+            cls.frames = letter_frames(cls.letter, 1)
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self:
+        return cls()
+
+    def encode(self) -> bytes:
+        return self.letter
 
 
-def encode_command(command: AnyCommand) -> bytes:
-    """The exact bytes that send ``command`` (positions as uppercase hex, low byte 00 when
-    rounded)."""
-    match command:
-        case GetRaDec(precise):
-            return b"e" if precise else b"E"
-        case GetAzAlt(precise):
-            return b"z" if precise else b"Z"
-        case GotoRaDec(ra, dec, precise):
-            return (b"r" if precise else b"R") + _encode_pair(ra, dec, precise)
-        case SyncRaDec(ra, dec, precise):
-            return (b"s" if precise else b"S") + _encode_pair(ra, dec, precise)
-        case GotoAzAlt(az, alt, precise):
-            return (b"b" if precise else b"B") + _encode_pair(az, alt, precise)
-        case GetTrackingMode():
-            return b"t"
-        case SetTrackingMode(mode):
-            return bytes((ord("T"), mode))
-        case (
-            VariableRateSlew()
-            | FixedRateSlew()
-            | GetDeviceVersion()
-            | SlowGoto()
-            | SetAxisPosition()
-            | Passthrough()
-        ):
-            return b"P" + passthrough_payload(command)
-        case GetLocation():
-            return b"w"
-        case SetLocation(location):
-            return b"W" + encode_location(location)
-        case GetTime():
-            return b"h"
-        case SetTime(time):
-            return b"H" + encode_date_time(time)
-        case GetVersion():
-            return b"V"
-        case GetModel():
-            return b"m"
-        case Echo(value):
-            return bytes((ord("K"), value))
-        case IsAligned():
-            return b"J"
-        case IsGotoInProgress():
-            return b"L"
-        case CancelGoto():
-            return b"M"
-        case GetPointingState():
-            return b"p"
+class _Precise(Command):
+    """A command with a standard letter (16-bit angles) and a precise one (32-bit angles)."""
+
+    __slots__ = ()
+    letters: ClassVar[bytes]
+    """The standard letter, then the precise one."""
+
+    precise: bool
+
+    def sent_letter(self) -> bytes:
+        """The letter this command is sent with."""
+        return self.letters[1:] if self.precise else self.letters[:1]
+
+    @classmethod
+    def is_precise(cls, frame: bytes) -> bool:
+        """Whether ``frame`` starts with the precise letter."""
+        return frame[0] == cls.letters[1]
 
 
-def _encode_pair(first: int, second: int, precise: bool) -> bytes:
-    return angles.format_hex_angle(first, precise) + b"," + angles.format_hex_angle(second, precise)
-
-
-def encode_location(location: Location) -> bytes:
-    """The 8 bytes of a location (``W`` payload, ``w`` reply without ``#``)."""
-    return bytes(
-        (
-            location.lat_degrees,
-            location.lat_minutes,
-            location.lat_seconds,
-            int(location.south),
-            location.lon_degrees,
-            location.lon_minutes,
-            location.lon_seconds,
-            int(location.west),
-        )
-    )
-
-
-def encode_date_time(time: DateTime) -> bytes:
-    """The 8 bytes of a date and time (``H`` payload, ``h`` reply without ``#``)."""
-    return bytes(
-        (
-            time.hour,
-            time.minute,
-            time.second,
-            time.month,
-            time.day,
-            time.year - YEAR_BASE,
-            time.utc_offset_hours & 0xFF,
-            int(time.dst),
-        )
-    )
-
-
-# ----------------------------------------------------------------------------------------- parsing
+# --------------------------------------------------------------------------------- positions
 
 
 @dataclass(frozen=True, slots=True)
-class FieldError:
-    """Where and why a payload does not parse; ``index`` counts from the start of the bytes
-    given."""
+class _PositionQuery(_Precise):
+    """Shared shape of the position reads: the reply is two hex angles, ``,`` between."""
 
-    index: int
-    reason: str
+    precise: bool = True
 
+    coordinates: ClassVar[Frame]
+    """Which pair of coordinates the reply carries."""
 
-def decode_location(payload: bytes) -> Location | FieldError:
-    """A location from its 8 bytes; the hemisphere flags must be 0 or 1."""
-    for index in (3, 7):
-        if payload[index] > 1:
-            return FieldError(index, f"hemisphere flag must be 0 or 1, got {payload[index]}")
-    lat_d, lat_m, lat_s, south, lon_d, lon_m, lon_s, west = payload
-    return Location(lat_d, lat_m, lat_s, bool(south), lon_d, lon_m, lon_s, bool(west))
+    @classmethod
+    def decode(cls, frame: bytes) -> Self:
+        return cls(precise=cls.is_precise(frame))
 
+    def encode(self) -> bytes:
+        return self.sent_letter()
 
-def decode_date_time(payload: bytes) -> DateTime | FieldError:
-    """A date and time from its 8 bytes; the DST flag must be 0 or 1."""
-    hour, minute, second, month, day, year, zone, dst = payload
-    if dst > 1:
-        return FieldError(7, f"DST flag must be 0 or 1, got {dst}")
-    offset = zone - 0x100 if zone >= 0x80 else zone
-    return DateTime(hour, minute, second, month, day, YEAR_BASE + year, offset, bool(dst))
+    def reply_shape(self) -> ReplyShape:
+        width = angles.hex_width(self.precise)
+        return ReplyShape((2 * width + 2,), f"{width} hex, ',', {width} hex, '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return Position.scan(buffer, self.coordinates, self.precise)
 
 
-_HEX_PAIR: Final = {
-    precise: re.compile(rb"[0-9A-Fa-f]{%d},[0-9A-Fa-f]{%d}" % (width, width))
-    for precise, width in ((True, angles.hex_width(True)), (False, angles.hex_width(False)))
-}
-"""A well-formed pair of each width; anything else goes through the byte-by-byte check."""
+class GetRaDec(_PositionQuery):
+    """``E`` (or ``e`` when precise): read RA/Dec (J2000)."""
+
+    __slots__ = ()
+    letters = b"Ee"
+    frames = letter_frames(letters, 1)
+    coordinates = Frame.EQUATORIAL
+
+    def describe(self) -> str:
+        return f"get {precision_word(self.precise)}RA/Dec"
 
 
-def decode_hex_pair(text: bytes, precise: bool) -> tuple[int, int] | FieldError:
-    """Two comma-separated hex angles (either case), e.g. ``34AB,12CE`` or ``34AB0500,12CE0500``."""
-    width = angles.hex_width(precise)
-    if _HEX_PAIR[precise].fullmatch(text):  # the usual case, at C speed
-        return int(text[:width], 16), int(text[width + 1 :], 16)
-    for index, byte in enumerate(text):
-        if index == width:
-            if byte != ord(","):
-                return FieldError(index, f"expected ',' got {bytes((byte,))!r}")
-        elif not angles.is_hex_digit(byte):
-            return FieldError(index, f"expected a hex digit, got {bytes((byte,))!r}")
-    return int(text[:width], 16), int(text[width + 1 :], 16)
+class GetAzAlt(_PositionQuery):
+    """``Z`` (or ``z`` when precise): read Az/Alt."""
+
+    __slots__ = ()
+    letters = b"Zz"
+    frames = letter_frames(letters, 1)
+    coordinates = Frame.HORIZONTAL
+
+    def describe(self) -> str:
+        return f"get {precision_word(self.precise)}Az/Alt"
 
 
-def decode_command_frame(frame: bytes) -> AnyCommand | FieldError:
-    """The command in one complete frame (length as `frame_length` says), or where it is
-    malformed."""
-    letter = chr(frame[0])
-    payload = frame[1:]
-    match letter:
-        case "E" | "e":
-            return GetRaDec(precise=letter == "e")
-        case "Z" | "z":
-            return GetAzAlt(precise=letter == "z")
-        case "R" | "r" | "S" | "s" | "B" | "b":
-            return _decode_position_command(letter, payload)
-        case "t":
-            return GetTrackingMode()
-        case "T":
-            return SetTrackingMode(payload[0])
-        case "P":
-            return passthrough_command(payload)
-        case "w":
-            return GetLocation()
-        case "W":
-            location = decode_location(payload)
-            return _shifted(location) if isinstance(location, FieldError) else SetLocation(location)
-        case "h":
-            return GetTime()
-        case "H":
-            time = decode_date_time(payload)
-            return _shifted(time) if isinstance(time, FieldError) else SetTime(time)
-        case "V":
-            return GetVersion()
-        case "m":
-            return GetModel()
-        case "K":
-            return Echo(payload[0])
-        case "J":
-            return IsAligned()
-        case "L":
-            return IsGotoInProgress()
-        case "M":
-            return CancelGoto()
-        case "p":
-            return GetPointingState()
-    raise ValueError(f"no command starts with {frame[:1]!r}")
+def _pair_frames(letters: bytes) -> dict[int, int]:
+    """Frames of a command carrying two angles: letter, hex, ``,``, hex."""
+    return {
+        letters[0]: 2 + 2 * angles.hex_width(False),
+        letters[1]: 2 + 2 * angles.hex_width(True),
+    }
 
 
-def _decode_position_command(letter: str, payload: bytes) -> AnyCommand | FieldError:
-    precise = letter.islower()
-    pair = decode_hex_pair(payload, precise)
-    if isinstance(pair, FieldError):
-        return _shifted(pair)
-    match letter.upper():
-        case "R":
-            return GotoRaDec(*pair, precise=precise)
-        case "S":
-            return SyncRaDec(*pair, precise=precise)
-        case _:
-            return GotoAzAlt(*pair, precise=precise)
-
-
-def _shifted(error: FieldError) -> FieldError:
-    """A payload error re-indexed from the start of the frame (past the command letter)."""
-    return FieldError(error.index + 1, error.reason)
+def _decode_pair(cls: type[_Precise], frame: bytes) -> tuple[int, int, bool] | FieldError:
+    precise = cls.is_precise(frame)
+    pair = decode_hex_pair(frame[1:], precise)
+    return pair.shifted(1) if isinstance(pair, FieldError) else (*pair, precise)
 
 
 @dataclass(frozen=True, slots=True)
-class ParsedCommand:
-    """A command with where it was in the stream and its exact bytes."""
+class _RaDecTarget(_Precise, _Acknowledged):
+    """Shared shape of goto and sync on RA/Dec (J2000). Units as on the wire."""
 
-    command: AnyCommand
-    raw: bytes
-    offset: int
+    ra_units: int
+    dec_units: int
+    precise: bool = True
 
+    _VERB: ClassVar[str] = ""
 
-class CommandParser:
-    """Incremental, length-framed parser of the PC -> hand control byte stream.
+    def __post_init__(self) -> None:
+        check_units("ra_units", self.ra_units, self.precise)
+        check_units("dec_units", self.dec_units, self.precise)
 
-    Feed bytes with `receive_data`; `next_frame` (or `next_event`) returns one command or error at a
-    time, or `NEED_DATA`. A stray ``#`` between commands is skipped silently; an unknown byte gives
-    `UnknownCommand` and is skipped; a malformed payload gives `MalformedCommand` and its whole
-    frame is discarded. Never raises on any input."""
+    @classmethod
+    def from_hours_degrees(cls, ra_hours: float, dec_degrees: float, precise: bool = True) -> Self:
+        """From RA in hours and Dec in degrees (negative Dec becomes the two's complement)."""
+        return cls(*ra_dec_units(ra_hours, dec_degrees, precise), precise)
 
-    def __init__(self) -> None:
-        self._buffer = bytearray()
-        self._offset = 0
+    @classmethod
+    def decode(cls, frame: bytes) -> Self | FieldError:
+        pair = _decode_pair(cls, frame)
+        return pair if isinstance(pair, FieldError) else cls(*pair)
+
+    def encode(self) -> bytes:
+        return self.sent_letter() + encode_hex_pair(self.ra_units, self.dec_units, self.precise)
 
     @property
-    def offset(self) -> int:
-        """Stream offset of the first byte not yet consumed."""
-        return self._offset
+    def ra_hours(self) -> float:
+        """Right ascension in hours, [0, 24)."""
+        return angles.degrees_to_hours(angles.units_to_degrees(self.ra_units, self.precise))
 
     @property
-    def pending(self) -> bytes:
-        """Bytes received but not yet consumed (the start of an incomplete frame)."""
-        return bytes(self._buffer)
+    def dec_degrees(self) -> float:
+        """Declination in degrees, two's complement read: [-180, 180)."""
+        return angles.units_to_signed_degrees(self.dec_units, self.precise)
 
-    def receive_data(self, data: bytes) -> None:
-        """Append bytes read from the link."""
-        self._buffer += data
+    def describe(self) -> str:
+        detail = describe_ra_dec(self.ra_units, self.dec_units, self.precise)
+        return f"{precision_word(self.precise)}{self._VERB} {detail}"
 
-    def next_frame(self) -> ParsedCommand | ServerError | NeedData:
-        """The next command with its offset and raw bytes, an error event, or `NEED_DATA`."""
-        while self._buffer and self._buffer[0] == HASH:
-            self._consume(1)
-        if not self._buffer:
-            return NEED_DATA
-        offset = self._offset
-        length = frame_length(self._buffer[0])
-        if length is None:
-            return UnknownCommand(self._consume(1)[0], offset)
-        if len(self._buffer) < length:
-            return NEED_DATA
-        frame = self._consume(length)
-        parsed = decode_command_frame(frame)
-        if isinstance(parsed, FieldError):
-            return MalformedCommand(frame, parsed.index, offset, parsed.reason)
-        return ParsedCommand(parsed, frame, offset)
 
-    def next_event(self) -> AnyCommand | ServerError | NeedData:
-        """The next command, an error event, or `NEED_DATA`."""
-        event = self.next_frame()
-        return event.command if isinstance(event, ParsedCommand) else event
+class GotoRaDec(_RaDecTarget):
+    """``R`` (or ``r`` when precise): goto RA/Dec (J2000)."""
 
-    def discard_partial(self) -> bytes:
-        """Drop and return an incomplete frame (call after an inter-byte timeout)."""
-        return self._consume(len(self._buffer))
+    __slots__ = ()
+    letters = b"Rr"
+    frames = _pair_frames(letters)
+    _VERB = "goto"
 
-    def _consume(self, count: int) -> bytes:
-        taken = bytes(self._buffer[:count])
-        del self._buffer[:count]
-        self._offset += count
-        return taken
+
+class SyncRaDec(_RaDecTarget):
+    """``S`` (or ``s`` when precise): sync on RA/Dec (J2000)."""
+
+    __slots__ = ()
+    letters = b"Ss"
+    frames = _pair_frames(letters)
+    _VERB = "sync"
+
+
+@dataclass(frozen=True, slots=True)
+class GotoAzAlt(_Precise, _Acknowledged):
+    """``B`` (or ``b`` when precise): goto Az/Alt. Units as on the wire."""
+
+    az_units: int
+    alt_units: int
+    precise: bool = True
+
+    letters = b"Bb"
+    frames = _pair_frames(letters)
+
+    def __post_init__(self) -> None:
+        check_units("az_units", self.az_units, self.precise)
+        check_units("alt_units", self.alt_units, self.precise)
+
+    @classmethod
+    def from_degrees(cls, az_degrees: float, alt_degrees: float, precise: bool = True) -> Self:
+        """Goto azimuth and altitude in degrees."""
+        return cls(
+            angles.degrees_to_units(az_degrees, precise),
+            angles.degrees_to_units(alt_degrees, precise),
+            precise,
+        )
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self | FieldError:
+        pair = _decode_pair(cls, frame)
+        return pair if isinstance(pair, FieldError) else cls(*pair)
+
+    def encode(self) -> bytes:
+        return self.sent_letter() + encode_hex_pair(self.az_units, self.alt_units, self.precise)
+
+    @property
+    def az_degrees(self) -> float:
+        """Azimuth in degrees, [0, 360)."""
+        return angles.units_to_degrees(self.az_units, self.precise)
+
+    @property
+    def alt_degrees(self) -> float:
+        """Altitude in degrees, two's complement read: [-180, 180)."""
+        return angles.units_to_signed_degrees(self.alt_units, self.precise)
+
+    def describe(self) -> str:
+        detail = describe_az_alt(self.az_units, self.alt_units, self.precise)
+        return f"{precision_word(self.precise)}goto {detail}"
+
+
+# ---------------------------------------------------------------------------------- tracking
+
+
+@dataclass(frozen=True, slots=True)
+class GetTrackingMode(_Letter):
+    """``t``: read the tracking mode."""
+
+    letter = b"t"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "binary mode byte, '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return scan_terminated(buffer, 1, None, lambda body: TrackingModeReply(body[0]))
+
+    def describe(self) -> str:
+        return "get tracking mode"
+
+
+@dataclass(frozen=True, slots=True)
+class SetTrackingMode(_Acknowledged):
+    """``T`` + mode byte: set the tracking mode (see `Tracking`)."""
+
+    mode: int
+
+    frames = letter_frames(b"T", 2)
+
+    def __post_init__(self) -> None:
+        check_byte("mode", self.mode)
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self:
+        return cls(frame[1])
+
+    def encode(self) -> bytes:
+        return bytes((ord("T"), self.mode))
+
+    def describe(self) -> str:
+        return f"set tracking mode {describe_tracking(self.mode)}"
+
+
+# ------------------------------------------------------------------------ location and time
+
+_EIGHT_BYTES = ReplyShape((9,), "8 binary bytes, '#'")
+
+
+class _ReadEightBytes(_Letter):
+    """Reads a value of 8 binary bytes (`Location`, `DateTime`); its flag bytes are 0 or 1."""
+
+    __slots__ = ()
+    _VALUE: ClassVar[type[Location] | type[DateTime]]
+    _FLAGS: ClassVar[tuple[int, ...]]
+
+    def reply_shape(self) -> ReplyShape:
+        return _EIGHT_BYTES
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return scan_terminated(buffer, 8, flag_check(*self._FLAGS), self._VALUE.from_body)
+
+
+class _SetEightBytes(_Acknowledged):
+    """Sets a value of 8 binary bytes: its letter, then the bytes of its reply form."""
+
+    __slots__ = ()
+    _LETTER: ClassVar[bytes]
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "_LETTER" in cls.__dict__:
+            cls.frames = letter_frames(cls._LETTER, 9)
+
+    @abstractmethod
+    def _value(self) -> Location | DateTime:
+        """The value set."""
+
+    def encode(self) -> bytes:
+        return self._LETTER + self._value().body()
+
+
+@dataclass(frozen=True, slots=True)
+class GetLocation(_ReadEightBytes):
+    """``w``: read the site location."""
+
+    letter = b"w"
+    _VALUE = Location
+    _FLAGS = (3, 7)
+
+    def describe(self) -> str:
+        return "get location"
+
+
+@dataclass(frozen=True, slots=True)
+class SetLocation(_SetEightBytes):
+    """``W`` + 8 bytes: set the site location."""
+
+    location: Location
+
+    _LETTER = b"W"
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self | FieldError:
+        location = Location.from_body(frame[1:])
+        return location.shifted(1) if isinstance(location, FieldError) else cls(location)
+
+    def _value(self) -> Location:
+        return self.location
+
+    def describe(self) -> str:
+        return f"set location {self.location.describe()}"
+
+
+@dataclass(frozen=True, slots=True)
+class GetTime(_ReadEightBytes):
+    """``h``: read the local date, time and time zone."""
+
+    letter = b"h"
+    _VALUE = DateTime
+    _FLAGS = (7,)
+
+    def describe(self) -> str:
+        return "get time"
+
+
+@dataclass(frozen=True, slots=True)
+class SetTime(_SetEightBytes):
+    """``H`` + 8 bytes: set the local date, time and time zone."""
+
+    time: DateTime
+
+    _LETTER = b"H"
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self | FieldError:
+        time = DateTime.from_body(frame[1:])
+        return time.shifted(1) if isinstance(time, FieldError) else cls(time)
+
+    def _value(self) -> DateTime:
+        return self.time
+
+    def describe(self) -> str:
+        return f"set time {self.time.describe()}"
+
+
+# ------------------------------------------------------------------------ the hand control
+
+
+@dataclass(frozen=True, slots=True)
+class GetVersion(_Letter):
+    """``V``: read the hand control's firmware version."""
+
+    letter = b"V"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape(
+            (7, 3, 4), "6 hex digits + '#', or 2 (NexStar) or 3 (old SynScan) binary bytes + '#'"
+        )
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return Version.scan(buffer)
+
+    def describe(self) -> str:
+        return "get hand control version"
+
+
+@dataclass(frozen=True, slots=True)
+class GetModel(_Letter):
+    """``m``: read the mount model code."""
+
+    letter = b"m"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "binary model byte, '#' (or '#' first on some firmware)")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return Model.scan(buffer)
+
+    def describe(self) -> str:
+        return "get mount model"
+
+
+@dataclass(frozen=True, slots=True)
+class Echo(Command):
+    """``K`` + byte: the hand control echoes the byte back (handshake and resynchronisation)."""
+
+    value: int
+
+    frames = letter_frames(b"K", 2)
+
+    def __post_init__(self) -> None:
+        check_byte("value", self.value)
+
+    @classmethod
+    def decode(cls, frame: bytes) -> Self:
+        return cls(frame[1])
+
+    def encode(self) -> bytes:
+        return bytes((ord("K"), self.value))
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "the echoed byte, '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        check = allowed_bytes(bytes((self.value,)))
+        return scan_terminated(buffer, 1, check, lambda body: EchoReply(body[0]))
+
+    def describe(self) -> str:
+        return f"echo {describe_byte(self.value)}"
+
+
+@dataclass(frozen=True, slots=True)
+class IsAligned(_Letter):
+    """``J``: is the alignment complete?"""
+
+    letter = b"J"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "binary 0x00/0x01, '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        check = allowed_bytes(b"\x00\x01")
+        return scan_terminated(buffer, 1, check, lambda body: Aligned(body[0] == 1))
+
+    def describe(self) -> str:
+        return "is alignment complete?"
+
+
+@dataclass(frozen=True, slots=True)
+class IsGotoInProgress(_Letter):
+    """``L``: is a GOTO in progress?"""
+
+    letter = b"L"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "ASCII '0'/'1', '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        check = allowed_bytes(b"01")
+        return scan_terminated(buffer, 1, check, lambda body: GotoInProgress(body == b"1"))
+
+    def describe(self) -> str:
+        return "is goto in progress?"
+
+
+@dataclass(frozen=True, slots=True)
+class CancelGoto(_Letter, _Acknowledged):
+    """``M``: cancel a GOTO."""
+
+    letter = b"M"
+
+    def describe(self) -> str:
+        return "cancel goto"
+
+
+@dataclass(frozen=True, slots=True)
+class GetPointingState(_Letter):
+    """``p``: which side of the meridian the tube is on."""
+
+    letter = b"p"
+
+    def reply_shape(self) -> ReplyShape:
+        return ReplyShape((2,), "ASCII 'E'/'W', '#'")
+
+    def scan_reply(self, buffer: bytes | bytearray) -> ScanResult:
+        return scan_terminated(
+            buffer,
+            1,
+            allowed_bytes(b"EW"),
+            lambda body: PointingState(PointingSide(body.decode())),
+        )
+
+    def describe(self) -> str:
+        return "get pointing state"

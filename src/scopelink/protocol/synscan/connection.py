@@ -8,25 +8,20 @@ from __future__ import annotations
 
 from collections import deque
 from enum import Enum
+from typing import cast
 
+from scopelink.protocol.base import NEED_DATA, LocalProtocolError, NeedData
 from scopelink.protocol.synscan.angles import HASH
-from scopelink.protocol.synscan.commands import CommandParser, encode_command
+from scopelink.protocol.synscan.commands import Echo
 from scopelink.protocol.synscan.events import (
-    NEED_DATA,
     ClientError,
-    LocalProtocolError,
     MalformedReply,
-    NeedData,
     ServerError,
     UnexpectedData,
 )
-from scopelink.protocol.synscan.messages import AnyCommand, AnyReply, Echo
-from scopelink.protocol.synscan.replies import (
-    Mismatch,
-    encode_reply,
-    reply_fits,
-    scan_reply,
-)
+from scopelink.protocol.synscan.message import Mismatch
+from scopelink.protocol.synscan.parser import CommandParser
+from scopelink.protocol.synscan.tables import AnyCommand, AnyReply, reply_fits
 
 
 class ClientState(Enum):
@@ -76,7 +71,7 @@ class SynScanClientConnection:
                 f"cannot send {command.describe()!r} while {self._state.value}"
                 + (f" ({self._in_flight.describe()!r})" if self._in_flight else "; call reset()")
             )
-        data = encode_command(command)
+        data = command.encode()
         if self._buffer:
             # these bytes arrived before the command was written, so they cannot be its reply
             self._stale += self._take(len(self._buffer))
@@ -102,7 +97,7 @@ class SynScanClientConnection:
             skip = _bytes_before_echo(self._buffer, command.value)
             if skip:
                 return UnexpectedData(self._take(skip))
-        result = scan_reply(command, self._buffer)
+        result = command.scan_reply(self._buffer)
         if result is NEED_DATA:
             return NEED_DATA
         self._in_flight = None
@@ -114,7 +109,7 @@ class SynScanClientConnection:
         self._take(result.length)
         self._state = ClientState.IDLE
         self._resynchronising = False
-        return result.reply
+        return cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
 
     def reset(self) -> bytes:
         """Forget the command in flight and drop buffered bytes (returned); start
@@ -187,7 +182,7 @@ class SynScanServerConnection:
                 f"{type(reply).__name__} {reply.describe()!r} cannot answer {command.describe()!r}"
             )
         self._unanswered.popleft()
-        return encode_reply(reply)
+        return reply.encode()
 
     def skip_reply(self) -> AnyCommand:
         """Leave the oldest unanswered command without a reply; returns it."""

@@ -1,44 +1,15 @@
-"""Events other than messages that the SynScan parsers hand out, and the local protocol error."""
+"""The error events the SynScan parsers hand out (each names the byte and the reason)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
-from typing import Final, Literal
 
-from scopelink.protocol.synscan.messages import Command
-
-
-class _Sentinel(Enum):
-    NEED_DATA = "NEED_DATA"
-
-
-NEED_DATA: Final = _Sentinel.NEED_DATA
-"""Returned by ``next_event()`` when more bytes are needed before anything can be said."""
-
-NeedData = Literal[_Sentinel.NEED_DATA]
-"""The type of `NEED_DATA`."""
-
-
-class _ErrorEvent:
-    """Base of the error events: ``str()`` gives ``describe()``."""
-
-    __slots__ = ()
-
-    def describe(self) -> str:
-        """What went wrong, in words."""
-        raise NotImplementedError
-
-    def __str__(self) -> str:
-        return self.describe()
-
-
-class LocalProtocolError(Exception):
-    """Our own side broke the protocol (e.g. sent a second command while one is in flight)."""
+from scopelink.protocol.base import Event
+from scopelink.protocol.synscan.message import Command
 
 
 @dataclass(frozen=True, slots=True)
-class UnknownCommand(_ErrorEvent):
+class UnknownCommand(Event):
     """A byte that starts no SynScan command; it was skipped."""
 
     byte: int
@@ -51,7 +22,7 @@ class UnknownCommand(_ErrorEvent):
 
 
 @dataclass(frozen=True, slots=True)
-class MalformedCommand(_ErrorEvent):
+class MalformedCommand(Event):
     """A command frame whose payload does not parse; the whole frame was discarded."""
 
     frame: bytes
@@ -75,7 +46,7 @@ class MalformedCommand(_ErrorEvent):
 
 
 @dataclass(frozen=True, slots=True)
-class MalformedReply(_ErrorEvent):
+class MalformedReply(Event):
     """A reply that does not fit the shape its command expects; the bytes read so far are in
     ``data``.
 
@@ -97,7 +68,7 @@ class MalformedReply(_ErrorEvent):
 
 
 @dataclass(frozen=True, slots=True)
-class UnexpectedData(_ErrorEvent):
+class UnexpectedData(Event):
     """Bytes that arrived when no reply was expected, or that were skipped while resynchronising."""
 
     data: bytes

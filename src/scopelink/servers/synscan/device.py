@@ -7,11 +7,13 @@ zone, where the axes were at power-on, whether a goto it started is still runnin
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
+from collections.abc import Awaitable, Callable
 from dataclasses import replace
 from datetime import UTC, datetime, timedelta, timezone
-from typing import Protocol, runtime_checkable
+from typing import Protocol, TypeVar, runtime_checkable
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, angular_separation_deg, observed_to_j2000
 from scopelink.mount import (
@@ -25,50 +27,8 @@ from scopelink.mount import (
     SunAvoidanceError,
     TrackingMode,
 )
-from scopelink.protocol.synscan import (
-    Ack,
-    Aligned,
-    AnyCommand,
-    AnyReply,
-    Axis,
-    CancelGoto,
-    DateTime,
-    DeviceVersion,
-    Echo,
-    EchoReply,
-    FixedRateSlew,
-    GetAzAlt,
-    GetDeviceVersion,
-    GetLocation,
-    GetModel,
-    GetPointingState,
-    GetRaDec,
-    GetTime,
-    GetTrackingMode,
-    GetVersion,
-    GotoAzAlt,
-    GotoInProgress,
-    GotoRaDec,
-    IsAligned,
-    IsGotoInProgress,
-    Location,
-    Model,
-    Passthrough,
-    PassthroughFailed,
-    PassthroughReply,
-    PointingSide,
-    PointingState,
-    Position,
-    SetAxisPosition,
-    SetLocation,
-    SetTime,
-    SetTrackingMode,
-    SlowGoto,
-    SyncRaDec,
-    Tracking,
-    VariableRateSlew,
-)
-from scopelink.protocol.synscan import TrackingMode as TrackingModeReply
+from scopelink.protocol import synscan
+from scopelink.protocol.synscan import AnyCommand, AnyReply, Axis, Tracking
 from scopelink.servers.synscan.config import SynScanConfig
 from scopelink.sim import synscan_fixed_rate_deg_s
 
@@ -102,16 +62,32 @@ _MOUNT_TRACKING: dict[int, TrackingMode] = {
 }
 
 
-_STATE_READS = (GetRaDec, GetAzAlt, GetTrackingMode, IsGotoInProgress, GetPointingState)
-"""Reads answered from the mount's state: without a current one they get no reply."""
-
-
 class NoReadingError(MountError):
     """The mount has no reading of what a command asks for."""
 
 
 class NoReply(Exception):  # noqa: N818 - named after what the server does with it
     """The command gets no reply (the message says why)."""
+
+
+_Read = TypeVar("_Read", bound=synscan.Command)
+_Answer = Callable[["SynScanHandControl", _Read], Awaitable[AnyReply]]
+
+
+def _state_read(answer: _Answer[_Read]) -> _Answer[_Read]:
+    """Marks a read answered from the mount's state: without a current one it gets no reply
+    (:class:`NoReply`), where the mount refusing any other command gets ``#``."""
+
+    @functools.wraps(answer)
+    async def read(hand_control: SynScanHandControl, command: _Read) -> AnyReply:
+        try:
+            return await answer(hand_control, command)
+        except SunAvoidanceError:
+            raise
+        except MountError as error:
+            raise NoReply(f"{command.describe()} not answered: {error}") from None
+
+    return read
 
 
 @runtime_checkable
@@ -182,86 +158,124 @@ class SynScanHandControl:
         ``#`` where 18 bytes are due, or an old position, would be read as data.
         """
         try:
-            return await self._answer(command)
+            return await synscan.dispatch(command, self)
         except SunAvoidanceError as error:  # shown at the default log level: it matters by day
             logger.warning("%s refused: %s", command.describe(), error)
-            return Ack()
+            return synscan.Ack()
         except MountError as error:
-            if isinstance(command, _STATE_READS):
-                raise NoReply(f"{command.describe()} not answered: {error}") from None
             logger.info("%s refused: %s", command.describe(), error)
-            return Ack()
+            return synscan.Ack()
 
-    async def _answer(self, command: AnyCommand) -> AnyReply:
-        match command:
-            case GetRaDec(precise):
-                state = await self.mount.current_state()
-                ra, dec = state.ra_j2000_hours, state.dec_j2000_deg
-                if ra is None or dec is None:
-                    raise NoReadingError("the mount has not reported its position yet")
-                return Position.from_ra_dec(ra, dec, precise)
-            case GetAzAlt(precise):
-                az, alt = self._reported_az_alt(await self.mount.current_state())
-                return Position.from_az_alt(az, alt, precise)
-            case GotoRaDec():
-                await self._goto_ra_dec(command.ra_hours, command.dec_degrees)
-            case GotoAzAlt():
-                await self._goto_az_alt(command.az_degrees, command.alt_degrees)
-            case SyncRaDec():
-                await self._sync(command.ra_hours, command.dec_degrees)
-            case GetTrackingMode():
-                state = await self.mount.current_state(position=False)
-                return TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
-            case SetTrackingMode(mode):
-                await self._set_tracking(mode)
-            case FixedRateSlew(axis, positive, rate):
-                await self._fixed_rate(_AXES[axis], positive, rate)
-            case VariableRateSlew():
-                rate_deg_s = command.arcsec_per_second / 3600.0
-                await self._slew(_AXES[command.axis], rate_deg_s, on_top_of_tracking=False)
-            case GetDeviceVersion():
-                return DeviceVersion(*self.config.motor_version)
-            case SlowGoto(axis, _) | SetAxisPosition(axis, _):
-                return await self._axis_position(command, _AXES[axis])
-            case Passthrough():
-                return self._unanswerable_passthrough(command)
-            case GetLocation():
-                site = self.mount.site
-                return Location.from_degrees(site.latitude_deg, site.longitude_deg)
-            case SetLocation(location):
-                try:
-                    site = replace(
-                        self.mount.site,
-                        latitude_deg=location.latitude,
-                        longitude_deg=(location.longitude + 180.0) % 360.0 - 180.0,
-                    )
-                except ValueError as error:  # W bytes come as sent: latitude 100° reaches here
-                    raise InvalidValueError(f"{command.describe()}: {error}") from None
-                await self.mount.set_site(site)
-            case GetTime():
-                return self._local_time()
-            case SetTime(time):
-                try:
-                    local = time.to_datetime()
-                except ValueError as error:  # H bytes come as sent: month 0, hour 76, UTC+45...
-                    raise InvalidValueError(f"{command.describe()}: {error}") from None
-                self.clock_offset = local.astimezone(UTC) - self.mount.now()
-                self.utc_offset_hours, self.dst = time.utc_offset_hours, time.dst
-            case GetVersion():
-                return self.config.firmware
-            case GetModel():
-                return Model(self.config.model, self.config.quirks.model_swapped)
-            case Echo(value):
-                return EchoReply(value)
-            case IsAligned():
-                return Aligned(self.aligned)
-            case IsGotoInProgress():
-                return GotoInProgress(await self._goto_in_progress())
-            case CancelGoto():
-                await self._cancel()
-            case GetPointingState():
-                return PointingState(self._pointing_side(await self.mount.current_state()))
-        return Ack()
+    # --- the answer to each command (its synscan.CommandHandler method) --------------------------
+
+    @_state_read
+    async def get_ra_dec(self, command: synscan.GetRaDec) -> AnyReply:
+        state = await self.mount.current_state()
+        ra, dec = state.ra_j2000_hours, state.dec_j2000_deg
+        if ra is None or dec is None:
+            raise NoReadingError("the mount has not reported its position yet")
+        return synscan.Position.from_ra_dec(ra, dec, command.precise)
+
+    @_state_read
+    async def get_az_alt(self, command: synscan.GetAzAlt) -> AnyReply:
+        az, alt = self._reported_az_alt(await self.mount.current_state())
+        return synscan.Position.from_az_alt(az, alt, command.precise)
+
+    async def goto_ra_dec(self, command: synscan.GotoRaDec) -> AnyReply:
+        await self._goto_ra_dec(command.ra_hours, command.dec_degrees)
+        return synscan.Ack()
+
+    async def goto_az_alt(self, command: synscan.GotoAzAlt) -> AnyReply:
+        await self._goto_az_alt(command.az_degrees, command.alt_degrees)
+        return synscan.Ack()
+
+    async def sync_ra_dec(self, command: synscan.SyncRaDec) -> AnyReply:
+        await self._sync(command.ra_hours, command.dec_degrees)
+        return synscan.Ack()
+
+    @_state_read
+    async def get_tracking_mode(self, command: synscan.GetTrackingMode) -> AnyReply:
+        state = await self.mount.current_state(position=False)
+        return synscan.TrackingModeReply(_SYNSCAN_TRACKING[state.tracking])
+
+    async def set_tracking_mode(self, command: synscan.SetTrackingMode) -> AnyReply:
+        await self._set_tracking(command.mode)
+        return synscan.Ack()
+
+    async def fixed_rate_slew(self, command: synscan.FixedRateSlew) -> AnyReply:
+        await self._fixed_rate(_AXES[command.axis], command.positive, command.rate)
+        return synscan.Ack()
+
+    async def variable_rate_slew(self, command: synscan.VariableRateSlew) -> AnyReply:
+        rate_deg_s = command.arcsec_per_second / 3600.0
+        await self._slew(_AXES[command.axis], rate_deg_s, on_top_of_tracking=False)
+        return synscan.Ack()
+
+    async def get_device_version(self, command: synscan.GetDeviceVersion) -> AnyReply:
+        return synscan.DeviceVersion(*self.config.motor_version)
+
+    async def slow_goto(self, command: synscan.SlowGoto) -> AnyReply:
+        return await self._axis_position(command, _AXES[command.axis])
+
+    async def set_axis_position(self, command: synscan.SetAxisPosition) -> AnyReply:
+        return await self._axis_position(command, _AXES[command.axis])
+
+    async def passthrough(self, command: synscan.Passthrough) -> AnyReply:
+        return self._unanswerable_passthrough(command)
+
+    async def get_location(self, command: synscan.GetLocation) -> AnyReply:
+        site = self.mount.site
+        return synscan.Location.from_degrees(site.latitude_deg, site.longitude_deg)
+
+    async def set_location(self, command: synscan.SetLocation) -> AnyReply:
+        location = command.location
+        try:
+            site = replace(
+                self.mount.site,
+                latitude_deg=location.latitude,
+                longitude_deg=(location.longitude + 180.0) % 360.0 - 180.0,
+            )
+        except ValueError as error:  # W bytes come as sent: latitude 100° reaches here
+            raise InvalidValueError(f"{command.describe()}: {error}") from None
+        await self.mount.set_site(site)
+        return synscan.Ack()
+
+    async def get_time(self, command: synscan.GetTime) -> AnyReply:
+        return self._local_time()
+
+    async def set_time(self, command: synscan.SetTime) -> AnyReply:
+        time = command.time
+        try:
+            local = time.to_datetime()
+        except ValueError as error:  # H bytes come as sent: month 0, hour 76, UTC+45...
+            raise InvalidValueError(f"{command.describe()}: {error}") from None
+        self.clock_offset = local.astimezone(UTC) - self.mount.now()
+        self.utc_offset_hours, self.dst = time.utc_offset_hours, time.dst
+        return synscan.Ack()
+
+    async def get_version(self, command: synscan.GetVersion) -> AnyReply:
+        return self.config.firmware
+
+    async def get_model(self, command: synscan.GetModel) -> AnyReply:
+        return synscan.Model(self.config.model, self.config.quirks.model_swapped)
+
+    async def echo(self, command: synscan.Echo) -> AnyReply:
+        return synscan.EchoReply(command.value)
+
+    async def is_aligned(self, command: synscan.IsAligned) -> AnyReply:
+        return synscan.Aligned(self.aligned)
+
+    @_state_read
+    async def is_goto_in_progress(self, command: synscan.IsGotoInProgress) -> AnyReply:
+        return synscan.GotoInProgress(await self._goto_in_progress())
+
+    async def cancel_goto(self, command: synscan.CancelGoto) -> AnyReply:
+        await self._cancel()
+        return synscan.Ack()
+
+    @_state_read
+    async def get_pointing_state(self, command: synscan.GetPointingState) -> AnyReply:
+        return synscan.PointingState(self._pointing_side(await self.mount.current_state()))
 
     # --- positions --------------------------------------------------------------------------------
 
@@ -274,11 +288,11 @@ class SynScanHandControl:
         az0, alt0 = self._power_on_az_alt
         return (az - az0) % 360.0, alt - alt0
 
-    def _pointing_side(self, state: MountState) -> PointingSide:
+    def _pointing_side(self, state: MountState) -> synscan.PointingSide:
         flipped = state.pier_side is PierSide.WEST
         if self.mount.site.latitude_deg < 0:
             flipped = not flipped
-        return PointingSide.WEST if flipped else PointingSide.EAST
+        return synscan.PointingSide.WEST if flipped else synscan.PointingSide.EAST
 
     # --- gotos and syncs --------------------------------------------------------------------------
 
@@ -400,33 +414,31 @@ class SynScanHandControl:
         await self.mount.move_axis(axis, rate_deg_s)
 
     async def _axis_position(
-        self, command: SlowGoto | SetAxisPosition, axis: MountAxis
+        self, command: synscan.SlowGoto | synscan.SetAxisPosition, axis: MountAxis
     ) -> AnyReply:
         if not (self.axis_passthrough and isinstance(self.mount, AxisPositioning)):
             return self._unanswerable_passthrough(command)
         position = (command.degrees + 180.0) % 360.0 - 180.0
-        if isinstance(command, SlowGoto):
+        if isinstance(command, synscan.SlowGoto):
             self.mount.slew_axis_to(axis, position)
             self._goto_running, self._goto_sticky = True, False
         else:
             self.mount.set_axis_position(axis, position)
-        return Ack()
+        return synscan.Ack()
 
-    def _unanswerable_passthrough(
-        self, command: Passthrough | SlowGoto | SetAxisPosition
-    ) -> AnyReply:
+    def _unanswerable_passthrough(self, command: synscan.PassthroughCommand) -> AnyReply:
         """No motor controller answers: the failed form (extra byte), or silence and ``#``."""
-        length = command.reply_length if isinstance(command, Passthrough) else 0
+        length = command.reply_length if isinstance(command, synscan.Passthrough) else 0
         if self.config.quirks.failed_passthrough:
-            return PassthroughFailed(bytes(length), _FAILED_PASSTHROUGH_EXTRA)
-        return PassthroughReply(bytes(length))
+            return synscan.PassthroughFailed(bytes(length), _FAILED_PASSTHROUGH_EXTRA)
+        return synscan.PassthroughReply(bytes(length))
 
     # --- time ---------------------------------------------------------------------------------
 
-    def _local_time(self) -> DateTime:
+    def _local_time(self) -> synscan.DateTime:
         zone = timezone(timedelta(hours=self.utc_offset_hours + int(self.dst)))
         local = self.now().astimezone(zone).replace(microsecond=0)
-        return DateTime.from_datetime(local, self.dst)
+        return synscan.DateTime.from_datetime(local, self.dst)
 
 
 def _fold_over_pole(around: float, angle_deg: float, half_turn: float) -> tuple[float, float]:

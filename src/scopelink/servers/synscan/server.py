@@ -20,21 +20,8 @@ from scopelink.protocol.synscan import (
     Ack,
     AnyCommand,
     AnyReply,
-    CancelGoto,
-    FixedRateSlew,
-    GotoAzAlt,
-    GotoRaDec,
-    MalformedCommand,
-    SetAxisPosition,
-    SetLocation,
-    SetTime,
-    SetTrackingMode,
-    SlowGoto,
-    SyncRaDec,
+    ServerError,
     SynScanServerConnection,
-    UnknownCommand,
-    VariableRateSlew,
-    encode_command,
 )
 from scopelink.servers.access import AccessControl, current_client
 from scopelink.servers.faults import FaultInjector, FaultKind
@@ -51,27 +38,10 @@ _NOT_EXECUTED = frozenset({FaultKind.STALL, FaultKind.HALT, FaultKind.CLOSE})
 """Faults that stand for a hung device: the command is not carried out. Under the others the
 device works and only its reply goes wrong on the way."""
 
-CHANGES_THE_MOUNT = (
-    GotoRaDec,
-    GotoAzAlt,
-    SyncRaDec,
-    SetTrackingMode,
-    FixedRateSlew,
-    VariableRateSlew,
-    SlowGoto,
-    SetAxisPosition,
-    SetLocation,
-    SetTime,
-    CancelGoto,
-)
-"""Refused by a read-only server. The hand control's answer to a command it refuses is a plain
-``#`` with nothing done (what it sends for a goto below the horizon), so that is the refusal.
-Passthrough motor commands are already answered as unanswerable over a Mount."""
-
 
 def command_key(command: AnyCommand) -> str:
     """The key faults match a command by: its first byte as text (``e``, ``P``, ``K``...)."""
-    return chr(encode_command(command)[0])
+    return chr(command.encode()[0])
 
 
 class SynScanServer:
@@ -144,7 +114,7 @@ class SynScanServer:
             event = connection.next_event()
             if event is NEED_DATA:
                 return True
-            if isinstance(event, UnknownCommand | MalformedCommand):
+            if isinstance(event, ServerError):
                 logger.info("%s: %s", link.name, event.describe())
                 continue
             fault = self.faults.select(command_key(event))
@@ -155,7 +125,10 @@ class SynScanServer:
                     return False
                 continue
             await throttle()
-            if self.access.read_only and isinstance(event, CHANGES_THE_MOUNT):
+            if self.access.read_only and event.changes_mount:
+                # the hand control's answer to a command it refuses is a plain '#' with nothing
+                # done (what it sends for a goto below the horizon), so that is the refusal;
+                # a raw Passthrough is already answered as unanswerable over a Mount
                 logger.info("%s: read-only: %s refused", link.name, event.describe())
                 reply: AnyReply = Ack()
             else:
