@@ -31,7 +31,7 @@ from pathlib import Path
 from bench.provenance import print_provenance
 from scopelink.cli.config_command import EXAMPLE_CONFIG
 from scopelink.cli.main import main as scopelink_main
-from scopelink.servers.storage import write_atomically
+from scopelink.links.storage import write_atomically
 
 
 def _plain(path: Path, data: bytes) -> None:

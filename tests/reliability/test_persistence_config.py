@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from scopelink.cli.config import ConfigError, load_config
 from scopelink.cli.config_command import EXAMPLE_CONFIG
 from scopelink.cli.config_edit import parse_value, set_values, unset_keys
-from scopelink.servers.storage import (
+from scopelink.links.storage import (
     create_atomically,
     remove_stale_temporaries,
     temporaries_of,

@@ -20,10 +20,10 @@ import pytest
 from scopelink.cli.config import load_config
 from scopelink.cli.config_command import EXAMPLE_CONFIG
 from scopelink.cli.config_edit import set_values
+from scopelink.links.storage import temporaries_of
 from scopelink.servers.alpaca.identity import UNIQUE_ID_FILE, load_or_create_unique_id
 from scopelink.servers.skytracker import ObjectStore, StoredObject
 from scopelink.servers.skytracker.objects import OBJECTS_FILE
-from scopelink.servers.storage import temporaries_of
 from tests.support.persistence import KillRound, Zygote, delays, devices_for, stored_object_for
 
 KILLS = int(os.environ.get("SCOPELINK_KILLS", "30"))

@@ -4,7 +4,7 @@ The file is edited with tomlkit, which keeps the user's comments, order and spac
 value asked for changes. The edited text is checked with the same reader every command uses
 (:func:`scopelink.cli.config.parse_config`) before anything is written, so a change that would
 make the file unreadable is refused with the key and the reason, and the file stays as it was.
-Writes are atomic (:mod:`scopelink.servers.storage`): a crash or ``kill -9`` leaves the old file
+Writes are atomic (:mod:`scopelink.links.storage`): a crash or ``kill -9`` leaves the old file
 or the new one, never a torn one.
 """
 
@@ -20,7 +20,7 @@ from tomlkit.container import Container
 from tomlkit.items import Table
 
 from scopelink.cli.config import ConfigError, parse_config
-from scopelink.servers.storage import create_atomically, write_atomically
+from scopelink.links.storage import create_atomically, write_atomically
 
 __all__ = ["create_config", "parse_value", "set_values", "unset_keys"]
 

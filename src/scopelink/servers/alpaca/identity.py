@@ -2,28 +2,22 @@
 
 Clients (NINA, ConformU's discovery map) recognise a device by its UniqueID across restarts and
 address changes, so it must never change. It is written atomically
-(:func:`scopelink.servers.storage.write_atomically`), so a crash never leaves a half-written
+(:func:`scopelink.links.storage.write_atomically`), so a crash never leaves a half-written
 file; a file that exists but cannot be read is reported, never silently replaced.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import uuid
 from pathlib import Path
 
-from scopelink.servers.storage import remove_stale_temporaries, write_atomically
+from scopelink.links.storage import remove_stale_temporaries, write_atomically
+from scopelink.mount.memory import default_state_dir
 
 __all__ = ["UNIQUE_ID_FILE", "default_state_dir", "load_or_create_unique_id"]
 
 UNIQUE_ID_FILE = "alpaca-telescope-0.json"
-
-
-def default_state_dir() -> Path:
-    """``$XDG_STATE_HOME/scopelink``, or ``~/.local/state/scopelink``."""
-    base = os.environ.get("XDG_STATE_HOME") or str(Path.home() / ".local" / "state")
-    return Path(base) / "scopelink"
 
 
 def load_or_create_unique_id(state_dir: Path) -> str:

@@ -1,5 +1,5 @@
 """Non-volatile memory of the emulated devices: files that survive a restart and a ``kill -9``
-(written with :func:`scopelink.servers.storage.write_atomically`)."""
+(written with :func:`scopelink.links.storage.write_atomically`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from scopelink.links.storage import remove_stale_temporaries, write_atomically
 from scopelink.protocol.skytracker.commander_messages import STORED_SLOTS
-from scopelink.servers.storage import remove_stale_temporaries, write_atomically
 
 OBJECTS_FILE = "skycommander-objects.json"
 CALIBRATION_FILE = "skytracker-calibration.json"
