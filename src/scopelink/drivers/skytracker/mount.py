@@ -94,11 +94,6 @@ STOP_BITS = 2
 TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
 """Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
 _TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
-UTILITY_RAMP_DOWN_DEG = 4.0
-"""Travel while a 4°/s UTILITY slew ramps down at the box's 2°/s² after its arrow is released."""
-STOP_MARGIN_POLLS = 3.0
-"""A slew down is released this many polls' worth of travel (plus the ramp) above the horizon."""
-STOP_MARGIN_DEG = 0.05
 GOTO_STATUS_POLL_S = 0.05
 """Status polls during a GOTO (by wait_for_goto, and the poller's refreshes) are this far apart."""
 NOTHING_PRESSED = Direction(0)
@@ -203,9 +198,6 @@ class SkyTrackerMount(Mount):
         self._buttons = asyncio.Lock()
         self._tracking_choice = TrackingMode.ALT_AZ
         self._problems: tuple[str, ...] = ()
-        self._below_horizon_alarm = False
-        self._poll_s = 0.05
-        """How long the last poll took (seconds on the mount's clock)."""
         self._goto_status_at = -math.inf
         self._engaged = False
         """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
@@ -343,7 +335,6 @@ class SkyTrackerMount(Mount):
         self._held.clear()
         self._cancel_pulses()  # a new line presses no arrow: no pulse is under way on it
         self._rest_mode = None
-        self._below_horizon_alarm = False
         try:
             if calibration is not None:
                 await self._write_calibration_first(line, calibration)
@@ -561,7 +552,6 @@ class SkyTrackerMount(Mount):
             since = time.monotonic() - self._goto_status_at
             if since < GOTO_STATUS_POLL_S:
                 await asyncio.sleep(GOTO_STATUS_POLL_S - since)
-        started, started_real = self.now(), time.monotonic()
         try:
             self._note_status(await self._read_status(line, Priority.POLL))
             self._goto_status_at = time.monotonic()
@@ -578,15 +568,7 @@ class SkyTrackerMount(Mount):
             self._publish_now()
             raise
         self._problems = ()
-        state = self._publish_now()
-        # On the mount's clock, so an accelerated simulator gets a margin in simulated time;
-        # stretched as the poll policy's line cap stretches the period on a fast link.
-        self._poll_s = (self.now() - started).total_seconds()
-        real_s = time.monotonic() - started_real
-        if real_s > 0.0:
-            self._poll_s *= max(1.0, self.poller.line_period_s / real_s)
-        await self._guard_horizon(state)
-        return self.state
+        return self._publish_now()
 
     async def _poll_position(self, line: SkyTrackerLine) -> None:
         """The position for a poll: one immediate retry after a garbled or missing grant; a
@@ -668,34 +650,6 @@ class SkyTrackerMount(Mount):
         )
         self._publish(state)
         return state
-
-    async def _guard_horizon(self, state: MountState) -> None:
-        """Release a slew down (or stop tracking) that reaches the configured horizon."""
-        if state.alt_deg is None or state.az_deg is None:
-            return
-        floor = self.limits.horizon_at(state.az_deg)
-        held = self._held.get(MountAxis.SECONDARY)
-        if held is not None and held.direction is Direction.DOWN:
-            speed = abs(held.rate_deg_s)
-            ramp = UTILITY_RAMP_DOWN_DEG if held.mode is TrackerMode.UTILITY else 0.0
-            margin = ramp + speed * STOP_MARGIN_POLLS * self._poll_s + STOP_MARGIN_DEG
-            if state.alt_deg < floor + margin:
-                logger.warning(
-                    "altitude %.2f° near the horizon: stopping the slew down", state.alt_deg
-                )
-                await self._move_axis(MountAxis.SECONDARY, 0.0)
-                self._problems = (f"slew down stopped at altitude {state.alt_deg:.2f}° (horizon)",)
-                self._publish_now()
-        was_below = self._below_horizon_alarm
-        self._below_horizon_alarm = state.alt_deg < floor
-        if self._below_horizon_alarm and not was_below and self._mode in _TRACKING:
-            await self._require_line().tracker(SelectMode(TrackerMode.UTILITY))
-            self._mode = TrackerMode.UTILITY
-            self._problems = (
-                f"tracking stopped: altitude {state.alt_deg:.2f}° is below the configured "
-                f"horizon of {floor:.2f}°",
-            )
-            self._publish_now()
 
     async def _send_confirmed(
         self,
