@@ -13,13 +13,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from scopelink.astro import format_degrees, format_hours
-from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.goto_command import SlewDisplay
 from scopelink.cli.main import build_parser
 from scopelink.cli.motion_commands import parse_rate
 from scopelink.cli.ports_command import SerialPort
 from scopelink.cli.targets import Coordinates, Named, parse_target
+from scopelink.drivers.open import DeviceError, DeviceSpec, parse_device
 from scopelink.mount import MountState, SlewProgress
 from scopelink.sim import SIDEREAL_RATE_DEG_S
 from tests.test_cli_support import scopelink

@@ -132,10 +132,10 @@ async def test_goto_lands_on_the_target_and_tracks(tmp_path: Path, transport: st
 
 async def test_goto_below_the_horizon_sends_nothing(tmp_path: Path, transport: str) -> None:
     async with rig(tmp_path, transport) as r:
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         with pytest.raises(LimitError):
             await r.driver.goto_equatorial(*sky_at(r.sim, -10.0, 200.0))
-        assert r.driver.line.commands_sent == sent
+        assert r.driver.line.statistics.commands_sent == sent
         assert box_mode(r) is TrackerMode.UTILITY
 
 
@@ -261,10 +261,10 @@ async def test_set_site_moves_only_the_pc_side_altaz(tmp_path: Path, transport: 
     async with rig(tmp_path, transport) as r:
         r.point(45.0, 90.0)
         before = await r.driver.refresh()
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         elsewhere = Site(latitude_deg=-30.0, longitude_deg=11.0, pressure_hpa=0.0)
         await r.driver.set_site(elsewhere)
-        assert r.driver.line.commands_sent == sent  # the box keeps no site
+        assert r.driver.line.statistics.commands_sent == sent  # the box keeps no site
         assert r.driver.site == elsewhere
         after = r.driver.state
         assert after.ra_j2000_hours == before.ra_j2000_hours

@@ -18,9 +18,9 @@ from rich.console import Console
 from scopelink.astro import Site
 from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
-from scopelink.cli.devices import EXAMPLES, DeviceError, DeviceSpec, open_mount, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.options import parse_site, positive_rate
+from scopelink.drivers.open import EXAMPLES, DeviceError, DeviceSpec, open_mount, parse_device
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (

@@ -4,27 +4,28 @@ See ``docs/drivers-skytracker.md``.
 """
 
 from .calibration import CalibrationFactors, CalibrationRuleError
-from .line import (
+from .exchange import (
+    DEFAULT_TIMEOUT_S,
     BadReplyError,
+    BusOptions,
     BusRefusedError,
-    LineOptions,
     LineOutOfSyncError,
     ReplyTimeoutError,
     SkyTrackerLine,
 )
 from .motion import AxisMotion, ButtonPlan, axis_motion, guide_button, plan_buttons
-from .mount import LinkFactory, SkyTrackerMount, SlewInProgressError
+from .mount import SkyTrackerMount, SlewInProgressError
 
 __all__ = [
+    "DEFAULT_TIMEOUT_S",
     "AxisMotion",
     "BadReplyError",
+    "BusOptions",
     "BusRefusedError",
     "ButtonPlan",
     "CalibrationFactors",
     "CalibrationRuleError",
-    "LineOptions",
     "LineOutOfSyncError",
-    "LinkFactory",
     "ReplyTimeoutError",
     "SkyTrackerLine",
     "SkyTrackerMount",

@@ -13,12 +13,14 @@ import contextlib
 import logging
 import math
 import time
-from collections.abc import Awaitable, Callable
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import replace
 from datetime import datetime
+from typing import Any, Self
 
-from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, j2000_to_observed
-from scopelink.links import Link, LinkError, open_link
+from scopelink.astro import Site, angular_separation_deg
+from scopelink.drivers.common import LinkFactory, Pointing, Reconnection, link_factory
+from scopelink.links import Link, LinkError
 from scopelink.mount import (
     AlignmentMode,
     Capabilities,
@@ -65,10 +67,11 @@ from scopelink.protocol.skytracker import (
 from scopelink.protocol.skytracker.calfloat import encode_calfloat_pair
 
 from .calibration import CalibrationFactors, CalibrationRuleError
-from .line import (
+from .exchange import (
+    DEFAULT_TIMEOUT_S,
     BadReplyError,
+    BusOptions,
     BusRefusedError,
-    LineOptions,
     LineOutOfSyncError,
     ReplyTimeoutError,
     SkyTrackerLine,
@@ -81,10 +84,7 @@ from .motion import (
     plan_buttons,
 )
 
-__all__ = ["LinkFactory", "SkyTrackerMount", "SlewInProgressError"]
-
-LinkFactory = Callable[[], Awaitable[Link]]
-"""Opens the link to the Sky Tracker (called by every connect)."""
+__all__ = ["SkyTrackerMount", "SlewInProgressError"]
 
 logger = logging.getLogger(__name__)
 
@@ -104,41 +104,6 @@ coordinates both ways, and the sky's drift during the read)."""
 
 class SlewInProgressError(MountError):
     """A GOTO is running: the request would abort it (or needs the bus the GOTO keeps busy)."""
-
-
-@dataclass(frozen=True, slots=True)
-class _Position:
-    """One Sky Commander reading and what the PC derives from it (computed once, at the time
-    the reply arrived)."""
-
-    ra_j2000_hours: float
-    dec_j2000_deg: float
-    read_at: datetime
-    ra_of_date_hours: float
-    dec_of_date_deg: float
-    alt_deg: float
-    az_deg: float
-    received_s: float = field(default_factory=time.monotonic)
-    """When the reply arrived (:func:`time.monotonic`): the position's age."""
-
-    @classmethod
-    def from_reply(cls, reply: object, read_at: datetime, site: Site) -> _Position:
-        assert isinstance(reply, PositionReply)
-        return cls.of(reply.ra_hours, reply.dec_degrees, read_at, site)
-
-    @classmethod
-    def of(
-        cls,
-        ra: float,
-        dec: float,
-        read_at: datetime,
-        site: Site,
-        received_s: float | None = None,
-    ) -> _Position:
-        alt, az = j2000_to_observed(ra, dec, read_at, site)
-        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
-        received = time.monotonic() if received_s is None else received_s
-        return cls(ra, dec, read_at, ra_of_date, dec_of_date, alt, az, received)
 
 
 class SkyTrackerMount(Mount):
@@ -161,25 +126,27 @@ class SkyTrackerMount(Mount):
         site: Site,
         limits: Limits | None = None,
         clock: Callable[[], datetime] = utc_now,
-        options: LineOptions | None = None,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        bus: BusOptions | None = None,
         guide_speed_arcsec_s: int | None = None,
         name: str | None = None,
     ) -> None:
         super().__init__(site=site, limits=limits, clock=clock)
         if guide_speed_arcsec_s is not None and not 1 <= guide_speed_arcsec_s <= 255:
             raise InvalidValueError(f"guide speed {guide_speed_arcsec_s} arcsec/s is not 1-255")
-        if isinstance(link, str):
-            spec = link
-
-            async def open_spec() -> Link:
-                return await open_link(spec, BAUDRATE, stopbits=STOP_BITS, pace=True)
-
-            self._open: LinkFactory = open_spec
-            self.spec = name or spec
-        else:
-            self._open = link
-            self.spec = name or "Sky Tracker link"
-        self.options = options or LineOptions()
+        if not timeout_s > 0:
+            raise ValueError(f"timeout {timeout_s} s must be positive")
+        self._open, self.spec = link_factory(
+            link,
+            name=name,
+            unnamed="Sky Tracker link",
+            baudrate=BAUDRATE,
+            stopbits=STOP_BITS,
+            pace=True,
+        )
+        self.timeout_s = timeout_s
+        """Bounds every reply (the spec names none; see ``DEFAULT_TIMEOUT_S``)."""
+        self.bus = bus or BusOptions()
         self.scheduler = WireScheduler()
         self._line: SkyTrackerLine | None = None
         self._wanted_guide_speed = guide_speed_arcsec_s
@@ -187,7 +154,7 @@ class SkyTrackerMount(Mount):
         self._commander_present: bool | None = None
         self._mode: TrackerMode | None = None
         self._status: TrackerStatus | None = None
-        self._position: _Position | None = None
+        self._position: Pointing | None = None
         self._guide_speeds = (120, 120)
         """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
         self._pulse_speeds = (120, 120)
@@ -205,32 +172,19 @@ class SkyTrackerMount(Mount):
         """The box was silent past ``stale_after_s`` on an open line: reopen before polling."""
         self._status_at = (self.now(), time.monotonic())
         """When the last status byte arrived: (mount clock, :func:`time.monotonic`)."""
-        self._reconnecting = asyncio.Lock()
-        """One reconnection at a time (a poll and a command may both find the link lost)."""
+        self._reconnection = Reconnection()
 
     @classmethod
     async def open(
         cls,
         link: str | LinkFactory,
         *,
-        site: Site,
-        limits: Limits | None = None,
-        clock: Callable[[], datetime] = utc_now,
-        options: LineOptions | None = None,
-        guide_speed_arcsec_s: int | None = None,
-        name: str | None = None,
         calibration: CalibrationFactors | None = None,
-    ) -> SkyTrackerMount:
-        """Construct and connect (writing ``calibration`` first, if given)."""
-        mount = cls(
-            link,
-            site=site,
-            limits=limits,
-            clock=clock,
-            options=options,
-            guide_speed_arcsec_s=guide_speed_arcsec_s,
-            name=name,
-        )
+        **options: Any,
+    ) -> Self:
+        """Construct the driver for ``link`` and connect it, writing ``calibration`` first if
+        given; ``options`` are the constructor's keywords."""
+        mount = cls(link, **options)
         await mount.connect(calibration=calibration)
         return mount
 
@@ -293,9 +247,7 @@ class SkyTrackerMount(Mount):
         A lost link (see :meth:`refresh`) is opened anew.
         """
         if self._engaged and calibration is None:  # connected, or lost: reopen it now
-            async with self._reconnecting:
-                if self._needs_reconnect():
-                    await self._reconnect()
+            await self._reconnection.run_if(self._needs_reconnect, self._reconnect)
             return
         if self._line is not None:
             if not self._line.link.closed and not self._link_lost:
@@ -330,7 +282,9 @@ class SkyTrackerMount(Mount):
 
     async def _open_and_identify(self, calibration: CalibrationFactors | None) -> None:
         link = await self._open_link()
-        line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
+        line = SkyTrackerLine(
+            link, timeout_s=self.timeout_s, bus=self.bus, scheduler=self.scheduler
+        )
         self._line = line
         self._held.clear()
         self._cancel_pulses()  # a new line presses no arrow: no pulse is under way on it
@@ -486,8 +440,8 @@ class SkyTrackerMount(Mount):
         if self._line is not None:
             raise CalibrationRuleError(
                 f"the Sky Tracker takes 'S' only as the first command after it is switched on, "
-                f"and only once; {self._line.commands_sent} commands have been sent on this "
-                "connection. Disconnect, switch the Sky Tracker off and on, then call "
+                f"and only once; {self._line.statistics.commands_sent} commands have been sent on "
+                "this connection. Disconnect, switch the Sky Tracker off and on, then call "
                 "write_calibration() before connect()"
             )
         await self.connect(calibration=factors)
@@ -495,7 +449,7 @@ class SkyTrackerMount(Mount):
     async def _write_calibration_first(
         self, line: SkyTrackerLine, factors: CalibrationFactors
     ) -> None:
-        if line.commands_sent:
+        if line.statistics.commands_sent:
             raise CalibrationRuleError("'S' must be the first command on the line")
         command = SetCalibration(factors.azimuth_factor, factors.elevation_factor)
         try:
@@ -506,9 +460,7 @@ class SkyTrackerMount(Mount):
             # The version is not known yet, so the resync had no sync point: a late 'A' could
             # be read as the first byte of the factors. A whole reply timeout of quiet first.
             try:
-                await line.link.drain_input(
-                    self.options.reply_timeout_s, 2 * self.options.reply_timeout_s
-                )
+                await line.link.drain_input(self.timeout_s, 2 * self.timeout_s)
             except LinkError as link_error:
                 raise NotConnectedError(f"the link {line.link.name} failed: {link_error}") from None
             stored = await self._read_agreed(line, ReadCalibration())
@@ -535,16 +487,15 @@ class SkyTrackerMount(Mount):
         A lost link (closed, or the box silent longer than ``stale_after_s``) reads as not
         connected; while engaged, the next refresh opens it anew and identifies the box again.
         """
-        if self._engaged and self._needs_reconnect():
-            async with self._reconnecting:
-                if self._engaged and self._needs_reconnect():
-                    try:
-                        await self._reconnect()
-                    except (MountError, LinkError) as error:
-                        self._problems = (f"reconnecting: {error}",)
-                        self._link_lost = True
-                        self._publish_now()
-                        raise
+        try:
+            await self._reconnection.run_if(
+                lambda: self._engaged and self._needs_reconnect(), self._reconnect
+            )
+        except (MountError, LinkError) as error:
+            self._problems = (f"reconnecting: {error}",)
+            self._link_lost = True
+            self._publish_now()
+            raise
         line = self._require_line()
         if self._mode is TrackerMode.GOTO:
             # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls
@@ -580,7 +531,7 @@ class SkyTrackerMount(Mount):
                 raise
             self._mode = TrackerMode.GOTO
             return
-        self._position = _Position.from_reply(reply, self.now(), self.site)
+        self._position = _pointing(reply, self.now(), self.site)
 
     async def read_position(self) -> tuple[float, float]:
         """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
@@ -590,11 +541,11 @@ class SkyTrackerMount(Mount):
 
     async def _read_position(
         self, line: SkyTrackerLine, priority: Priority, *, retry: bool
-    ) -> _Position:
+    ) -> Pointing:
         (reply,) = await line.commander(
             [ReadPosition()], priority, retry_delays_s=None if retry else ()
         )
-        self._position = _Position.from_reply(reply, self.now(), self.site)
+        self._position = _pointing(reply, self.now(), self.site)
         return self._position
 
     async def read_status(self) -> TrackerStatus:
@@ -759,13 +710,7 @@ class SkyTrackerMount(Mount):
         """The box keeps no site: only the PC-side alt/az of the last reading changes."""
         position = self._position
         if position is not None:
-            self._position = _Position.of(
-                position.ra_j2000_hours,
-                position.dec_j2000_deg,
-                position.read_at,
-                site,
-                position.received_s,
-            )
+            self._position = position.at_site(site)
             self._publish_now()
 
     def _require_line(self) -> SkyTrackerLine:
@@ -978,3 +923,9 @@ class SkyTrackerMount(Mount):
 
 def _other(axis: MountAxis) -> MountAxis:
     return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY
+
+
+def _pointing(reply: object, read_at: datetime, site: Site) -> Pointing:
+    """The reading of one Sky Commander position reply."""
+    assert isinstance(reply, PositionReply)
+    return Pointing(reply.ra_hours, reply.dec_degrees, read_at, site)

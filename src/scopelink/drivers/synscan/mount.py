@@ -2,12 +2,11 @@
 
 Usage::
 
-    mount = SynScanMount.open("/dev/ttyUSB0", site=Site(51.48, 0.0))
-    await mount.connect()
+    mount = await SynScanMount.open("/dev/ttyUSB0", site=Site(51.48, 0.0))  # and connect
     await mount.goto_object("M31")
     await mount.wait_for_slew(timeout_s=120)
 
-Every exchange goes through :class:`~scopelink.drivers.synscan.wire.SynScanWire` (one command in
+Every exchange goes through :class:`~scopelink.drivers.synscan.exchange.SynScanWire` (one command in
 flight, replies read by length, timeouts and resynchronisation). Decisions where the spec is
 silent are in ``docs/drivers-synscan.md``.
 """
@@ -28,9 +27,9 @@ from scopelink.astro import (
     PierSide,
     Site,
     angular_separation_deg,
-    j2000_to_apparent,
-    j2000_to_observed,
 )
+from scopelink.drivers.common import LinkFactory, Pointing, Reconnection, link_factory
+from scopelink.drivers.synscan.exchange import DEFAULT_TIMEOUT_S, SynScanWire
 from scopelink.drivers.synscan.identify import (
     SIDEREAL_RATE_DEG_S,
     HandControlInfo,
@@ -40,8 +39,6 @@ from scopelink.drivers.synscan.identify import (
 )
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.drivers.synscan.stops import OwedStops
-from scopelink.drivers.synscan.wire import DEFAULT_TIMEOUT_S, LinkFactory, SynScanWire
-from scopelink.links import Link, open_link
 from scopelink.mount import (
     AlignmentMode,
     Capabilities,
@@ -157,17 +154,7 @@ class SynScanMount(Mount):
         name: str | None = None,
     ) -> None:
         super().__init__(site=site, limits=limits, clock=clock, park_position=park_position)
-        if isinstance(link, str):
-            spec = link
-
-            async def open_spec() -> Link:
-                return await open_link(spec)
-
-            factory: LinkFactory = open_spec
-            name = name or spec
-        else:
-            factory = link
-            name = name or "SynScan link"
+        factory, name = link_factory(link, name=name, unnamed="SynScan link")
         if not 0 < guide_rate_deg_s <= 10 * SIDEREAL_RATE_DEG_S:
             raise ValueError(f"guide rate {guide_rate_deg_s}°/s must lie in (0, 10x sidereal]")
         if not -12 <= utc_offset_hours <= 14:
@@ -207,16 +194,18 @@ class SynScanMount(Mount):
         """The link was lost (closed, or the device silent past ``stale_after_s``): the next
         poll opens it anew and identifies the device again before reading."""
         self._identified_on = -1
-        self._reconnecting = asyncio.Lock()
-        """One reconnection at a time (a poll and a command may both find the link lost)."""
         """``wire.statistics.reconnects`` when the device was last identified: a link the wire
         reopened by itself gets the device identified again too."""
+        self._reconnection = Reconnection()
 
     @classmethod
-    def open(cls, link: str | LinkFactory, **options: Any) -> Self:
-        """The driver for ``link`` (not connected yet: ``await mount.connect()``, or hand it to
-        ``BlockingMount``, which connects); ``options`` are the constructor's keywords."""
-        return cls(link, **options)
+    async def open(cls, link: str | LinkFactory, **options: Any) -> Self:
+        """Construct the driver for ``link`` and connect it; ``options`` are the constructor's
+        keywords. (The constructor alone touches nothing: ``BlockingMount(SynScanMount(...))``
+        connects in its own thread.)"""
+        mount = cls(link, **options)
+        await mount.connect()
+        return mount
 
     # --- who, what --------------------------------------------------------------------------------
 
@@ -313,6 +302,9 @@ class SynScanMount(Mount):
         self._reidentify = False
         logger.warning("%s: the hand control answers on a new link: identified", self.wire.name)
 
+    def _needs_reidentifying(self) -> bool:
+        return self._reidentify or self._identified_on != self.wire.statistics.reconnects
+
     def _line_bytes(self) -> tuple[int, int]:
         return self.wire.statistics.bytes_sent, self.wire.statistics.bytes_received
 
@@ -375,15 +367,12 @@ class SynScanMount(Mount):
     async def _read_state(self, priority: Priority) -> MountState:
         if not self._connected:
             raise NotConnectedError(f"{self.wire.name} is not connected")
-        if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
-            async with self._reconnecting:
-                if self._reidentify or self._identified_on != self.wire.statistics.reconnects:
-                    try:
-                        await self._reconnect()
-                    except DeviceError as error:
-                        self._report_problem(f"reconnecting: {error}")
-                        self._judge_link()
-                        raise
+        try:
+            await self._reconnection.run_if(self._needs_reidentifying, self._reconnect)
+        except DeviceError as error:
+            self._report_problem(f"reconnecting: {error}")
+            self._judge_link()
+            raise
         epoch = self._motion_epoch
         failures = self.wire.statistics.failures
         # 't' and 'p' change with motion (a goto enables tracking and may flip the tube) or on the
@@ -402,8 +391,7 @@ class SynScanMount(Mount):
             goto = await self._ask(IsGotoInProgress(), GotoInProgress, priority)
             position = await self._ask(GetRaDec(), Position, priority)
             read_at = self.now()
-            received_s = time.monotonic()
-            place = _Place(position, read_at, self.site)
+            place = _pointing(position, read_at, self.site)
             if full:
                 # The astrometry (about 1 ms of CPU) runs while the hand control answers 't'.
                 tracking = await self._ask(
@@ -419,7 +407,8 @@ class SynScanMount(Mount):
                 self._report_problem(str(error))
             self._judge_link()
             raise
-        ra, dec, alt, az, ra_of_date, dec_of_date = place.compute()
+        ra, dec = place.ra_j2000_hours, place.dec_j2000_deg
+        alt, az, ra_of_date, dec_of_date = place.compute()
         problems: tuple[str, ...] = (self._site_mismatch,) if self._site_mismatch else ()
         if tracking is not None:
             self._cycles_since_full_read = 0
@@ -457,7 +446,7 @@ class SynScanMount(Mount):
             aligned=self._aligned,
             pulse_guiding=bool(self._pulses),
             problems=problems,
-            received_s=received_s,
+            received_s=place.received_s,
         )
         self._publish(state)
         return state
@@ -893,25 +882,13 @@ def _site_mismatch(theirs: Location, ours: Site) -> str:
     )
 
 
-class _Place:
-    """One ``e`` reading and, computed once on demand, what it means: J2000, observed, of date."""
-
-    def __init__(self, position: Position, read_at: datetime, site: Site) -> None:
-        self._position = position
-        self._read_at = read_at
-        self._site = site
-        self._result: tuple[float, float, float, float, float, float] | None = None
-
-    def compute(self) -> tuple[float, float, float, float, float, float]:
-        """(RA J2000 h, Dec J2000°, alt°, az°, RA of date h, Dec of date°)."""
-        if self._result is None:
-            ra, dec = self._position.ra_hours, self._position.dec_degrees
-            if self._position.flipped:  # Dec read beyond the pole: the same direction is RA + 12 h
-                ra = (ra + 12.0) % 24.0
-            alt, az = j2000_to_observed(ra, dec, self._read_at, self._site)
-            ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, self._read_at)
-            self._result = (ra, dec, alt, az, ra_of_date, dec_of_date)
-        return self._result
+def _pointing(position: Position, read_at: datetime, site: Site) -> Pointing:
+    """The reading of one ``e`` reply (a Dec read beyond the pole is the same direction at
+    RA + 12 h)."""
+    ra = position.ra_hours
+    if position.flipped:
+        ra = (ra + 12.0) % 24.0
+    return Pointing(ra, position.dec_degrees, read_at, site)
 
 
 def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float) -> float:

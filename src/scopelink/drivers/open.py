@@ -1,4 +1,5 @@
-"""What a DEVICE string names, and the :class:`Mount` that drives it (docs/cli.md).
+"""Opening a device by its string: what a DEVICE string names, and the :class:`Mount` that
+drives it (the CLI's DEVICE argument, ``scopelink serve``, library users; docs/cli.md).
 
 Forms:
 
@@ -22,7 +23,6 @@ from typing import Final
 from scopelink.astro import Site
 from scopelink.links import LinkError
 from scopelink.mount import Limits, Mount, MountError
-from scopelink.sim import PRESETS, SimClock, SimulatedMount
 
 __all__ = [
     "AUTODETECT_TIMEOUT_S",
@@ -81,6 +81,8 @@ def parse_device(text: str) -> DeviceSpec:
         if not rest.strip():
             raise DeviceError(f"device {text!r} names no port", f"give one of: {EXAMPLES}")
         if kind == "sim":
+            from scopelink.sim import PRESETS  # noqa: PLC0415 - the simulator only if named
+
             preset = rest.strip().lower()
             if preset not in PRESETS:
                 raise DeviceError(
@@ -103,6 +105,8 @@ def create_mount(
     """The (not yet connected) mount for a spec of known kind. ``clock_rate`` speeds up the
     simulator's clock; ``timeout_s`` bounds each reply of a real device (driver default if None)."""
     if spec.kind == "sim":
+        from scopelink.sim import PRESETS, SimClock, SimulatedMount  # noqa: PLC0415 - if used
+
         return SimulatedMount(
             PRESETS[spec.target], site=site, limits=limits, clock=SimClock(rate=clock_rate)
         )
@@ -113,13 +117,11 @@ def create_mount(
             return SynScanMount(spec.target, site=site, limits=limits)
         return SynScanMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
     if spec.kind == "skytracker":
-        from scopelink.drivers.skytracker import (  # noqa: PLC0415 - only if used
-            LineOptions,
-            SkyTrackerMount,
-        )
+        from scopelink.drivers.skytracker import SkyTrackerMount  # noqa: PLC0415 - only if used
 
-        options = LineOptions() if timeout_s is None else LineOptions(reply_timeout_s=timeout_s)
-        return SkyTrackerMount(spec.target, site=site, limits=limits, options=options)
+        if timeout_s is None:
+            return SkyTrackerMount(spec.target, site=site, limits=limits)
+        return SkyTrackerMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
     raise DeviceError(f"cannot create a mount of unknown kind for {spec}")
 
 

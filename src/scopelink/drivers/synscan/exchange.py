@@ -1,4 +1,4 @@
-"""One SynScan exchange at a time on a link: send, read the reply by its shape, recover from faults.
+"""One SynScan exchange at a time on a link: send, read the reply by its shape, recover.
 
 :class:`SynScanWire` owns the link and the client codec. Every exchange takes a turn on the
 :class:`~scopelink.mount.scheduling.WireScheduler` (user commands before polls), writes one
@@ -27,10 +27,11 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
+from scopelink.drivers.common import LinkFactory, LinkStatistics
 from scopelink.links import Link, LinkClosedError, LinkError
 from scopelink.mount import DeviceError, Priority, WireScheduler
 from scopelink.protocol.synscan import (
@@ -45,15 +46,12 @@ from scopelink.protocol.synscan import (
     encode_command,
 )
 
-__all__ = ["DEFAULT_TIMEOUT_S", "STOP_GRACE_S", "LinkFactory", "SynScanWire", "WireStatistics"]
+__all__ = ["DEFAULT_TIMEOUT_S", "STOP_GRACE_S", "SynScanWire"]
 
 logger = logging.getLogger(__name__)
 
 DEFAULT_TIMEOUT_S = 5.0
 """The spec: "Software drivers should be prepared to wait up to 5.0s" for a reply."""
-
-LinkFactory = Callable[[], Awaitable[Link]]
-"""Opens the link to the hand control (called again to reconnect after the link dropped)."""
 
 _ECHO_VALUES = range(0x80, 0x100)
 """Resynchronisation echoes: bytes no ASCII reply contains, counted so that each is unique among
@@ -95,23 +93,6 @@ class _ExchangeError(Exception):
         self.sent = sent
 
 
-@dataclass(slots=True)
-class WireStatistics:
-    """Counters for health displays and benchmarks."""
-
-    exchanges: int = 0
-    bytes_sent: int = 0
-    bytes_received: int = 0
-    failures: int = 0
-    resyncs: int = 0
-    reconnects: int = 0
-    discarded_bytes: int = 0
-    stops_at_once: int = 0
-    """Stops written without waiting for the stream to be in step (see ``stop_at_once``)."""
-    interrupted: int = 0
-    """Exchanges cut short by a stop."""
-
-
 class SynScanWire:
     """The link to one hand control, used one exchange at a time.
 
@@ -134,7 +115,7 @@ class SynScanWire:
         self.name = name
         self.timeout_s = timeout_s
         self.scheduler = scheduler or WireScheduler()
-        self.statistics = WireStatistics()
+        self.statistics = LinkStatistics()
         self.avoid_echo: set[int] = set()
         self._link: Link | None = None
         self._codec = SynScanClientConnection()
