@@ -9,7 +9,7 @@ import pytest
 
 from scopelink.astro import PierSide, angular_separation_deg, j2000_to_apparent
 from scopelink.drivers.synscan import NotAlignedError, SynScanMount
-from scopelink.drivers.synscan.mount import FULL_READ_EVERY
+from scopelink.drivers.synscan.polling import FULL_READ_EVERY
 from scopelink.mount import (
     AlignmentMode,
     DeviceError,
