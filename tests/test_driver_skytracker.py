@@ -217,6 +217,28 @@ async def test_disconnect_releases_and_aborts(tmp_path: Path, transport: str) ->
         await assert_position_matches_sim(r)
 
 
+async def test_open_constructs_and_connects(tmp_path: Path, transport: str) -> None:
+    """The constructor touches nothing; ``await SkyTrackerMount.open`` connects (the same meaning
+    as ``SynScanMount.open``); ``timeout_s`` is the one reply timeout, as on SynScan."""
+    async with rig(tmp_path, transport, connect=False) as r:
+        assert not r.driver.state.connected
+        assert r.emulator.tracker.mode is not None  # the box is there, untouched
+        with pytest.raises(NotConnectedError):
+            _ = r.driver.line
+        opened = await SkyTrackerMount.open(
+            r.spec, site=SITE, clock=r.sim.clock.now, timeout_s=0.5, name=r.spec
+        )
+        try:
+            assert opened.state.connected
+            assert opened.identity.link == r.spec
+            assert opened.timeout_s == opened.line.timeout_s == 0.5
+            assert opened.line.statistics.commands_sent > 0
+        finally:
+            await opened.disconnect()
+    with pytest.raises(ValueError, match="timeout"):
+        SkyTrackerMount("tcp://127.0.0.1:1", site=SITE, timeout_s=0.0)
+
+
 async def test_blocking_facade_over_the_driver(tmp_path: Path, transport: str) -> None:
     from scopelink.mount.blocking import BlockingMount
 
