@@ -19,7 +19,7 @@ from scopelink.cli.main import build_parser
 from scopelink.cli.motion_commands import parse_rate
 from scopelink.cli.ports_command import SerialPort
 from scopelink.cli.targets import Coordinates, Named, parse_target
-from scopelink.drivers.open import DeviceError, DeviceSpec, parse_device
+from scopelink.drivers.open import DeviceOpenError, DeviceSpec, parse_device
 from scopelink.mount import MountState, SlewProgress
 from scopelink.sim import SIDEREAL_RATE_DEG_S
 from tests.test_cli_support import scopelink
@@ -128,7 +128,7 @@ def test_device_strings(text: str, expected: DeviceSpec) -> None:
 
 @pytest.mark.parametrize("text", ["", "synscan:", "sim:eq7", "skytracker:  "])
 def test_bad_device_strings_say_what_to_give(text: str) -> None:
-    with pytest.raises(DeviceError) as raised:
+    with pytest.raises(DeviceOpenError) as raised:
         parse_device(text)
     assert raised.value.hint
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
-from scopelink.drivers import DeviceError, create_mount, open_mount, parse_device
+from scopelink.drivers import DeviceOpenError, create_mount, open_mount, parse_device
 from scopelink.drivers.common import LinkStatistics, Pointing
 from scopelink.drivers.open import AUTODETECT_TIMEOUT_S
 from scopelink.drivers.skytracker import DEFAULT_TIMEOUT_S as SKYTRACKER_TIMEOUT_S
@@ -97,7 +97,7 @@ async def test_a_device_string_opens_without_the_cli() -> None:
         assert opened.state.connected
     finally:
         await opened.disconnect()
-    with pytest.raises(DeviceError, match="no simulated mount called 'nope'"):
+    with pytest.raises(DeviceOpenError, match="no simulated mount called 'nope'"):
         parse_device("sim:nope")
 
 

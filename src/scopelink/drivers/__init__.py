@@ -11,6 +11,12 @@ touching the link; ``await driver.connect()`` (or ``await Driver.open(link, ...)
 constructs and connects) opens it. See the "Drivers" section of ``docs/architecture.md``.
 """
 
-from scopelink.drivers.open import DeviceError, DeviceSpec, create_mount, open_mount, parse_device
+from scopelink.drivers.open import (
+    DeviceOpenError,
+    DeviceSpec,
+    create_mount,
+    open_mount,
+    parse_device,
+)
 
-__all__ = ["DeviceError", "DeviceSpec", "create_mount", "open_mount", "parse_device"]
+__all__ = ["DeviceOpenError", "DeviceSpec", "create_mount", "open_mount", "parse_device"]

@@ -6,6 +6,7 @@ and turn a J2000 reading into what the Mount API reports.
   and reopens, its link;
 - :class:`LinkStatistics`: the counters every driver keeps about its line (health displays,
   benchmarks, tests);
+- :class:`PendingRead`: the reply being waited for, which a stop may cut short;
 - :class:`Reconnection`: one reconnection at a time, for a poll and a command that both find the
   link lost;
 - :class:`Pointing`: one J2000 reading and, computed once on demand, alt/az and RA/Dec of date;
@@ -30,6 +31,7 @@ from scopelink.mount.scheduling import Priority, WireScheduler
 __all__ = [
     "LinkFactory",
     "LinkStatistics",
+    "PendingRead",
     "Pointing",
     "Priority",
     "Reconnection",
@@ -88,6 +90,19 @@ class LinkStatistics:
     commands_sent: int = 0
     stray_bytes: int = 0
     bus_refusals: int = 0
+
+
+@dataclass(slots=True)
+class PendingRead:
+    """A reply being waited for: its deadline, and whether a stop cut it short (both drivers'
+    ``stop_at_once`` interrupt the read in progress rather than wait for it)."""
+
+    deadline: asyncio.Timeout
+    interrupted: bool = False
+
+    def interrupt(self) -> None:
+        self.interrupted = True
+        self.deadline.reschedule(asyncio.get_running_loop().time())
 
 
 class Reconnection:

@@ -48,16 +48,8 @@ from scopelink.protocol.skytracker import (
     TrackerStatus,
 )
 
-from .exchange import (
-    DEFAULT_TIMEOUT_S,
-    BadReplyError,
-    BusOptions,
-    SkyTrackerLine,
-)
-from .motion import (
-    UTILITY_ARROW_ARCSEC_S,
-    AxisMotion,
-)
+from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, BusOptions, SkyTrackerLine
+from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion
 
 __all__ = ["SkyTrackerBase"]
 

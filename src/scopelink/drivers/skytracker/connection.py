@@ -9,10 +9,7 @@ import contextlib
 import logging
 
 from scopelink.links import Link, LinkError
-from scopelink.mount import (
-    DeviceError,
-    NotConnectedError,
-)
+from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import (
     Acknowledge,
@@ -29,9 +26,7 @@ from scopelink.protocol.skytracker import (
 )
 from scopelink.protocol.skytracker.calfloat import encode_calfloat_pair
 
-from .base import (
-    SkyTrackerBase,
-)
+from .base import SkyTrackerBase
 from .calibration import CalibrationFactors, CalibrationRuleError
 from .exchange import (
     BadReplyError,

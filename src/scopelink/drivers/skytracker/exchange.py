@@ -24,7 +24,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from scopelink.drivers.common import LinkStatistics
+from scopelink.drivers.common import LinkStatistics, PendingRead
 from scopelink.links import Link, LinkError
 from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority, WireScheduler
@@ -104,18 +104,6 @@ class BusRefusedError(DeviceError):
         self.unanswered = unanswered
 
 
-@dataclass(slots=True)
-class _Reading:
-    """A reply being waited for: its deadline, and whether a stop abandoned it."""
-
-    deadline: asyncio.Timeout
-    interrupted: bool = False
-
-    def interrupt(self) -> None:
-        self.interrupted = True
-        self.deadline.reschedule(asyncio.get_running_loop().time())
-
-
 @dataclass(frozen=True, slots=True)
 class BusOptions:
     """Timing of the Sky Commander bus on the PC side; the defaults follow the spec (see
@@ -162,7 +150,7 @@ class SkyTrackerLine:
         how long it has been silent, which tells a lost box from a noisy line."""
         self._writing = asyncio.Lock()
         """Held while bytes are written: a stop never lands inside another command's bytes."""
-        self._reading: _Reading | None = None
+        self._reading: PendingRead | None = None
         """The reply being waited for, which a stop may abandon."""
         self._stops = 0
         """Stops written at once so far; a turn that began before the last one ends."""
@@ -339,7 +327,7 @@ class SkyTrackerLine:
             )
         self._flush_strays()
         data = self._client.send(command)
-        reading: _Reading | None = None
+        reading: PendingRead | None = None
         try:
             async with self._writing:
                 await self.link.write(data)
@@ -347,7 +335,7 @@ class SkyTrackerLine:
             if command.reply is None:
                 return None
             async with asyncio.timeout(reply_within_s) as deadline:
-                reading = self._reading = _Reading(deadline)
+                reading = self._reading = PendingRead(deadline)
                 try:
                     event = await self._next_reply()
                 finally:

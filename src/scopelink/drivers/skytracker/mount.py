@@ -42,15 +42,9 @@ from scopelink.protocol.skytracker import (
     TrackerMode,
 )
 
-from .base import (
-    BOX_TRACKING,
-)
+from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
-from .motion import (
-    axis_motion,
-    guide_button,
-    plan_buttons,
-)
+from .motion import axis_motion, guide_button, plan_buttons
 from .polling import SkyTrackerPolling
 
 __all__ = ["SkyTrackerMount", "SlewInProgressError"]

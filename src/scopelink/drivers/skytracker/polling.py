@@ -9,12 +9,7 @@ import logging
 import time
 
 from scopelink.links import LinkError
-from scopelink.mount import (
-    DeviceError,
-    MountError,
-    MountState,
-    NotConnectedError,
-)
+from scopelink.mount import DeviceError, MountError, MountState, NotConnectedError
 from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import (
     ReadPosition,
@@ -25,14 +20,9 @@ from scopelink.protocol.skytracker import (
     TrackerStatus,
 )
 
-from .base import (
-    pointing_of,
-)
+from .base import pointing_of
 from .connection import SkyTrackerConnection
-from .exchange import (
-    BusRefusedError,
-    SkyTrackerLine,
-)
+from .exchange import BusRefusedError, SkyTrackerLine
 
 __all__ = ["SkyTrackerPolling"]
 

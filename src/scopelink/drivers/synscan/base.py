@@ -15,10 +15,7 @@ from collections.abc import Callable, Iterator
 from datetime import datetime
 from typing import TypeVar
 
-from scopelink.astro import (
-    PierSide,
-    Site,
-)
+from scopelink.astro import PierSide, Site
 from scopelink.drivers.common import LinkFactory, Reconnection, link_factory
 from scopelink.drivers.synscan.exchange import DEFAULT_TIMEOUT_S, SynScanWire
 from scopelink.drivers.synscan.identify import (

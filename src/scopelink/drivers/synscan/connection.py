@@ -8,18 +8,10 @@ import dataclasses
 import logging
 import time
 
-from scopelink.astro import (
-    Site,
-)
+from scopelink.astro import Site
 from scopelink.drivers.synscan.base import SynScanBase
-from scopelink.drivers.synscan.identify import (
-    HandControlInfo,
-    capabilities_for,
-)
-from scopelink.mount import (
-    DeviceError,
-    NotConnectedError,
-)
+from scopelink.drivers.synscan.identify import HandControlInfo, capabilities_for
+from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.protocol.synscan import (
     Aligned,
     Axis,

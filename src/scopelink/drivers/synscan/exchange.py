@@ -29,9 +29,8 @@ import logging
 import time
 from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
-from dataclasses import dataclass
 
-from scopelink.drivers.common import LinkFactory, LinkStatistics
+from scopelink.drivers.common import LinkFactory, LinkStatistics, PendingRead
 from scopelink.links import Link, LinkClosedError, LinkError
 from scopelink.mount import DeviceError, Priority, WireScheduler
 from scopelink.protocol.synscan import (
@@ -69,18 +68,6 @@ STOP_GRACE_S = 0.1
 """A stop waits this long for an exchange in flight on a stream in step (the longest reply, 18
 bytes, takes 19 ms at 9600 baud); a reply still missing by then is not worth more of the stop's
 time: the exchange is interrupted."""
-
-
-@dataclass(slots=True)
-class _Scope:
-    """A read in progress: its deadline, and whether a stop cut it short."""
-
-    deadline: asyncio.Timeout
-    interrupted: bool = False
-
-    def interrupt(self) -> None:
-        self.interrupted = True
-        self.deadline.reschedule(asyncio.get_running_loop().time())
 
 
 class _ExchangeError(Exception):
@@ -124,7 +111,7 @@ class SynScanWire:
         self._holder: asyncio.Task[object] | None = None
         self._io = asyncio.Lock()
         """Held while a task uses the link (one recovery and exchange, or a stop's write)."""
-        self._reading: _Scope | None = None
+        self._reading: PendingRead | None = None
         """The scope of the read in progress, which a stop may cut short."""
         self._reading_since = 0.0
         self._stops_waiting = 0
@@ -401,12 +388,12 @@ class SynScanWire:
                 return event
 
     @asynccontextmanager
-    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[_Scope]:
+    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[PendingRead]:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
         either way ``TimeoutError`` leaves the block, and ``scope.interrupted`` tells which."""
         loop = asyncio.get_running_loop()
         async with asyncio.timeout(seconds) as deadline:
-            scope = _Scope(deadline)
+            scope = PendingRead(deadline)
             self._reading, self._reading_since = scope, loop.time()
             try:
                 if self._stops_waiting and self._needs_resync:

@@ -21,17 +21,10 @@ import math
 from datetime import UTC, datetime, timedelta, timezone
 from typing import Any, Self
 
-from scopelink.astro import (
-    PierSide,
-    Site,
-    angular_separation_deg,
-)
+from scopelink.astro import PierSide, Site, angular_separation_deg
 from scopelink.drivers.common import LinkFactory
 from scopelink.drivers.synscan.base import AXES, rate_zero
-from scopelink.drivers.synscan.identify import (
-    SIDEREAL_RATE_DEG_S,
-    synscan_tracking,
-)
+from scopelink.drivers.synscan.identify import SIDEREAL_RATE_DEG_S, synscan_tracking
 from scopelink.drivers.synscan.polling import SynScanPolling
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.mount import (

@@ -8,22 +8,11 @@ import asyncio
 import logging
 from datetime import datetime
 
-from scopelink.astro import (
-    PierSide,
-    Site,
-    angular_separation_deg,
-)
+from scopelink.astro import PierSide, Site, angular_separation_deg
 from scopelink.drivers.common import Pointing
 from scopelink.drivers.synscan.connection import SynScanConnection
-from scopelink.drivers.synscan.identify import (
-    mount_tracking,
-)
-from scopelink.mount import (
-    DeviceError,
-    MountState,
-    NotConnectedError,
-    Priority,
-)
+from scopelink.drivers.synscan.identify import mount_tracking
+from scopelink.mount import DeviceError, MountState, NotConnectedError, Priority
 from scopelink.protocol.synscan import (
     Aligned,
     GetPointingState,
