@@ -1,5 +1,5 @@
-"""What both drivers do alike: open their link, count its traffic, take turns on it, reconnect,
-and turn a J2000 reading into what the Mount API reports.
+"""What both drivers do alike: open their link, count its traffic, cut a read short for a stop,
+reconnect, and turn a J2000 reading into what the Mount API reports.
 
 - :data:`LinkFactory` and :func:`link_factory`: a link spec (``/dev/ttyUSB0``,
   ``tcp://host:port``, a pty path) or a coroutine function becomes the one way a driver opens,
@@ -9,9 +9,10 @@ and turn a J2000 reading into what the Mount API reports.
 - :class:`PendingRead`: the reply being waited for, which a stop may cut short;
 - :class:`Reconnection`: one reconnection at a time, for a poll and a command that both find the
   link lost;
-- :class:`Pointing`: one J2000 reading and, computed once on demand, alt/az and RA/Dec of date;
-- :class:`~scopelink.mount.scheduling.WireScheduler` and :class:`Priority` (re-exported): user
-  commands take the wire before background polls.
+- :class:`Pointing`: one J2000 reading and, computed once on demand, alt/az and RA/Dec of date.
+
+The turn-taking on the wire (user commands before background polls) is
+:class:`scopelink.mount.scheduling.WireScheduler`, one per driver: the Mount layer defines it.
 
 See the "Drivers" section of ``docs/architecture.md``.
 """
@@ -26,16 +27,13 @@ from datetime import datetime
 
 from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
 from scopelink.links import Link, open_link
-from scopelink.mount.scheduling import Priority, WireScheduler
 
 __all__ = [
     "LinkFactory",
     "LinkStatistics",
     "PendingRead",
     "Pointing",
-    "Priority",
     "Reconnection",
-    "WireScheduler",
     "link_factory",
 ]
 
