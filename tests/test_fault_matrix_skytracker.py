@@ -186,7 +186,7 @@ async def assert_truth_read(r: Rig) -> None:
     assert off < POSITION_TOLERANCE_DEG, f"position {read} is {off:.4f}° from the truth {after}"
     assert r.driver.tracker_mode is mode_after, f"mode {r.driver.tracker_mode}, box {mode_after}"
     assert r.driver.state.problems == (), f"problems {r.driver.state.problems}"
-    speeds = await r.driver.line.tracker(ReadGuideSpeed())
+    speeds = await r.driver.line.ask(ReadGuideSpeed())
     truth = GuideSpeedReply(*r.emulator.tracker.guide_speeds_arcsec_s)
     assert speeds == truth, f"read {speeds}, box {truth}"
 

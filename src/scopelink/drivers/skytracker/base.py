@@ -196,12 +196,12 @@ class SkyTrackerBase(Mount):
         floats have no redundancy (a garbled one still reads as some value), so a reply that is
         not ``expected`` (or with nothing expected) is read again until two readings in a row
         agree, at most three readings; then :class:`BadReplyError`."""
-        reply = first if first is not None else await line.tracker(command, priority)
+        reply = first if first is not None else await line.ask(command, priority)
         assert reply is not None
         if expected is not None and reply == expected:
             return reply
         for _ in range(2):
-            again = await line.tracker(command, priority)
+            again = await line.ask(command, priority)
             assert again is not None
             if again == reply or (expected is not None and again == expected):
                 if again != reply:
@@ -275,7 +275,7 @@ class SkyTrackerBase(Mount):
         confirm: list[TrackerCommand] = [ReadStatus()]
         if speeds is not None:
             confirm.append(ReadGuideSpeed())
-        replies = await line.tracker_sequence([*commands, *confirm])
+        replies = await line.ask_sequence([*commands, *confirm])
         status = replies[len(commands)]
         assert isinstance(status, StatusReply)
         if status.status.mode is not mode or pressed & ~status.status.directions:
@@ -316,7 +316,7 @@ class SkyTrackerBase(Mount):
 
     async def _set_guide_speeds(self, speeds: tuple[int, int]) -> None:
         line = self._require_line()
-        await line.tracker(SetGuideSpeed(*speeds))
+        await line.ask(SetGuideSpeed(*speeds))
         reply = await self._read_agreed(line, ReadGuideSpeed(), expected=GuideSpeedReply(*speeds))
         assert isinstance(reply, GuideSpeedReply)
         self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)

@@ -103,7 +103,7 @@ class SkyTrackerConnection(SkyTrackerBase):
         if not self._status.directions:
             return
         logger.warning("arrows still pressed at connect (%s): releasing them", self._status)
-        replies = await line.tracker_sequence([ReleaseDirections(), ReadStatus()])
+        replies = await line.ask_sequence([ReleaseDirections(), ReadStatus()])
         self._note_status(await self._read_agreed(line, ReadStatus(), first=replies[-1]))
 
     @staticmethod
@@ -112,10 +112,10 @@ class SkyTrackerConnection(SkyTrackerBase):
         ``K`` echo) can leave the box inside a ``K`` or ``S`` frame that swallows the first
         ``V`` as payload; once that frame is complete (or dropped), ``V`` is answered."""
         try:
-            reply = await line.tracker(ReadVersion())
+            reply = await line.ask(ReadVersion())
         except (ReplyTimeoutError, BadReplyError) as error:
             logger.info("no version on the first try, asking again: %s", error)
-            reply = await line.tracker(ReadVersion())
+            reply = await line.ask(ReadVersion())
             # The first answer may only have been late, and so read as the second's: now that
             # the version is known, the resync's sync point reads past any answer still due.
             if not await line.resync():
@@ -160,7 +160,7 @@ class SkyTrackerConnection(SkyTrackerBase):
             raise CalibrationRuleError("'S' must be the first command on the line")
         command = SetCalibration(factors.azimuth_factor, factors.elevation_factor)
         try:
-            reply = await line.tracker(command)
+            reply = await line.ask(command)
         except (ReplyTimeoutError, BadReplyError) as error:
             # A refused 'S' gets no reply; so does one whose 'A' was lost. 's' tells them apart.
             logger.info("no good acknowledgement of 'S' (%s): reading the factors back", error)

@@ -158,7 +158,7 @@ class SkyTrackerLine:
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
-    async def tracker(
+    async def ask(
         self, command: TrackerCommand, priority: Priority = Priority.COMMAND
     ) -> Reply | None:
         """One Sky Tracker command and its reply (None for a command without one)."""
@@ -166,7 +166,7 @@ class SkyTrackerLine:
             self._turn_stops = self._stops
             return await self._exchange(command, self.timeout_s)
 
-    async def tracker_sequence(
+    async def ask_sequence(
         self, commands: Sequence[TrackerCommand], priority: Priority = Priority.COMMAND
     ) -> list[Reply | None]:
         """Several Sky Tracker commands in one turn (e.g. ``b`` then the arrows still held)."""

@@ -125,7 +125,7 @@ class SkyTrackerMount(SkyTrackerPolling):
             if self._mode is TrackerMode.GOTO:
                 commands.append(SelectMode(TrackerMode.UTILITY))
             # The status read makes sure the box has taken them before the link closes.
-            await line.tracker_sequence([*commands, ReadStatus()])
+            await line.ask_sequence([*commands, ReadStatus()])
         except (MountError, LinkError) as error:
             logger.info("could not stop motion before disconnecting: %s", error)
         finally:
@@ -157,7 +157,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         # UTILITY first: it ends a GOTO under way (the box ignores 'G' during one), and makes
         # the status after 'G' tell a lost 'G' (still UTILITY) from a GOTO that ended at once
         # (TRACK).
-        await line.tracker(SelectMode(TrackerMode.UTILITY))
+        await line.ask(SelectMode(TrackerMode.UTILITY))
         self._mode = TrackerMode.UTILITY
         (reply,) = await line.commander([LoadObject.current(ra_j2000_hours, dec_j2000_deg)])
         if not isinstance(reply, Acknowledge):
@@ -165,7 +165,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         # 'G' has no reply: the status tells that the box took it (GOTO, or TRACK at once when
         # already on target). A lost 'G' (unbuffered port) is sent once more.
         for _ in range(2):
-            replies = await line.tracker_sequence([SelectMode(TrackerMode.GOTO), ReadStatus()])
+            replies = await line.ask_sequence([SelectMode(TrackerMode.GOTO), ReadStatus()])
             self._note_status(replies[-1])
             if self._mode in (TrackerMode.GOTO, *BOX_TRACKING):
                 break
