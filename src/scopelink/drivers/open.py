@@ -18,11 +18,11 @@ from __future__ import annotations
 import contextlib
 import logging
 from dataclasses import dataclass
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
-from scopelink.astro import Site
-from scopelink.links import LinkError
-from scopelink.mount import Limits, Mount, MountError
+if TYPE_CHECKING:  # the CLI builds its parsers from EXAMPLES: no numpy before a command runs
+    from scopelink.astro import Site
+    from scopelink.mount import Limits, Mount
 
 __all__ = [
     "AUTODETECT_TIMEOUT_S",
@@ -81,7 +81,7 @@ def parse_device(text: str) -> DeviceSpec:
         if not rest.strip():
             raise DeviceOpenError(f"device {text!r} names no port", f"give one of: {EXAMPLES}")
         if kind == "sim":
-            from scopelink.sim import PRESETS  # noqa: PLC0415 - the simulator only if named
+            from scopelink.sim import PRESETS  # noqa: PLC0415 - numpy: only for a sim device
 
             preset = rest.strip().lower()
             if preset not in PRESETS:
@@ -179,11 +179,17 @@ _PORT_HINT: Final = (
 
 async def _close_quietly(mount: Mount) -> None:
     """Close the link a failed connection attempt may have left open."""
+    from scopelink.links import LinkError  # noqa: PLC0415 - see the imports at the top
+    from scopelink.mount import MountError  # noqa: PLC0415
+
     with contextlib.suppress(MountError, LinkError):
         await mount.disconnect()
 
 
 async def _connect(mount: Mount, spec: DeviceSpec) -> None:
+    from scopelink.links import LinkError  # noqa: PLC0415 - see the imports at the top
+    from scopelink.mount import MountError  # noqa: PLC0415
+
     try:
         await mount.connect()
     except LinkError as error:
