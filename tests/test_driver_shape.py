@@ -106,7 +106,8 @@ def test_importing_the_drivers_loads_neither_the_cli_nor_the_simulator() -> None
     load numpy (the astronomy) before a command runs, nor the CLI or the simulator."""
     code = (
         "import re, sys, scopelink.drivers as d; d.parse_device('synscan:/dev/ttyUSB0'); "
-        "bad = sorted(m for m in sys.modules if re.match(r'numpy|scopelink\\.(astro|cli|sim|web)', m)); "
+        "bad = sorted(m for m in sys.modules "
+        "if re.match(r'numpy|scopelink\\.(astro|cli|sim|web)', m)); "
         "print(bad)"
     )
     result = subprocess.run(
