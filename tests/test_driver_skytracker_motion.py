@@ -29,7 +29,9 @@ async def track_at(r: Rig, alt_deg: float, az_deg: float) -> None:
     """Point the scope there and track (TRACK mode)."""
     r.point(alt_deg, az_deg)
     await r.driver.set_tracking(TrackingMode.ALT_AZ)
-    await asyncio.sleep(0.05)  # a few firmware ticks: the track rates are read
+    # The box reads its track rates from the Sky Commander at its next firmware tick: wait for
+    # them to drive both axes (a fixed sleep missed the tick on a loaded machine).
+    await eventually(lambda: all(axis.rate != 0.0 for axis in r.sim.axes))
 
 
 async def test_tracking_on_and_off(tmp_path: Path, transport: str) -> None:
