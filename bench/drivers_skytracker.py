@@ -168,7 +168,7 @@ async def measure(sizes: Sizes, data_dir: Path, *, pace: bool) -> list[Row]:
                 await line.commander([ReadPosition()], Priority.POLL, retry_delays_s=())
 
             async def driver_status() -> None:
-                await line.tracker(ReadStatus(), Priority.POLL)
+                await line.ask(ReadStatus(), Priority.POLL)
 
             measure_one = rate_per_s if pace else cpu_us_per_call
             count = sizes.polls if pace else sizes.commands

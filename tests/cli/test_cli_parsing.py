@@ -13,13 +13,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, format_degrees, format_hours
-from scopelink.cli.devices import DeviceError, DeviceSpec, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.goto_command import SlewDisplay
 from scopelink.cli.main import build_parser
 from scopelink.cli.motion_commands import parse_rate
 from scopelink.cli.ports_command import SerialPort
 from scopelink.cli.targets import AltAz, Named, RaDec, parse_target
+from scopelink.drivers.open import DeviceOpenError, DeviceSpec, parse_device
 from scopelink.mount import MountState, SlewProgress
 from tests.support.cli import scopelink
 
@@ -125,7 +125,7 @@ def test_device_strings(text: str, expected: DeviceSpec) -> None:
 
 @pytest.mark.parametrize("text", ["", "synscan:", "sim:eq7", "skytracker:  "])
 def test_bad_device_strings_say_what_to_give(text: str) -> None:
-    with pytest.raises(DeviceError) as raised:
+    with pytest.raises(DeviceOpenError) as raised:
         parse_device(text)
     assert raised.value.hint
 

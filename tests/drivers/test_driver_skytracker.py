@@ -103,10 +103,10 @@ async def test_goto_lands_on_the_target_and_tracks(tmp_path: Path, transport: st
 
 async def test_goto_below_the_horizon_sends_nothing(tmp_path: Path, transport: str) -> None:
     async with rig(tmp_path, transport) as r:
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         with pytest.raises(LimitError):
             await r.driver.goto_equatorial(*sky_at(r.sim, -10.0, 200.0))
-        assert r.driver.line.commands_sent == sent
+        assert r.driver.line.statistics.commands_sent == sent
         assert box_mode(r) is TrackerMode.UTILITY
 
 
@@ -188,6 +188,28 @@ async def test_disconnect_releases_and_aborts(tmp_path: Path, transport: str) ->
         await assert_position_matches_sim(r)
 
 
+async def test_open_constructs_and_connects(tmp_path: Path, transport: str) -> None:
+    """The constructor touches nothing; ``await SkyTrackerMount.open`` connects (the same meaning
+    as ``SynScanMount.open``); ``timeout_s`` is the one reply timeout, as on SynScan."""
+    async with rig(tmp_path, transport, connect=False) as r:
+        assert not r.driver.state.connected
+        assert r.emulator.tracker.mode is not None  # the box is there, untouched
+        with pytest.raises(NotConnectedError):
+            _ = r.driver.line
+        opened = await SkyTrackerMount.open(
+            r.spec, site=SITE, clock=r.sim.clock.now, timeout_s=0.5, name=r.spec
+        )
+        try:
+            assert opened.state.connected
+            assert opened.identity.link == r.spec
+            assert opened.timeout_s == opened.line.timeout_s == 0.5
+            assert opened.line.statistics.commands_sent > 0
+        finally:
+            await opened.disconnect()
+    with pytest.raises(ValueError, match="timeout"):
+        SkyTrackerMount("tcp://127.0.0.1:1", site=SITE, timeout_s=0.0)
+
+
 async def test_blocking_facade_over_the_driver(tmp_path: Path, transport: str) -> None:
     from scopelink.mount.blocking import BlockingMount
 
@@ -232,10 +254,10 @@ async def test_set_site_moves_only_the_pc_side_altaz(tmp_path: Path, transport: 
     async with rig(tmp_path, transport) as r:
         r.point(45.0, 90.0)
         before = await r.driver.refresh()
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         elsewhere = Site(latitude_deg=-30.0, longitude_deg=11.0, pressure_hpa=0.0)
         await r.driver.set_site(elsewhere)
-        assert r.driver.line.commands_sent == sent  # the box keeps no site
+        assert r.driver.line.statistics.commands_sent == sent  # the box keeps no site
         assert r.driver.site == elsewhere
         after = r.driver.state
         assert after.ra_j2000_hours == before.ra_j2000_hours

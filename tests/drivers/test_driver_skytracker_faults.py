@@ -56,7 +56,7 @@ async def test_a_lost_status_reply_keeps_the_last_state(tmp_path: Path, transpor
         assert kept.ra_j2000_hours == before.ra_j2000_hours
         assert kept.dec_j2000_deg == before.dec_j2000_deg
         assert any("no reply to 'R" in problem for problem in kept.problems)
-        assert r.driver.line.resyncs == 1
+        assert r.driver.line.statistics.resyncs == 1
         await assert_position_matches_sim(r)  # recovered
         assert r.driver.state.problems == ()
 
@@ -84,7 +84,7 @@ async def test_a_bad_bus_grant_is_retried_transparently(
             except DeviceError:
                 assert r.driver.state.problems  # a clear error, the last position kept
         assert r.emulator.faults.fired
-        assert r.driver.line.resyncs >= 1
+        assert r.driver.line.statistics.resyncs >= 1
         await assert_position_matches_sim(r)
 
 
@@ -93,7 +93,7 @@ async def test_a_slow_reply_still_arrives(tmp_path: Path, transport: str) -> Non
     async with rig(tmp_path, transport) as r:
         r.emulator.faults.add(fault(FaultKind.SLOW, "V", 0.02))
         assert (await r.driver.read_status()) is not None
-        assert r.driver.line.resyncs == 0
+        assert r.driver.line.statistics.resyncs == 0
 
 
 @transports
@@ -163,7 +163,9 @@ async def test_one_lost_version_reply_is_asked_again(tmp_path: Path, transport: 
         r.emulator.faults.add(fault(FaultKind.DROP, "V"))
         await r.driver.connect()
         assert r.driver.identity.firmware == "v4.0"
-        assert r.driver.line.resyncs == 2  # after the timeout, and past a late first answer
+        assert (
+            r.driver.line.statistics.resyncs == 2
+        )  # after the timeout, and past a late first answer
 
 
 @transports

@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 from scopelink.drivers.skytracker import (
+    BusOptions,
     BusRefusedError,
     CalibrationFactors,
     CalibrationRuleError,
-    LineOptions,
     SkyTrackerMount,
 )
 from scopelink.links import Link, open_serial, open_tcp
@@ -23,6 +23,7 @@ from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.skytracker.tracker import DEFAULT_CALIBRATION
 from tests.support.skytracker_driver import (
     FAST,
+    FAST_TIMEOUT_S,
     SITE,
     TRANSPORTS,
     assert_position_matches_sim,
@@ -49,26 +50,26 @@ async def test_bus_refused_during_goto_backs_off_then_fails_clearly(
         started = time.monotonic()
         with pytest.raises(BusRefusedError, match="GOTO is running"):
             await r.driver.read_position()
-        assert time.monotonic() - started >= sum(FAST.bus_retry_delays_s)
-        assert r.driver.line.bus_refusals == len(FAST.bus_retry_delays_s) + 1
+        assert time.monotonic() - started >= sum(FAST.retry_delays_s)
+        assert r.driver.line.statistics.bus_refusals == len(FAST.retry_delays_s) + 1
         # Polls meanwhile neither wait nor fail: the status says GOTO, the bus is not asked.
-        refusals = r.driver.line.bus_refusals
+        refusals = r.driver.line.statistics.bus_refusals
         state = await r.driver.refresh()
         assert state.slewing
-        assert r.driver.line.bus_refusals == refusals
+        assert r.driver.line.statistics.bus_refusals == refusals
 
 
 @transports
 async def test_bus_granted_once_the_goto_ends_during_the_back_off(
     tmp_path: Path, transport: str
 ) -> None:
-    options = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.1, 0.2, 0.4, 0.8, 1.6))
-    async with rig(tmp_path, transport, options=options, clock_rate=10.0) as r:
+    bus = BusOptions(retry_delays_s=(0.1, 0.2, 0.4, 0.8, 1.6))
+    async with rig(tmp_path, transport, bus=bus, clock_rate=10.0) as r:
         here = r.point(40.0, 100.0)
         target = sky_at(r.sim, 40.0, 110.0)  # ~5 simulated seconds away, 0.5 s at 10x
         await r.driver.goto_equatorial(*target)
         position = await r.driver.read_position()
-        assert r.driver.line.bus_refusals >= 1
+        assert r.driver.line.statistics.bus_refusals >= 1
         assert separation_deg(position, target) < 0.02
         assert separation_deg(position, here) > 5.0
 
@@ -85,10 +86,10 @@ async def test_calibration_reads_any_time_but_writes_only_first(
         assert factory.azimuth_factor == DEFAULT_CALIBRATION.azimuth_factor
         assert factory.ground_board_diameter_in == pytest.approx(20.0)
         assert factory.bearing_diameter_in == pytest.approx(8.0)
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         with pytest.raises(CalibrationRuleError, match="first command after it is switched on"):
             await r.driver.write_calibration(CalibrationFactors.for_telescope(24.0, 10.0))
-        assert r.driver.line.commands_sent == sent  # refused before sending anything
+        assert r.driver.line.statistics.commands_sent == sent  # refused before sending anything
 
 
 @transports
@@ -127,7 +128,7 @@ async def test_goto_and_sync_survive_the_strict_line(tmp_path: Path, transport: 
         await r.driver.sync_equatorial(*target)
         await assert_position_matches_sim(r)
         if transport == "pty":  # two stop bits: the port never loses a byte
-            assert r.driver.line.resyncs == 0
+            assert r.driver.line.statistics.resyncs == 0
         # Over TCP the paced sends may bunch after an event-loop stall on a loaded machine (the
         # pacing catches up on its schedule); the retry inside the grant then recovers.
 
@@ -146,7 +147,9 @@ async def test_unspaced_sends_fail_on_the_strict_line(tmp_path: Path, transport:
             host, port = spec.removeprefix("tcp://").split(":")
             return await open_tcp(host, int(port))
 
-        driver = SkyTrackerMount(open_unspaced, site=SITE, clock=sim.clock.now, options=FAST)
+        driver = SkyTrackerMount(
+            open_unspaced, site=SITE, clock=sim.clock.now, timeout_s=FAST_TIMEOUT_S, bus=FAST
+        )
 
         async def connect_and_goto() -> None:
             await driver.connect()
@@ -169,5 +172,7 @@ async def test_connect_after_a_synscan_probe_left_a_frame_open(tmp_path: Path) -
         await probe.close()
         await r.driver.connect()
         assert r.driver.identity.firmware == "v4.0"
-        assert r.driver.line.resyncs == 2  # after the timeout, and past a late first answer
+        assert (
+            r.driver.line.statistics.resyncs == 2
+        )  # after the timeout, and past a late first answer
         assert r.emulator.tracker.guide_speeds_arcsec_s == (ord("x"), ord("V"))

@@ -12,6 +12,7 @@ import pytest
 from scopelink.mount import (
     GuideDirection,
     InvalidValueError,
+    Limits,
     MountAxis,
     NotSupportedError,
     TrackingMode,
@@ -33,7 +34,9 @@ async def track_at(r: Rig, alt_deg: float, az_deg: float) -> None:
     """Point the scope there and track (TRACK mode)."""
     r.point(alt_deg, az_deg)
     await r.driver.set_tracking(TrackingMode.ALT_AZ)
-    await asyncio.sleep(0.05)  # a few firmware ticks: the track rates are read
+    # The box reads its track rates from the Sky Commander at its next firmware tick: wait for
+    # them to drive both axes (a fixed sleep missed the tick on a loaded machine).
+    await eventually(lambda: all(axis.rate != 0.0 for axis in r.sim.axes))
 
 
 async def test_tracking_on_and_off(tmp_path: Path, transport: str) -> None:
@@ -138,6 +141,29 @@ async def test_slew_down_is_released_above_the_horizon(tmp_path: Path, transport
         await eventually(lambda: altitude.rate == 0.0)
         assert r.sim.observed_at(r.sim.elapsed())[0] > 0.0
         assert any("horizon" in p for p in r.driver.state.problems)
+
+
+async def test_tracking_a_setting_star_stops_above_the_horizon(
+    tmp_path: Path, transport: str
+) -> None:
+    """The Sky Tracker driver has no horizon guard of its own any more (issue #13): the Mount's
+    HorizonGuard turns tracking off before a setting star carries the tube below the horizon."""
+    horizon = 5.0
+    async with rig(tmp_path, transport, limits=Limits(horizon_deg=horizon), clock_rate=200.0) as r:
+        await track_at(r, horizon + 0.6, 270.0)  # in the west: the tracked star sets
+        assert box_mode(r) is TrackerMode.TRACK
+        lowest = 90.0
+        async with r.driver.watching():
+            async with asyncio.timeout(20.0):
+                while box_mode(r) is TrackerMode.TRACK:
+                    lowest = min(lowest, r.sim.observed_at(r.sim.elapsed())[0])
+                    await asyncio.sleep(0.01)
+            await r.driver.wait_for(lambda s: s.tracking is TrackingMode.OFF, 5.0)
+        assert box_mode(r) is TrackerMode.UTILITY
+        await asyncio.sleep(0.2)  # tracking is off: the tube stays where it stopped
+        lowest = min(lowest, r.sim.observed_at(r.sim.elapsed())[0])
+        assert lowest >= horizon, lowest
+        assert any("horizon" in p for p in r.driver.state.problems), r.driver.state.problems
 
 
 async def test_move_axis_at_the_track_arrow_rate(tmp_path: Path, transport: str) -> None:

@@ -9,7 +9,7 @@ import pytest
 
 from scopelink.astro import PierSide, angular_separation_deg, j2000_to_apparent
 from scopelink.drivers.synscan import NotAlignedError, SynScanMount
-from scopelink.drivers.synscan.mount import FULL_READ_EVERY
+from scopelink.drivers.synscan.polling import FULL_READ_EVERY
 from scopelink.mount import (
     AlignmentMode,
     DeviceError,
@@ -290,18 +290,26 @@ async def test_disconnect_stops_manual_motion_and_refuses_commands() -> None:
 
 
 async def test_open_and_an_unreachable_link_is_a_clear_error() -> None:
+    """The constructor touches nothing; ``connect`` opens; ``await SynScanMount.open`` does
+    both (the same meaning as ``SkyTrackerMount.open``)."""
     async with rig("tcp", connect=False) as r:
-        mount = SynScanMount.open(r.spec, site=MADRID, clock=r.sim.now)
+        mount = SynScanMount(r.spec, site=MADRID, clock=r.sim.now)
         before = mount.state
         await mount.connect()
         assert not before.connected
         assert mount.state.connected
         assert mount.identity.link == r.spec
         await mount.disconnect()
-    unreachable = SynScanMount.open("tcp://127.0.0.1:1", site=MADRID, timeout_s=0.5)
+        opened = await SynScanMount.open(r.spec, site=MADRID, clock=r.sim.now)
+        assert opened.state.connected
+        assert opened.identity.link == r.spec
+        await opened.disconnect()
+    unreachable = SynScanMount("tcp://127.0.0.1:1", site=MADRID, timeout_s=0.5)
     with pytest.raises(DeviceError, match=r"cannot open tcp://127\.0\.0\.1:1"):
         await unreachable.connect()
     assert not unreachable.state.connected
+    with pytest.raises(DeviceError, match=r"cannot open tcp://127\.0\.0\.1:1"):
+        await SynScanMount.open("tcp://127.0.0.1:1", site=MADRID, timeout_s=0.5)
 
 
 def test_time_zone_is_whole_hours() -> None:

@@ -10,7 +10,7 @@ import asyncio
 
 import pytest
 
-from scopelink.drivers.synscan.mount import FULL_READ_EVERY
+from scopelink.drivers.synscan.polling import FULL_READ_EVERY
 from scopelink.mount import DeviceError
 from scopelink.servers.faults import Fault, FaultInjector, FaultKind
 from tests.support.synscan_driver import TRANSPORTS, Rig, assert_position_matches, rig

@@ -6,8 +6,8 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
+from scopelink.drivers.synscan.exchange import SynScanWire
 from scopelink.drivers.synscan.settling import NEAR_TARGET_DEG, STILL_DEG, SettleDetector
-from scopelink.drivers.synscan.wire import SynScanWire
 
 altitudes = st.floats(-80.0, 80.0)
 azimuths = st.floats(0.0, 359.0)

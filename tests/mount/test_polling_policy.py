@@ -16,8 +16,8 @@ import pytest
 from scopelink.astro import Site
 from scopelink.cli.config import ConfigError, parse_config
 from scopelink.cli.config_command import EXAMPLE_CONFIG, show
-from scopelink.cli.devices import parse_device
 from scopelink.cli.mount_session import DeviceCommand, open_device
+from scopelink.drivers.open import parse_device
 from scopelink.mount import InvalidValueError, MountAxis
 from scopelink.mount.polling import (
     DEFAULT_DEMAND_HOLD_S,

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import pytest
 
-from scopelink.drivers.skytracker import CalibrationFactors, LineOptions
+from scopelink.drivers.skytracker import DEFAULT_TIMEOUT_S, BusOptions, CalibrationFactors
 from scopelink.mount import (
     GuideDirection,
     MountAxis,
@@ -72,7 +72,8 @@ class Injection:
 class Timing:
     """The driver's timeouts and the faults' durations of one run of the matrix."""
 
-    options: LineOptions
+    timeout_s: float
+    bus: BusOptions
     delay_below_s: float
     delay_beyond_s: float
     slow_gap_s: float
@@ -100,7 +101,8 @@ class Timing:
 
 
 FAST = Timing(
-    LineOptions(reply_timeout_s=1.0, grant_timeout_s=0.5, bus_retry_delays_s=(0.05,)),
+    timeout_s=1.0,
+    bus=BusOptions(grant_timeout_s=0.5, retry_delays_s=(0.05,)),
     delay_below_s=0.04,
     delay_beyond_s=2.0,
     slow_gap_s=0.005,
@@ -112,7 +114,8 @@ that take milliseconds: with 0.4 s, a loaded machine running 20 emulators at onc
 late). The grant timeout is 5 times the spec's 100 ms: the emulated box grants only after its own
 Sky Commander exchange. A slow reply's 16 bytes take 75 ms. Unpaced."""
 SPEC = Timing(
-    LineOptions(),
+    timeout_s=DEFAULT_TIMEOUT_S,
+    bus=BusOptions(),
     delay_below_s=0.08,
     delay_beyond_s=6.0,
     slow_gap_s=0.03,
@@ -121,7 +124,6 @@ SPEC = Timing(
 )
 """The driver's defaults (1 s reply timeout, the spec's 100 ms grant, the full bus back-off), a
 reply 6 s late (beyond the 5 s of issue #7), 9600-baud pacing (``--spec-timing``; ~40 s)."""
-OPTIONS = FAST.options
 MUST_SUCCEED = {"delay<timeout", "slow"}
 CAUSES = {
     # What the error must say for each fault: the reply that did not come, a garbled reply,
@@ -184,7 +186,7 @@ async def assert_truth_read(r: Rig) -> None:
     assert off < POSITION_TOLERANCE_DEG, f"position {read} is {off:.4f}° from the truth {after}"
     assert r.driver.tracker_mode is mode_after, f"mode {r.driver.tracker_mode}, box {mode_after}"
     assert r.driver.state.problems == (), f"problems {r.driver.state.problems}"
-    speeds = await r.driver.line.tracker(ReadGuideSpeed())
+    speeds = await r.driver.line.ask(ReadGuideSpeed())
     truth = GuideSpeedReply(*r.emulator.tracker.guide_speeds_arcsec_s)
     assert speeds == truth, f"read {speeds}, box {truth}"
 
@@ -490,9 +492,15 @@ async def run_cell(row: Row, injection: Injection, data_dir: Path, timing: Timin
 async def _run_cell(
     row: Row, injection: Injection, data_dir: Path, timing: Timing, outcome: Outcome
 ) -> None:
-    connect, rate, options = row.connect, row.clock_rate, timing.options
+    connect, rate = row.connect, row.clock_rate
     async with rig(
-        data_dir, "tcp", options=options, connect=connect, clock_rate=rate, pace=timing.paced
+        data_dir,
+        "tcp",
+        timeout_s=timing.timeout_s,
+        bus=timing.bus,
+        connect=connect,
+        clock_rate=rate,
+        pace=timing.paced,
     ) as r:
         r.point(*START_ALTAZ)
         if row.connect:
@@ -648,7 +656,9 @@ async def break_link(r: Rig) -> None:
 async def test_arrows_pressed_when_the_link_broke_are_released_on_reconnect(
     tmp_path: Path,
 ) -> None:
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=CLOCK_RATE
+    ) as r:
         r.point(*START_ALTAZ)
         await r.driver.move_axis(MountAxis.PRIMARY, 4.0)  # UTILITY arrow, 4°/s
         await break_link(r)
@@ -662,7 +672,9 @@ async def test_arrows_pressed_when_the_link_broke_are_released_on_reconnect(
 
 
 async def test_a_guide_pulse_cut_by_the_link_is_ended_on_reconnect(tmp_path: Path) -> None:
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=CLOCK_RATE
+    ) as r:
         r.point(*START_ALTAZ)
         await r.driver.set_tracking(TrackingMode.ALT_AZ)
         await r.driver.pulse_guide(GuideDirection.WEST, 300)
@@ -680,7 +692,9 @@ async def test_a_guide_pulse_cut_by_the_link_is_ended_on_reconnect(tmp_path: Pat
 
 
 async def test_a_goto_cut_by_the_link_lands_and_is_left_alone(tmp_path: Path) -> None:
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=GOTO_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=GOTO_RATE
+    ) as r:
         await point_for_goto(r)
         await goto(r)
         await break_link(r)
@@ -693,7 +707,9 @@ async def test_a_goto_cut_by_the_link_lands_and_is_left_alone(tmp_path: Path) ->
 async def test_a_deaf_box_cannot_be_stopped_until_it_listens_again(tmp_path: Path) -> None:
     """A halted box reads nothing: the abort fails naming the silence; once the box reads
     again the next abort stops the motion within one timeout."""
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=CLOCK_RATE
+    ) as r:
         r.point(*START_ALTAZ)
         # Not this test's subject: blind for seconds at 4°/s, the guard's Sun budget would stop
         # the azimuth motion itself (tests/safety/test_safety_sun_noisy.py), reopening the link.
@@ -717,10 +733,12 @@ async def test_a_deaf_box_cannot_be_stopped_until_it_listens_again(tmp_path: Pat
 async def test_what_the_box_cannot_do_never_reaches_the_link(tmp_path: Path) -> None:
     """The public methods without a Sky Tracker command are refused or done on the PC: with
     every reply armed to close the link, nothing fires."""
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=CLOCK_RATE
+    ) as r:
         r.point(*START_ALTAZ)
         await r.driver.refresh()
-        sent = r.driver.line.commands_sent
+        sent = r.driver.line.statistics.commands_sent
         r.emulator.faults.add(Fault(FaultKind.CLOSE, times=None))
         for refused in (
             r.driver.park(),
@@ -731,7 +749,7 @@ async def test_what_the_box_cannot_do_never_reaches_the_link(tmp_path: Path) -> 
             with pytest.raises(NotSupportedError):
                 await refused
         await r.driver.set_site(r.driver.site)
-        assert r.driver.line.commands_sent == sent
+        assert r.driver.line.statistics.commands_sent == sent
         assert not r.emulator.faults.fired
 
 
@@ -743,7 +761,9 @@ async def test_no_published_state_is_wrong_while_faults_come_and_go(tmp_path: Pa
     other is armed on whatever comes next, box or Sky Commander: every state published meanwhile
     still shows the scope tracking where it points (a kept position is still true: tracking
     holds the J2000 position), never a mode or position from a bad or misattributed reply."""
-    async with rig(tmp_path, "tcp", options=OPTIONS, clock_rate=CLOCK_RATE) as r:
+    async with rig(
+        tmp_path, "tcp", timeout_s=FAST.timeout_s, bus=FAST.bus, clock_rate=CLOCK_RATE
+    ) as r:
         r.point(*START_ALTAZ)
         await r.driver.set_tracking(TrackingMode.ALT_AZ)
         await r.driver.refresh()

@@ -12,13 +12,14 @@ import asyncio
 from collections.abc import Callable
 from pathlib import Path
 
-from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
+from scopelink.drivers.skytracker import BusOptions, SkyTrackerMount
 from scopelink.mount import MountAxis, MountState, TrackingMode
 from scopelink.servers.faults import ANY, Fault, FaultKind
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from tests.support.skytracker_driver import SITE, sky_tracker_mount
 
-OPTIONS = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.05, 0.1, 0.2))
+BUS = BusOptions(retry_delays_s=(0.05, 0.1, 0.2))
+TIMEOUT_S = 0.5
 RECONNECT_WITHIN_S = 5.0
 
 
@@ -42,7 +43,7 @@ async def test_the_driver_reconnects_by_itself_and_claims_no_motion_meanwhile(
     sim = sky_tracker_mount(rate=1.0)
     async with SkyTrackerEmulator(sim, tmp_path) as emulator:
         _, port = await emulator.on_tcp()
-        driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, options=OPTIONS)
+        driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, timeout_s=TIMEOUT_S, bus=BUS)
         driver.stale_after_s = 1.0
         await driver.connect()
         async with driver.watching():
@@ -79,7 +80,7 @@ async def test_a_silent_box_is_lost_then_found_again(tmp_path: Path) -> None:
     sim = sky_tracker_mount(rate=1.0)
     async with SkyTrackerEmulator(sim, tmp_path) as emulator:
         _, port = await emulator.on_tcp()
-        driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, options=OPTIONS)
+        driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, timeout_s=TIMEOUT_S, bus=BUS)
         driver.stale_after_s = 1.0
         await driver.connect()
         async with driver.watching():

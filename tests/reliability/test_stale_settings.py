@@ -12,8 +12,8 @@ import pytest
 from scopelink.astro import Site
 from scopelink.cli.config import ConfigError, parse_config
 from scopelink.cli.config_command import EXAMPLE_CONFIG, show
-from scopelink.cli.devices import parse_device
 from scopelink.cli.mount_session import DeviceCommand, open_device
+from scopelink.drivers.open import parse_device
 from scopelink.mount import DEFAULT_STALE_AFTER_S
 from scopelink.mount.polling import (
     MAX_RETRY_S,

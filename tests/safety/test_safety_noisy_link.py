@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 from bench.safety_guard import HORIZON_DEG, noisy_rig, noisy_trial
 
-from scopelink.drivers.synscan.wire import STOP_GRACE_S
+from scopelink.drivers.synscan.exchange import STOP_GRACE_S
 from scopelink.mount import MountAxis
 from scopelink.mount import guard as guard_module
 from scopelink.mount.guarded import GuardSettings

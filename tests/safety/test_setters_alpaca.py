@@ -18,7 +18,7 @@ from typing import Any
 import aiohttp
 import pytest
 
-from scopelink.drivers.synscan.mount import PARK_TOLERANCE_DEG
+from scopelink.drivers.synscan.polling import PARK_TOLERANCE_DEG
 from scopelink.mount import InvalidValueError, LimitError, Mount, ParkPosition
 from scopelink.mount.setters import EARLIEST_UTC, LATEST_UTC
 from scopelink.servers.alpaca import AlpacaServer, ErrorNumber

@@ -10,7 +10,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
-from scopelink.drivers.skytracker import LineOptions, SkyTrackerMount
+from scopelink.drivers.skytracker import BusOptions, SkyTrackerMount
 from scopelink.links import Link, open_link
 from scopelink.mount import Limits, MountAxis
 from scopelink.protocol.skytracker import TrackerMode
@@ -23,7 +23,8 @@ EPOCH = datetime(2026, 1, 1, 20, 0, tzinfo=UTC)
 CLOCK_RATE = 40.0
 """Simulated seconds per real second: a 30 s GOTO takes 0.75 s."""
 TRANSPORTS = ["pty", "tcp"]
-FAST = LineOptions(reply_timeout_s=0.5, bus_retry_delays_s=(0.05, 0.1, 0.2))
+FAST = BusOptions(retry_delays_s=(0.05, 0.1, 0.2))
+FAST_TIMEOUT_S = 0.5
 """Spec timing (100 ms grant), shorter reply timeout and back-off so fault tests stay quick."""
 
 
@@ -75,7 +76,8 @@ async def rig(
     *,
     faults: FaultInjector | None = None,
     strict_line: bool = False,
-    options: LineOptions = FAST,
+    timeout_s: float = FAST_TIMEOUT_S,
+    bus: BusOptions = FAST,
     connect: bool = True,
     limits: Limits | None = None,
     guide_speed_arcsec_s: int | None = None,
@@ -100,7 +102,8 @@ async def rig(
             spec if pace else unpaced,
             site=SITE,
             clock=sim.clock.now,
-            options=options,
+            timeout_s=timeout_s,
+            bus=bus,
             limits=limits,
             guide_speed_arcsec_s=guide_speed_arcsec_s,
             name=spec,

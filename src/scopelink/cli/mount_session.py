@@ -19,9 +19,9 @@ from rich.console import Console
 from scopelink.astro import Site
 from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
-from scopelink.cli.devices import EXAMPLES, DeviceError, DeviceSpec, open_mount, parse_device
 from scopelink.cli.errors import CommandError
 from scopelink.cli.options import positive_rate
+from scopelink.drivers.open import EXAMPLES, DeviceOpenError, DeviceSpec, open_mount, parse_device
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (
@@ -88,7 +88,7 @@ class DeviceCommand:
             )
         try:
             spec = parse_device(text)
-        except DeviceError as error:
+        except DeviceOpenError as error:
             raise CommandError(str(error), error.hint) from None
         site = parse_site(args.site) if args.site else config.site
         if args.timeout is not None and not args.timeout > 0:
@@ -136,7 +136,7 @@ async def open_device(command: DeviceCommand) -> Mount:
             clock_rate=command.clock_rate,
             timeout_s=command.timeout_s,
         )
-    except DeviceError as error:
+    except DeviceOpenError as error:
         raise CommandError(str(error), error.hint) from None
     mount.stale_after_s = command.config.stale_after_s
     mount.poll_policy = command.config.poll_policy

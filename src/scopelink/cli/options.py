@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import argparse
 
-from scopelink.cli.devices import EXAMPLES
 from scopelink.cli.errors import CommandError
+from scopelink.drivers.open import EXAMPLES
 
 DEFAULT_SITE = "51.4779,-0.0015"
 """Greenwich: a neutral default until the user configures a site."""

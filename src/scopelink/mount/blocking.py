@@ -3,7 +3,7 @@
 The mount lives on an event loop in a background thread; each call here runs the matching
 coroutine there and waits for it. Usage::
 
-    with BlockingMount(SynScanMount.open("/dev/ttyUSB0", site=site)) as mount:
+    with BlockingMount(SynScanMount("/dev/ttyUSB0", site=site)) as mount:
         mount.goto_object("M31")
         mount.wait_for_slew(timeout_s=120)
         print(mount.state.ra_j2000_hours)

@@ -11,97 +11,46 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import math
-import time
-from collections.abc import Awaitable, Callable
-from dataclasses import dataclass, field, replace
-from datetime import datetime
+from dataclasses import replace
+from typing import Any, Self
 
-from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, j2000_to_observed
-from scopelink.links import Link, LinkError, open_link
+from scopelink.astro import Site, angular_separation_deg
+from scopelink.drivers.common import LinkFactory
+from scopelink.links import LinkError
 from scopelink.mount import (
-    AlignmentMode,
-    Capabilities,
     DeviceError,
     GuideDirection,
-    Identity,
     InvalidValueError,
-    Limits,
-    Mount,
     MountAxis,
     MountError,
     MountState,
     NotConnectedError,
     NotSupportedError,
     TrackingMode,
-    utc_now,
 )
-from scopelink.mount.scheduling import Priority, WireScheduler
+from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import (
     Acknowledge,
-    CalibrationReply,
-    Direction,
-    GuideSpeedReply,
     LoadObject,
-    PositionReply,
     PressDirection,
-    ReadCalibration,
-    ReadGuideSpeed,
-    ReadPosition,
     ReadStatus,
-    ReadVersion,
     Realign,
     ReleaseDirections,
-    Reply,
     SelectMode,
-    SetCalibration,
     SetGuideSpeed,
-    StatusReply,
     TrackerCommand,
     TrackerMode,
-    TrackerStatus,
-    VersionReply,
 )
-from scopelink.protocol.skytracker.calfloat import encode_calfloat_pair
 
+from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
-from .line import (
-    BadReplyError,
-    BusRefusedError,
-    LineOptions,
-    LineOutOfSyncError,
-    ReplyTimeoutError,
-    SkyTrackerLine,
-)
-from .motion import (
-    UTILITY_ARROW_ARCSEC_S,
-    AxisMotion,
-    axis_motion,
-    guide_button,
-    plan_buttons,
-)
+from .motion import axis_motion, guide_button, plan_buttons
+from .polling import SkyTrackerPolling
 
-__all__ = ["LinkFactory", "SkyTrackerMount", "SlewInProgressError"]
-
-LinkFactory = Callable[[], Awaitable[Link]]
-"""Opens the link to the Sky Tracker (called by every connect)."""
+__all__ = ["SkyTrackerMount", "SlewInProgressError"]
 
 logger = logging.getLogger(__name__)
 
-BAUDRATE = 9600
-STOP_BITS = 2
-"""The Sky Tracker's PC port is unbuffered: two stop bits (or paced sends) keep bytes apart."""
-TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
-"""Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
-_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
-UTILITY_RAMP_DOWN_DEG = 4.0
-"""Travel while a 4°/s UTILITY slew ramps down at the box's 2°/s² after its arrow is released."""
-STOP_MARGIN_POLLS = 3.0
-"""A slew down is released this many polls' worth of travel (plus the ramp) above the horizon."""
-STOP_MARGIN_DEG = 0.05
-GOTO_STATUS_POLL_S = 0.05
-"""Status polls during a GOTO (by wait_for_goto, and the poller's refreshes) are this far apart."""
-NOTHING_PRESSED = Direction(0)
 SYNC_TOLERANCE_DEG = 0.05
 """After a sync the position read back must lie this close to the synced one (3-decimal
 coordinates both ways, and the sky's drift during the read)."""
@@ -111,42 +60,11 @@ class SlewInProgressError(MountError):
     """A GOTO is running: the request would abort it (or needs the bus the GOTO keeps busy)."""
 
 
-@dataclass(frozen=True, slots=True)
-class _Position:
-    """One Sky Commander reading and what the PC derives from it (computed once, at the time
-    the reply arrived)."""
-
-    ra_j2000_hours: float
-    dec_j2000_deg: float
-    read_at: datetime
-    ra_of_date_hours: float
-    dec_of_date_deg: float
-    alt_deg: float
-    az_deg: float
-    received_s: float = field(default_factory=time.monotonic)
-    """When the reply arrived (:func:`time.monotonic`): the position's age."""
-
-    @classmethod
-    def from_reply(cls, reply: object, read_at: datetime, site: Site) -> _Position:
-        assert isinstance(reply, PositionReply)
-        return cls.of(reply.ra_hours, reply.dec_degrees, read_at, site)
-
-    @classmethod
-    def of(
-        cls,
-        ra: float,
-        dec: float,
-        read_at: datetime,
-        site: Site,
-        received_s: float | None = None,
-    ) -> _Position:
-        alt, az = j2000_to_observed(ra, dec, read_at, site)
-        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, read_at)
-        received = time.monotonic() if received_s is None else received_s
-        return cls(ra, dec, read_at, ra_of_date, dec_of_date, alt, az, received)
+def _other(axis: MountAxis) -> MountAxis:
+    return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY
 
 
-class SkyTrackerMount(Mount):
+class SkyTrackerMount(SkyTrackerPolling):
     """A Sky Tracker box (with its Sky Commander) on a link.
 
     ``link`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
@@ -159,139 +77,19 @@ class SkyTrackerMount(Mount):
     poll_interval_s = 0.0
     """Background polls may run back to back (within the poll policy's line cap)."""
 
-    def __init__(
-        self,
-        link: str | LinkFactory,
-        *,
-        site: Site,
-        limits: Limits | None = None,
-        clock: Callable[[], datetime] = utc_now,
-        options: LineOptions | None = None,
-        guide_speed_arcsec_s: int | None = None,
-        name: str | None = None,
-    ) -> None:
-        super().__init__(site=site, limits=limits, clock=clock)
-        if guide_speed_arcsec_s is not None and not 1 <= guide_speed_arcsec_s <= 255:
-            raise InvalidValueError(f"guide speed {guide_speed_arcsec_s} arcsec/s is not 1-255")
-        if isinstance(link, str):
-            spec = link
-
-            async def open_spec() -> Link:
-                return await open_link(spec, BAUDRATE, stopbits=STOP_BITS, pace=True)
-
-            self._open: LinkFactory = open_spec
-            self.spec = name or spec
-        else:
-            self._open = link
-            self.spec = name or "Sky Tracker link"
-        self.options = options or LineOptions()
-        self.scheduler = WireScheduler()
-        self._line: SkyTrackerLine | None = None
-        self._wanted_guide_speed = guide_speed_arcsec_s
-        self._version = ""
-        self._commander_present: bool | None = None
-        self._mode: TrackerMode | None = None
-        self._status: TrackerStatus | None = None
-        self._position: _Position | None = None
-        self._guide_speeds = (120, 120)
-        """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
-        self._pulse_speeds = (120, 120)
-        self._held: dict[MountAxis, AxisMotion] = {}
-        self._pulses: dict[MountAxis, tuple[Direction, asyncio.Task[None]]] = {}
-        self._rest_mode: TrackerMode | None = None
-        """The mode to return to when the last arrow is released."""
-        self._buttons = asyncio.Lock()
-        self._tracking_choice = TrackingMode.ALT_AZ
-        self._problems: tuple[str, ...] = ()
-        self._below_horizon_alarm = False
-        self._poll_s = 0.05
-        """How long the last poll took (seconds on the mount's clock)."""
-        self._goto_status_at = -math.inf
-        self._engaged = False
-        """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
-        self._link_lost = False
-        """The box was silent past ``stale_after_s`` on an open line: reopen before polling."""
-        self._status_at = (self.now(), time.monotonic())
-        """When the last status byte arrived: (mount clock, :func:`time.monotonic`)."""
-        self._reconnecting = asyncio.Lock()
-        """One reconnection at a time (a poll and a command may both find the link lost)."""
-
     @classmethod
     async def open(
         cls,
         link: str | LinkFactory,
         *,
-        site: Site,
-        limits: Limits | None = None,
-        clock: Callable[[], datetime] = utc_now,
-        options: LineOptions | None = None,
-        guide_speed_arcsec_s: int | None = None,
-        name: str | None = None,
         calibration: CalibrationFactors | None = None,
-    ) -> SkyTrackerMount:
-        """Construct and connect (writing ``calibration`` first, if given)."""
-        mount = cls(
-            link,
-            site=site,
-            limits=limits,
-            clock=clock,
-            options=options,
-            guide_speed_arcsec_s=guide_speed_arcsec_s,
-            name=name,
-        )
+        **options: Any,
+    ) -> Self:
+        """Construct the driver for ``link`` and connect it, writing ``calibration`` first if
+        given; ``options`` are the constructor's keywords."""
+        mount = cls(link, **options)
         await mount.connect(calibration=calibration)
         return mount
-
-    # --- who and what ----------------------------------------------------------------------------
-
-    @property
-    def capabilities(self) -> Capabilities:
-        commander = self._commander_present is not False
-        return Capabilities(
-            alignment_mode=AlignmentMode.ALT_AZ,
-            can_goto=commander,
-            can_goto_altaz=False,
-            can_sync=commander,
-            can_park=False,
-            can_set_park=False,
-            can_pulse_guide=True,
-            can_move_axis=(True, True),
-            max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
-            tracking_modes=frozenset({TrackingMode.OFF, *TRACKING_MODES}),
-            can_set_site=True,
-            can_set_time=False,
-            can_report_pier_side=False,
-        )
-
-    @property
-    def identity(self) -> Identity:
-        model = "Sky Tracker"
-        if self._commander_present:
-            model += " + Sky Commander"
-        return Identity("skytracker", model, firmware=self._version.strip(), link=self.spec)
-
-    @property
-    def commander_present(self) -> bool | None:
-        """Whether a Sky Commander answered on the bus at connect (None: not known)."""
-        return self._commander_present
-
-    @property
-    def tracker_mode(self) -> TrackerMode | None:
-        """The box's mode as last read or set (None for a flag mix outside the spec's table)."""
-        return self._mode
-
-    @property
-    def line(self) -> SkyTrackerLine:
-        """The open line (for diagnostics: counters of resyncs and stray bytes)."""
-        if self._line is None:
-            raise NotConnectedError(f"the Sky Tracker on {self.spec} is not connected")
-        return self._line
-
-    # --- connection ------------------------------------------------------------------------------
-
-    @property
-    def engaged(self) -> bool:
-        return self._engaged
 
     async def connect(self, *, calibration: CalibrationFactors | None = None) -> None:
         """Open the link and identify: ``V``, ``k``, ``R`` and a position read through the bus.
@@ -301,9 +99,7 @@ class SkyTrackerMount(Mount):
         A lost link (see :meth:`refresh`) is opened anew.
         """
         if self._engaged and calibration is None:  # connected, or lost: reopen it now
-            async with self._reconnecting:
-                if self._needs_reconnect():
-                    await self._reconnect()
+            await self._reconnection.run_if(self._needs_reconnect, self._reconnect)
             return
         if self._line is not None:
             if not self._line.link.closed and not self._link_lost:
@@ -311,145 +107,6 @@ class SkyTrackerMount(Mount):
             await self._drop_line()  # the link went away under us: open it again
         await self._open_and_identify(calibration)
         self._engaged = True
-
-    def _needs_reconnect(self) -> bool:
-        return self._line is None or self._line.link.closed or self._link_lost
-
-    def _line_bytes(self) -> tuple[int, int]:
-        link = self._line.link if self._line is not None else None
-        return (link.bytes_written, link.bytes_read) if link is not None else (0, 0)
-
-    async def _drop_line(self) -> None:
-        line, self._line = self._line, None
-        if line is not None:
-            with contextlib.suppress(LinkError):
-                await line.link.close()
-
-    async def _reconnect(self) -> None:
-        """Open the lost link anew and identify the box again (it may have been switched off
-        and on): arrows left pressed by the broken link are released (see connect)."""
-        await self._drop_line()
-        await self._open_and_identify(None)
-        if not self._engaged:  # disconnected meanwhile: let go of the new line
-            await self._drop_line()
-            self._publish_now()
-            raise NotConnectedError(f"the Sky Tracker on {self.spec} was disconnected meanwhile")
-        logger.warning("the Sky Tracker on %s answers again: reconnected", self.spec)
-
-    async def _open_and_identify(self, calibration: CalibrationFactors | None) -> None:
-        link = await self._open_link()
-        line = SkyTrackerLine(link, options=self.options, scheduler=self.scheduler)
-        self._line = line
-        self._held.clear()
-        self._cancel_pulses()  # a new line presses no arrow: no pulse is under way on it
-        self._rest_mode = None
-        self._below_horizon_alarm = False
-        try:
-            if calibration is not None:
-                await self._write_calibration_first(line, calibration)
-            self._version = await self._read_version(line)
-            speeds = await self._read_agreed(line, ReadGuideSpeed())
-            assert isinstance(speeds, GuideSpeedReply)
-            self._guide_speeds = (speeds.azimuth_arcsec_per_s, speeds.elevation_arcsec_per_s)
-            if self._wanted_guide_speed is not None:
-                await self._set_guide_speeds((self._wanted_guide_speed,) * 2)
-            self._pulse_speeds = self._guide_speeds
-            self._note_status(await self._read_agreed(line, ReadStatus()))
-            await self._release_orphaned_arrows(line)
-            await self._detect_commander(line)
-        except BaseException:
-            self._line = None
-            with contextlib.suppress(LinkError):
-                await link.close()
-            raise
-        self._problems = ()
-        self._link_lost = False
-        self._publish_now()
-
-    async def _release_orphaned_arrows(self, line: SkyTrackerLine) -> None:
-        """``b`` when the box reports arrows pressed: a motion started over a link that broke
-        (or by another program) that nobody on this connection can stop any more. The hand
-        box's own arrows stay pressed while its user holds them."""
-        assert self._status is not None
-        if not self._status.directions:
-            return
-        logger.warning("arrows still pressed at connect (%s): releasing them", self._status)
-        replies = await line.tracker_sequence([ReleaseDirections(), ReadStatus()])
-        self._note_status(await self._read_agreed(line, ReadStatus(), first=replies[-1]))
-
-    async def _read_agreed(
-        self,
-        line: SkyTrackerLine,
-        command: TrackerCommand,
-        priority: Priority = Priority.COMMAND,
-        *,
-        first: Reply | None = None,
-        expected: Reply | None = None,
-    ) -> Reply:
-        """The reply to ``command``, trusted: the status byte, the two ``k`` bytes and the ``s``
-        floats have no redundancy (a garbled one still reads as some value), so a reply that is
-        not ``expected`` (or with nothing expected) is read again until two readings in a row
-        agree, at most three readings; then :class:`BadReplyError`."""
-        reply = first if first is not None else await line.tracker(command, priority)
-        assert reply is not None
-        if expected is not None and reply == expected:
-            return reply
-        for _ in range(2):
-            again = await line.tracker(command, priority)
-            assert again is not None
-            if again == reply or (expected is not None and again == expected):
-                if again != reply:
-                    logger.info(
-                        "garbled reply to %s: %s, then %s", command.describe(), reply, again
-                    )
-                return again
-            reply = again
-        raise BadReplyError(
-            f"three different replies in a row to {command.describe()!r} on {line.link.name}: "
-            "the line garbles replies, or they come late (check the cable, 9600 baud, the stop "
-            "bits)"
-        )
-
-    @staticmethod
-    async def _read_version(line: SkyTrackerLine) -> str:
-        """``V``, asked twice if need be: a probe by another program (e.g. a SynScan driver's
-        ``K`` echo) can leave the box inside a ``K`` or ``S`` frame that swallows the first
-        ``V`` as payload; once that frame is complete (or dropped), ``V`` is answered."""
-        try:
-            reply = await line.tracker(ReadVersion())
-        except (ReplyTimeoutError, BadReplyError) as error:
-            logger.info("no version on the first try, asking again: %s", error)
-            reply = await line.tracker(ReadVersion())
-            # The first answer may only have been late, and so read as the second's: now that
-            # the version is known, the resync's sync point reads past any answer still due.
-            if not await line.resync():
-                raise LineOutOfSyncError(
-                    f"the Sky Tracker on {line.link.name} answered 'V' only late and then "
-                    "not the sync point: is it busy or off?"
-                ) from error
-        assert isinstance(reply, VersionReply)
-        return reply.text
-
-    async def _open_link(self) -> Link:
-        try:
-            return await self._open()
-        except LinkError as error:
-            raise NotConnectedError(f"cannot open the Sky Tracker's link: {error}") from error
-
-    async def _detect_commander(self, line: SkyTrackerLine) -> None:
-        if self._mode is TrackerMode.GOTO:
-            self._commander_present = None  # the bus is refused during a GOTO; it needs one
-            return
-        try:
-            await self._read_position(line, Priority.COMMAND, retry=False)
-        except ReplyTimeoutError as error:
-            logger.warning("no Sky Commander on the bus: %s", error)
-            self._commander_present = False
-            return
-        except BusRefusedError:
-            self._commander_present = None
-            return
-        self._commander_present = True
 
     async def disconnect(self) -> None:
         """Release the arrows, abort a GOTO (``U``), close the link. Tracking keeps running."""
@@ -468,7 +125,7 @@ class SkyTrackerMount(Mount):
             if self._mode is TrackerMode.GOTO:
                 commands.append(SelectMode(TrackerMode.UTILITY))
             # The status read makes sure the box has taken them before the link closes.
-            await line.tracker_sequence([*commands, ReadStatus()])
+            await line.ask_sequence([*commands, ReadStatus()])
         except (MountError, LinkError) as error:
             logger.info("could not stop motion before disconnecting: %s", error)
         finally:
@@ -476,14 +133,6 @@ class SkyTrackerMount(Mount):
             with contextlib.suppress(LinkError):
                 await line.link.close()
             self._publish(replace(self.state, connected=False))
-
-    # --- calibration -----------------------------------------------------------------------------
-
-    async def read_calibration(self) -> CalibrationFactors:
-        """``s``: the motor calibration factors (always allowed)."""
-        reply = await self._read_agreed(self._require_line(), ReadCalibration())
-        assert isinstance(reply, CalibrationReply)
-        return CalibrationFactors(reply.azimuth_factor, reply.elevation_factor)
 
     async def write_calibration(self, factors: CalibrationFactors) -> None:
         """``S``: store calibration factors in the box's EEPROM.
@@ -495,248 +144,11 @@ class SkyTrackerMount(Mount):
         if self._line is not None:
             raise CalibrationRuleError(
                 f"the Sky Tracker takes 'S' only as the first command after it is switched on, "
-                f"and only once; {self._line.commands_sent} commands have been sent on this "
-                "connection. Disconnect, switch the Sky Tracker off and on, then call "
+                f"and only once; {self._line.statistics.commands_sent} commands have been sent on "
+                "this connection. Disconnect, switch the Sky Tracker off and on, then call "
                 "write_calibration() before connect()"
             )
         await self.connect(calibration=factors)
-
-    async def _write_calibration_first(
-        self, line: SkyTrackerLine, factors: CalibrationFactors
-    ) -> None:
-        if line.commands_sent:
-            raise CalibrationRuleError("'S' must be the first command on the line")
-        command = SetCalibration(factors.azimuth_factor, factors.elevation_factor)
-        try:
-            reply = await line.tracker(command)
-        except (ReplyTimeoutError, BadReplyError) as error:
-            # A refused 'S' gets no reply; so does one whose 'A' was lost. 's' tells them apart.
-            logger.info("no good acknowledgement of 'S' (%s): reading the factors back", error)
-            # The version is not known yet, so the resync had no sync point: a late 'A' could
-            # be read as the first byte of the factors. A whole reply timeout of quiet first.
-            try:
-                await line.link.drain_input(
-                    self.options.reply_timeout_s, 2 * self.options.reply_timeout_s
-                )
-            except LinkError as link_error:
-                raise NotConnectedError(f"the link {line.link.name} failed: {link_error}") from None
-            stored = await self._read_agreed(line, ReadCalibration())
-            assert isinstance(stored, CalibrationReply)
-            wanted = encode_calfloat_pair(command.azimuth_factor, command.elevation_factor)
-            if encode_calfloat_pair(stored.azimuth_factor, stored.elevation_factor) == wanted:
-                logger.info("'S' was taken (its acknowledgement was lost)")
-                return
-            raise CalibrationRuleError(
-                f"the Sky Tracker did not acknowledge 'S' nor take it ({error}; it still holds "
-                f"factors {stored.azimuth_factor:g}, {stored.elevation_factor:g}): it takes "
-                "calibration only as the first command after it is switched on, and once, so "
-                "something talked to it since power-on (an earlier connection?), or 'S' was lost "
-                "on the line: switch it off and on and try again"
-            ) from None
-        if not isinstance(reply, Acknowledge):
-            raise DeviceError(f"unexpected reply to 'S': {reply}")
-
-    # --- reading ---------------------------------------------------------------------------------
-
-    async def refresh(self) -> MountState:
-        """``R`` status; then, unless a GOTO keeps the bus, the position through the bus.
-
-        A lost link (closed, or the box silent longer than ``stale_after_s``) reads as not
-        connected; while engaged, the next refresh opens it anew and identifies the box again.
-        """
-        if self._engaged and self._needs_reconnect():
-            async with self._reconnecting:
-                if self._engaged and self._needs_reconnect():
-                    try:
-                        await self._reconnect()
-                    except (MountError, LinkError) as error:
-                        self._problems = (f"reconnecting: {error}",)
-                        self._link_lost = True
-                        self._publish_now()
-                        raise
-        line = self._require_line()
-        if self._mode is TrackerMode.GOTO:
-            # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls
-            # would read it hundreds of times a second; GOTO_STATUS_POLL_S apart is plenty.
-            since = time.monotonic() - self._goto_status_at
-            if since < GOTO_STATUS_POLL_S:
-                await asyncio.sleep(GOTO_STATUS_POLL_S - since)
-        started, started_real = self.now(), time.monotonic()
-        try:
-            self._note_status(await self._read_status(line, Priority.POLL))
-            self._goto_status_at = time.monotonic()
-            if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
-                await self._poll_position(line)
-        except (DeviceError, NotConnectedError) as error:
-            self._problems = (str(error),)
-            silent_s = time.monotonic() - line.last_answer_s
-            if line.link.closed or silent_s > self.stale_after_s:
-                # The link is gone (or the box silent): so is the connection, until reopened.
-                if not self._link_lost:
-                    logger.warning("the Sky Tracker on %s is lost: %s", self.spec, error)
-                self._link_lost = True
-            self._publish_now()
-            raise
-        self._problems = ()
-        state = self._publish_now()
-        # On the mount's clock, so an accelerated simulator gets a margin in simulated time;
-        # stretched as the poll policy's line cap stretches the period on a fast link.
-        self._poll_s = (self.now() - started).total_seconds()
-        real_s = time.monotonic() - started_real
-        if real_s > 0.0:
-            self._poll_s *= max(1.0, self.poller.line_period_s / real_s)
-        await self._guard_horizon(state)
-        return self.state
-
-    async def _poll_position(self, line: SkyTrackerLine) -> None:
-        """The position for a poll: one immediate retry after a garbled or missing grant; a
-        refusal means a GOTO began since the status read (the position is then kept)."""
-        try:
-            (reply,) = await line.commander([ReadPosition()], Priority.POLL, retry_delays_s=(0.0,))
-        except BusRefusedError as error:
-            if error.unanswered:
-                raise
-            self._mode = TrackerMode.GOTO
-            return
-        self._position = _Position.from_reply(reply, self.now(), self.site)
-
-    async def read_position(self) -> tuple[float, float]:
-        """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
-        position = await self._read_position(self._require_line(), Priority.COMMAND, retry=True)
-        self._publish_now()
-        return position.ra_j2000_hours, position.dec_j2000_deg
-
-    async def _read_position(
-        self, line: SkyTrackerLine, priority: Priority, *, retry: bool
-    ) -> _Position:
-        (reply,) = await line.commander(
-            [ReadPosition()], priority, retry_delays_s=None if retry else ()
-        )
-        self._position = _Position.from_reply(reply, self.now(), self.site)
-        return self._position
-
-    async def read_status(self) -> TrackerStatus:
-        """``R``: the box's mode flags and pressed arrows now."""
-        self._note_status(await self._read_status(self._require_line(), Priority.COMMAND))
-        assert self._status is not None
-        return self._status
-
-    async def _read_status(self, line: SkyTrackerLine, priority: Priority) -> Reply:
-        """``R``; a status other than the last one is read again (the byte has no redundancy)."""
-        last = StatusReply(self._status) if self._status is not None else None
-        return await self._read_agreed(line, ReadStatus(), priority, expected=last)
-
-    async def wait_for_goto(self, timeout_s: float | None = None) -> MountState:
-        """Poll ``R`` until the GOTO bit clears (TRACK follows), then refresh everything."""
-        async with asyncio.timeout(timeout_s):
-            while (await self.read_status()).mode is TrackerMode.GOTO:  # noqa: ASYNC110
-                await asyncio.sleep(GOTO_STATUS_POLL_S)
-        return await self.refresh()
-
-    def _note_status(self, reply: object) -> None:
-        assert isinstance(reply, StatusReply)
-        self._status = reply.status
-        self._mode = reply.status.mode
-        self._status_at = (self.now(), time.monotonic())
-
-    def _publish_now(self) -> MountState:
-        position = self._position
-        status = self._status
-        pulsing = Direction(0)
-        for direction, _ in self._pulses.values():
-            pulsing |= direction
-        pressed = status.directions if status is not None else Direction(0)
-        line = self._line
-        read_at, received_s = self._status_at
-        state = MountState(
-            read_at=read_at,
-            connected=line is not None and not line.link.closed and not self._link_lost,
-            ra_j2000_hours=position.ra_j2000_hours if position else None,
-            dec_j2000_deg=position.dec_j2000_deg if position else None,
-            ra_of_date_hours=position.ra_of_date_hours if position else None,
-            dec_of_date_deg=position.dec_of_date_deg if position else None,
-            alt_deg=position.alt_deg if position else None,
-            az_deg=position.az_deg if position else None,
-            slewing=self._mode is TrackerMode.GOTO or bool(pressed & ~pulsing),
-            tracking=self._tracking_choice if self._mode in _TRACKING else TrackingMode.OFF,
-            parked=False,
-            aligned=True,
-            pulse_guiding=bool(self._pulses),
-            problems=self._problems,
-            received_s=received_s,
-            position_received_s=position.received_s if position else None,
-        )
-        self._publish(state)
-        return state
-
-    async def _guard_horizon(self, state: MountState) -> None:
-        """Release a slew down (or stop tracking) that reaches the configured horizon."""
-        if state.alt_deg is None or state.az_deg is None:
-            return
-        floor = self.limits.horizon_at(state.az_deg)
-        held = self._held.get(MountAxis.SECONDARY)
-        if held is not None and held.direction is Direction.DOWN:
-            speed = abs(held.rate_deg_s)
-            ramp = UTILITY_RAMP_DOWN_DEG if held.mode is TrackerMode.UTILITY else 0.0
-            margin = ramp + speed * STOP_MARGIN_POLLS * self._poll_s + STOP_MARGIN_DEG
-            if state.alt_deg < floor + margin:
-                logger.warning(
-                    "altitude %.2f° near the horizon: stopping the slew down", state.alt_deg
-                )
-                await self._move_axis(MountAxis.SECONDARY, 0.0)
-                self._problems = (f"slew down stopped at altitude {state.alt_deg:.2f}° (horizon)",)
-                self._publish_now()
-        was_below = self._below_horizon_alarm
-        self._below_horizon_alarm = state.alt_deg < floor
-        if self._below_horizon_alarm and not was_below and self._mode in _TRACKING:
-            await self._require_line().tracker(SelectMode(TrackerMode.UTILITY))
-            self._mode = TrackerMode.UTILITY
-            self._problems = (
-                f"tracking stopped: altitude {state.alt_deg:.2f}° is below the configured "
-                f"horizon of {floor:.2f}°",
-            )
-            self._publish_now()
-
-    async def _send_confirmed(
-        self,
-        commands: list[TrackerCommand],
-        *,
-        mode: TrackerMode,
-        pressed: Direction = NOTHING_PRESSED,
-        speeds: tuple[int, int] | None = None,
-    ) -> None:
-        """Send commands without replies, then read back what they set (``R``, and ``k`` after
-        ``K``) in the same turn: a command lost on the unbuffered line becomes a clear error."""
-        line = self._require_line()
-        confirm: list[TrackerCommand] = [ReadStatus()]
-        if speeds is not None:
-            confirm.append(ReadGuideSpeed())
-        replies = await line.tracker_sequence([*commands, *confirm])
-        status = replies[len(commands)]
-        assert isinstance(status, StatusReply)
-        if status.status.mode is not mode or pressed & ~status.status.directions:
-            status = await self._read_agreed(line, ReadStatus(), first=status)
-        self._note_status(status)
-        assert self._status is not None
-        if speeds is not None:
-            reply = replies[-1]
-            wanted = GuideSpeedReply(*speeds)
-            reply = await self._read_agreed(line, ReadGuideSpeed(), first=reply, expected=wanted)
-            assert isinstance(reply, GuideSpeedReply)
-            self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
-        sent = " ".join(c.encode().decode("latin-1") for c in commands)
-        if self._mode is not mode or pressed & ~self._status.directions:
-            raise DeviceError(
-                f"after {sent!r} the Sky Tracker reports {self._status}, not {mode.name} with "
-                f"{pressed!r} pressed: was a command lost on the line?"
-            )
-        if speeds is not None and self._guide_speeds != speeds:
-            raise DeviceError(
-                f"after {sent!r} the Sky Tracker keeps guide speeds {self._guide_speeds}, "
-                f"not {speeds}"
-            )
-
-    # --- goto and sync ---------------------------------------------------------------------------
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """``U`` if a GOTO runs (re-target), ``Q`` ``L99 ...`` ``q``, then ``G``."""
@@ -745,7 +157,7 @@ class SkyTrackerMount(Mount):
         # UTILITY first: it ends a GOTO under way (the box ignores 'G' during one), and makes
         # the status after 'G' tell a lost 'G' (still UTILITY) from a GOTO that ended at once
         # (TRACK).
-        await line.tracker(SelectMode(TrackerMode.UTILITY))
+        await line.ask(SelectMode(TrackerMode.UTILITY))
         self._mode = TrackerMode.UTILITY
         (reply,) = await line.commander([LoadObject.current(ra_j2000_hours, dec_j2000_deg)])
         if not isinstance(reply, Acknowledge):
@@ -753,11 +165,11 @@ class SkyTrackerMount(Mount):
         # 'G' has no reply: the status tells that the box took it (GOTO, or TRACK at once when
         # already on target). A lost 'G' (unbuffered port) is sent once more.
         for _ in range(2):
-            replies = await line.tracker_sequence([SelectMode(TrackerMode.GOTO), ReadStatus()])
+            replies = await line.ask_sequence([SelectMode(TrackerMode.GOTO), ReadStatus()])
             self._note_status(replies[-1])
-            if self._mode in (TrackerMode.GOTO, *_TRACKING):
+            if self._mode in (TrackerMode.GOTO, *BOX_TRACKING):
                 break
-        if self._mode not in (TrackerMode.GOTO, *_TRACKING):
+        if self._mode not in (TrackerMode.GOTO, *BOX_TRACKING):
             raise DeviceError(
                 f"the Sky Tracker did not start the GOTO (status {self._status}): was 'G' lost "
                 "on the line?"
@@ -805,30 +217,8 @@ class SkyTrackerMount(Mount):
         """The box keeps no site: only the PC-side alt/az of the last reading changes."""
         position = self._position
         if position is not None:
-            self._position = _Position.of(
-                position.ra_j2000_hours,
-                position.dec_j2000_deg,
-                position.read_at,
-                site,
-                position.received_s,
-            )
+            self._position = position.at_site(site)
             self._publish_now()
-
-    def _require_line(self) -> SkyTrackerLine:
-        if self._line is None:
-            raise NotConnectedError(f"the Sky Tracker on {self.spec} is not connected")
-        return self._line
-
-    def _require_commander(self) -> SkyTrackerLine:
-        line = self._require_line()
-        if self._commander_present is False:
-            raise NotSupportedError(
-                "no Sky Commander answered on the Sky Tracker's bus at connect: goto and sync "
-                "need it (check the cable between the two, then reconnect)"
-            )
-        return line
-
-    # --- abort and tracking ----------------------------------------------------------------------
 
     async def _abort(self) -> None:
         """Release every arrow; ``U`` ends a GOTO (motors ramp down, UTILITY mode). Written at
@@ -897,17 +287,6 @@ class SkyTrackerMount(Mount):
         async with self._buttons:
             await self._set_guide_speeds(self._pulse_speeds)
 
-    async def _set_guide_speeds(self, speeds: tuple[int, int]) -> None:
-        line = self._require_line()
-        await line.tracker(SetGuideSpeed(*speeds))
-        reply = await self._read_agreed(line, ReadGuideSpeed(), expected=GuideSpeedReply(*speeds))
-        assert isinstance(reply, GuideSpeedReply)
-        self._guide_speeds = (reply.azimuth_arcsec_per_s, reply.elevation_arcsec_per_s)
-        if self._guide_speeds != speeds:
-            raise DeviceError(f"the Sky Tracker kept guide speed {reply} after 'K' {speeds}")
-
-    # --- arrows: move_axis and pulse_guide ----------------------------------------------------
-
     async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Press the arrow of the nearest supported rate (see motion.py); 0 releases it."""
         self._refuse_during_goto("moving an axis")
@@ -934,7 +313,7 @@ class SkyTrackerMount(Mount):
         Returns at once; :attr:`MountState.pulse_guiding` is true until the pulse ends.
         """
         self._refuse_during_goto("pulse guiding")
-        if self._mode not in _TRACKING:
+        if self._mode not in BOX_TRACKING:
             raise NotSupportedError(
                 "the Sky Tracker guides only while tracking (its arrows slew at 4°/s in UTILITY "
                 "mode): start tracking first"
@@ -971,11 +350,6 @@ class SkyTrackerMount(Mount):
             logger.warning("could not end a guide pulse: %s", error)
             self._problems = (f"could not end a guide pulse: {error}",)
             self._publish_now()
-
-    def _cancel_pulses(self) -> None:
-        for _, task in self._pulses.values():
-            task.cancel()
-        self._pulses.clear()
 
     def _refuse_during_goto(self, what: str) -> None:
         if self._mode is TrackerMode.GOTO:
@@ -1020,7 +394,3 @@ class SkyTrackerMount(Mount):
                 speeds=plan.guide_speeds_arcsec_s if change_speeds else None,
             )
             self._publish_now()
-
-
-def _other(axis: MountAxis) -> MountAxis:
-    return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY

@@ -1,4 +1,4 @@
-"""One SynScan exchange at a time on a link: send, read the reply by its shape, recover from faults.
+"""One SynScan exchange at a time on a link: send, read the reply by its shape, recover.
 
 :class:`SynScanWire` owns the link and the client codec. Every exchange takes a turn on the
 :class:`~scopelink.mount.scheduling.WireScheduler` (user commands before polls), writes one
@@ -27,10 +27,10 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
-from dataclasses import dataclass
 
+from scopelink.drivers.common import LinkFactory, LinkStatistics, PendingRead
 from scopelink.links import Link, LinkClosedError, LinkError
 from scopelink.mount import DeviceError, Priority, WireScheduler
 from scopelink.protocol.synscan import (
@@ -45,15 +45,12 @@ from scopelink.protocol.synscan import (
     encode_command,
 )
 
-__all__ = ["DEFAULT_TIMEOUT_S", "STOP_GRACE_S", "LinkFactory", "SynScanWire", "WireStatistics"]
+__all__ = ["DEFAULT_TIMEOUT_S", "STOP_GRACE_S", "SynScanWire"]
 
 logger = logging.getLogger(__name__)
 
 DEFAULT_TIMEOUT_S = 5.0
 """The spec: "Software drivers should be prepared to wait up to 5.0s" for a reply."""
-
-LinkFactory = Callable[[], Awaitable[Link]]
-"""Opens the link to the hand control (called again to reconnect after the link dropped)."""
 
 _ECHO_VALUES = range(0x80, 0x100)
 """Resynchronisation echoes: bytes no ASCII reply contains, counted so that each is unique among
@@ -73,18 +70,6 @@ bytes, takes 19 ms at 9600 baud); a reply still missing by then is not worth mor
 time: the exchange is interrupted."""
 
 
-@dataclass(slots=True)
-class _Scope:
-    """A read in progress: its deadline, and whether a stop cut it short."""
-
-    deadline: asyncio.Timeout
-    interrupted: bool = False
-
-    def interrupt(self) -> None:
-        self.interrupted = True
-        self.deadline.reschedule(asyncio.get_running_loop().time())
-
-
 class _ExchangeError(Exception):
     """One exchange went wrong; the message says how (it becomes part of a DeviceError).
     ``interrupted``: cut short by a stop, and not to be retried."""
@@ -93,23 +78,6 @@ class _ExchangeError(Exception):
         super().__init__(message)
         self.interrupted = interrupted
         self.sent = sent
-
-
-@dataclass(slots=True)
-class WireStatistics:
-    """Counters for health displays and benchmarks."""
-
-    exchanges: int = 0
-    bytes_sent: int = 0
-    bytes_received: int = 0
-    failures: int = 0
-    resyncs: int = 0
-    reconnects: int = 0
-    discarded_bytes: int = 0
-    stops_at_once: int = 0
-    """Stops written without waiting for the stream to be in step (see ``stop_at_once``)."""
-    interrupted: int = 0
-    """Exchanges cut short by a stop."""
 
 
 class SynScanWire:
@@ -134,7 +102,7 @@ class SynScanWire:
         self.name = name
         self.timeout_s = timeout_s
         self.scheduler = scheduler or WireScheduler()
-        self.statistics = WireStatistics()
+        self.statistics = LinkStatistics()
         self.avoid_echo: set[int] = set()
         self._link: Link | None = None
         self._codec = SynScanClientConnection()
@@ -143,7 +111,7 @@ class SynScanWire:
         self._holder: asyncio.Task[object] | None = None
         self._io = asyncio.Lock()
         """Held while a task uses the link (one recovery and exchange, or a stop's write)."""
-        self._reading: _Scope | None = None
+        self._reading: PendingRead | None = None
         """The scope of the read in progress, which a stop may cut short."""
         self._reading_since = 0.0
         self._stops_waiting = 0
@@ -420,12 +388,12 @@ class SynScanWire:
                 return event
 
     @asynccontextmanager
-    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[_Scope]:
+    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[PendingRead]:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
         either way ``TimeoutError`` leaves the block, and ``scope.interrupted`` tells which."""
         loop = asyncio.get_running_loop()
         async with asyncio.timeout(seconds) as deadline:
-            scope = _Scope(deadline)
+            scope = PendingRead(deadline)
             self._reading, self._reading_since = scope, loop.time()
             try:
                 if self._stops_waiting and self._needs_resync:

@@ -24,6 +24,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from scopelink.drivers.common import LinkStatistics, PendingRead
 from scopelink.links import Link, LinkError
 from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority, WireScheduler
@@ -48,10 +49,10 @@ from scopelink.protocol.skytracker import (
 __all__ = [
     "DEFAULT_BUS_RETRY_DELAYS_S",
     "DEFAULT_GRANT_TIMEOUT_S",
-    "DEFAULT_REPLY_TIMEOUT_S",
+    "DEFAULT_TIMEOUT_S",
     "BadReplyError",
+    "BusOptions",
     "BusRefusedError",
-    "LineOptions",
     "LineOutOfSyncError",
     "ReplyTimeoutError",
     "SkyTrackerLine",
@@ -60,7 +61,7 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-DEFAULT_REPLY_TIMEOUT_S = 1.0
+DEFAULT_TIMEOUT_S = 1.0
 """The spec names no reply time; the longest reply (16 bytes) takes 17 ms at 9600 baud."""
 DEFAULT_GRANT_TIMEOUT_S = 0.1
 """The spec: after ``Q`` the PC waits up to 100 ms for the grant ``A``."""
@@ -103,30 +104,18 @@ class BusRefusedError(DeviceError):
         self.unanswered = unanswered
 
 
-@dataclass(slots=True)
-class _Reading:
-    """A reply being waited for: its deadline, and whether a stop abandoned it."""
-
-    deadline: asyncio.Timeout
-    interrupted: bool = False
-
-    def interrupt(self) -> None:
-        self.interrupted = True
-        self.deadline.reschedule(asyncio.get_running_loop().time())
-
-
 @dataclass(frozen=True, slots=True)
-class LineOptions:
-    """Timing of the PC side; the defaults follow the spec (see ``docs/drivers-skytracker.md``)."""
+class BusOptions:
+    """Timing of the Sky Commander bus on the PC side; the defaults follow the spec (see
+    ``docs/drivers-skytracker.md``). The reply timeout is the line's ``timeout_s``."""
 
-    reply_timeout_s: float = DEFAULT_REPLY_TIMEOUT_S
     grant_timeout_s: float = DEFAULT_GRANT_TIMEOUT_S
-    bus_retry_delays_s: tuple[float, ...] = DEFAULT_BUS_RETRY_DELAYS_S
+    retry_delays_s: tuple[float, ...] = DEFAULT_BUS_RETRY_DELAYS_S
 
     def __post_init__(self) -> None:
-        if self.reply_timeout_s <= 0 or self.grant_timeout_s <= 0:
+        if self.grant_timeout_s <= 0:
             raise ValueError(f"timeouts must be positive: {self}")
-        if any(delay < 0 for delay in self.bus_retry_delays_s):
+        if any(delay < 0 for delay in self.retry_delays_s):
             raise ValueError(f"bus retry delays must not be negative: {self}")
 
 
@@ -137,18 +126,20 @@ class SkyTrackerLine:
         self,
         link: Link,
         *,
-        options: LineOptions | None = None,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        bus: BusOptions | None = None,
         scheduler: WireScheduler | None = None,
     ) -> None:
+        if not timeout_s > 0:
+            raise ValueError(f"timeout {timeout_s} s must be positive")
         self.link = link
-        self.options = options or LineOptions()
+        self.timeout_s = timeout_s
+        self.bus = bus or BusOptions()
         self.scheduler = scheduler or WireScheduler()
         self._client = TrackerClient()
-        self.commands_sent = 0
-        """Commands written since the link opened (the Sky Tracker's ``S`` rule counts them)."""
-        self.resyncs = 0
-        self.stray_bytes = 0
-        self.bus_refusals = 0
+        self.statistics = LinkStatistics()
+        """Counters of this line (``commands_sent`` since the link opened: the Sky Tracker's
+        ``S`` rule counts them)."""
         self._interrupted = False
         self._sync_marker: bytes | None = None
         """The box's version reply, once read: the answer the resync's ``V`` waits for."""
@@ -159,30 +150,29 @@ class SkyTrackerLine:
         how long it has been silent, which tells a lost box from a noisy line."""
         self._writing = asyncio.Lock()
         """Held while bytes are written: a stop never lands inside another command's bytes."""
-        self._reading: _Reading | None = None
+        self._reading: PendingRead | None = None
         """The reply being waited for, which a stop may abandon."""
         self._stops = 0
         """Stops written at once so far; a turn that began before the last one ends."""
         self._turn_stops = 0
-        self.stops_at_once = 0
 
     # --- Sky Tracker commands ----------------------------------------------------------------
 
-    async def tracker(
+    async def ask(
         self, command: TrackerCommand, priority: Priority = Priority.COMMAND
     ) -> Reply | None:
         """One Sky Tracker command and its reply (None for a command without one)."""
         async with self.scheduler.turn(priority):
             self._turn_stops = self._stops
-            return await self._exchange(command, self.options.reply_timeout_s)
+            return await self._exchange(command, self.timeout_s)
 
-    async def tracker_sequence(
+    async def ask_sequence(
         self, commands: Sequence[TrackerCommand], priority: Priority = Priority.COMMAND
     ) -> list[Reply | None]:
         """Several Sky Tracker commands in one turn (e.g. ``b`` then the arrows still held)."""
         async with self.scheduler.turn(priority):
             self._turn_stops = self._stops
-            return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
+            return [await self._exchange(c, self.timeout_s) for c in commands]
 
     # --- Sky Commander commands through the bus ----------------------------------------------
 
@@ -198,7 +188,7 @@ class SkyTrackerLine:
         A refused (NUL) or unanswered request is retried after each delay of the schedule, the
         wire free for others meanwhile; then :class:`BusRefusedError`.
         """
-        delays = self.options.bus_retry_delays_s if retry_delays_s is None else retry_delays_s
+        delays = self.bus.retry_delays_s if retry_delays_s is None else retry_delays_s
         refused = unanswered = 0
         retried_commands = False
         attempt = 0
@@ -214,12 +204,12 @@ class SkyTrackerLine:
                     continue
                 if not answer:
                     refused += 1
-                    self.bus_refusals += 1
+                    self.statistics.bus_refusals += 1
                     continue
                 try:
                     if self._commander_behind:
                         await self._catch_up_commander()
-                    return [await self._exchange(c, self.options.reply_timeout_s) for c in commands]
+                    return [await self._exchange(c, self.timeout_s) for c in commands]
                 except (ReplyTimeoutError, BadReplyError) as error:
                     # Loading an object, realigning on it and reading the position can all be
                     # repeated: one more try (the resync has ended any partial line).
@@ -239,7 +229,7 @@ class SkyTrackerLine:
             )
         else:
             cause = (
-                f"no answer to 'Q' within {self.options.grant_timeout_s * 1000:.0f} ms, "
+                f"no answer to 'Q' within {self.bus.grant_timeout_s * 1000:.0f} ms, "
                 f"{unanswered} time(s)"
             )
         raise BusRefusedError(
@@ -264,8 +254,8 @@ class SkyTrackerLine:
         except LinkError as error:
             self._interrupted = True
             raise NotConnectedError(f"the link {self.link.name} failed: {error}") from error
-        self.commands_sent += 1 + len(commands)
-        self.stops_at_once += 1
+        self.statistics.commands_sent += 1 + len(commands)
+        self.statistics.stops_at_once += 1
         logger.info(
             "stop written at once: %s", ", ".join(command.describe() for command in commands)
         )
@@ -279,17 +269,17 @@ class SkyTrackerLine:
         self._flush_strays()
         async with self._writing:
             await self.link.write(b"\r")
-        self.commands_sent += 1
+        self.statistics.commands_sent += 1
         received = b""
         try:
-            async with asyncio.timeout(self.options.reply_timeout_s):
+            async with asyncio.timeout(self.timeout_s):
                 while len(received) < POSITION_REPLY_SIZE:
                     received += await self.link.read()
         except TimeoutError:
             raise ReplyTimeoutError(
                 f"the Sky Commander behind {self.link.name} has not answered since an earlier "
                 f"fault: no reply to a position request within "
-                f"{self.options.reply_timeout_s * 1000:.0f} ms (is its cable to the Sky Tracker "
+                f"{self.timeout_s * 1000:.0f} ms (is its cable to the Sky Tracker "
                 "plugged in?)"
             ) from None
         except LinkError as error:
@@ -303,7 +293,7 @@ class SkyTrackerLine:
     async def _request_bus(self) -> bool | None:
         """True granted, False refused, None no (good) answer (the line was resynchronised)."""
         try:
-            reply = await self._exchange(RequestBus(), self.options.grant_timeout_s)
+            reply = await self._exchange(RequestBus(), self.bus.grant_timeout_s)
         except (ReplyTimeoutError, BadReplyError) as error:
             logger.info("bus request failed: %s", error)
             return None
@@ -315,7 +305,7 @@ class SkyTrackerLine:
             return
         # If the link went away, the box takes the bus back when its PC link ends.
         with contextlib.suppress(LinkError, NotConnectedError):
-            await self._exchange(ReleaseBus(), self.options.reply_timeout_s)
+            await self._exchange(ReleaseBus(), self.timeout_s)
 
     # --- one exchange ------------------------------------------------------------------------
 
@@ -327,7 +317,7 @@ class SkyTrackerLine:
                 raise LineOutOfSyncError(
                     f"cannot send {command.describe()!r}: the line {self.link.name} is not back "
                     "in sync after an earlier fault (no answer to the 'V' sync point within "
-                    f"{self.options.reply_timeout_s * 1000:.0f} ms): is the Sky Tracker busy or "
+                    f"{self.timeout_s * 1000:.0f} ms): is the Sky Tracker busy or "
                     "off?"
                 )
             self._interrupted = False
@@ -337,15 +327,15 @@ class SkyTrackerLine:
             )
         self._flush_strays()
         data = self._client.send(command)
-        reading: _Reading | None = None
+        reading: PendingRead | None = None
         try:
             async with self._writing:
                 await self.link.write(data)
-            self.commands_sent += 1
+            self.statistics.commands_sent += 1
             if command.reply is None:
                 return None
             async with asyncio.timeout(reply_within_s) as deadline:
-                reading = self._reading = _Reading(deadline)
+                reading = self._reading = PendingRead(deadline)
                 try:
                     event = await self._next_reply()
                 finally:
@@ -397,7 +387,7 @@ class SkyTrackerLine:
                 self._note_stray(event)
 
     def _note_stray(self, event: StrayByte) -> None:
-        self.stray_bytes += 1
+        self.statistics.stray_bytes += 1
         logger.info("ignored %s", event.describe())
 
     async def _resync_after_fault(self) -> None:
@@ -413,7 +403,7 @@ class SkyTrackerLine:
         silent or still busy): late replies may still come, so the line is not to be trusted.
         Before the version is known (during connect) only the drain is done.
         """
-        self.resyncs += 1
+        self.statistics.resyncs += 1
         held = self._client.bus is BusState.HELD
         self._client = TrackerClient()
         discarded = b""
@@ -430,14 +420,14 @@ class SkyTrackerLine:
                 self._commander_behind = True
             async with self._writing:
                 await self.link.write(ReleaseBus().encode())
-            self.commands_sent += 1 + held
+            self.statistics.commands_sent += 1 + held
             if self._sync_marker is not None:
                 # The box answers in order: a reply it is late with comes before the answer to
                 # this 'V'. A quiet drain alone would let a reply later than the drain through,
                 # to be read as the answer to the next command.
                 async with self._writing:
                     await self.link.write(ReadVersion().encode())
-                self.commands_sent += 1
+                self.statistics.commands_sent += 1
                 received, synced = await self._read_through(self._sync_marker)
                 discarded += received
             discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
@@ -453,7 +443,7 @@ class SkyTrackerLine:
         """Read until ``marker`` has come (True), or the reply timeout passes (False)."""
         received = b""
         try:
-            async with asyncio.timeout(self.options.reply_timeout_s):
+            async with asyncio.timeout(self.timeout_s):
                 while marker not in received:
                     received += await self.link.read()
         except TimeoutError:

@@ -1,4 +1,5 @@
-"""What a DEVICE string names, and the :class:`Mount` that drives it (docs/cli.md).
+"""Opening a device by its string: what a DEVICE string names, and the :class:`Mount` that
+drives it (the CLI's DEVICE argument, ``scopelink serve``, library users; docs/cli.md).
 
 Forms:
 
@@ -26,7 +27,7 @@ if TYPE_CHECKING:  # the CLI builds its parsers from EXAMPLES: no numpy before a
 __all__ = [
     "AUTODETECT_TIMEOUT_S",
     "KINDS",
-    "DeviceError",
+    "DeviceOpenError",
     "DeviceSpec",
     "create_mount",
     "open_mount",
@@ -47,7 +48,7 @@ EXAMPLES: Final = (
 )
 
 
-class DeviceError(Exception):
+class DeviceOpenError(Exception):
     """The DEVICE string is malformed, or nothing usable answered on it."""
 
     def __init__(self, message: str, hint: str = "") -> None:
@@ -71,20 +72,20 @@ def parse_device(text: str) -> DeviceSpec:
     """Split ``kind:target``; a prefix that is no kind belongs to the link (``tcp://...``)."""
     text = text.strip()
     if not text:
-        raise DeviceError("empty device", f"give one of: {EXAMPLES}")
+        raise DeviceOpenError("empty device", f"give one of: {EXAMPLES}")
     if text == "sim":
         return DeviceSpec("sim", DEFAULT_SIM_PRESET)
     kind, colon, rest = text.partition(":")
     if colon and kind.lower() in KINDS and not rest.startswith("//"):
         kind = kind.lower()
         if not rest.strip():
-            raise DeviceError(f"device {text!r} names no port", f"give one of: {EXAMPLES}")
+            raise DeviceOpenError(f"device {text!r} names no port", f"give one of: {EXAMPLES}")
         if kind == "sim":
             from scopelink.sim import PRESETS  # noqa: PLC0415 - numpy: only for a sim device
 
             preset = rest.strip().lower()
             if preset not in PRESETS:
-                raise DeviceError(
+                raise DeviceOpenError(
                     f"no simulated mount called {preset!r}",
                     "presets: " + ", ".join(sorted(PRESETS)),
                 )
@@ -116,14 +117,12 @@ def create_mount(
             return SynScanMount(spec.target, site=site, limits=limits)
         return SynScanMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
     if spec.kind == "skytracker":
-        from scopelink.drivers.skytracker import (  # noqa: PLC0415 - only if used
-            LineOptions,
-            SkyTrackerMount,
-        )
+        from scopelink.drivers.skytracker import SkyTrackerMount  # noqa: PLC0415 - only if used
 
-        options = LineOptions() if timeout_s is None else LineOptions(reply_timeout_s=timeout_s)
-        return SkyTrackerMount(spec.target, site=site, limits=limits, options=options)
-    raise DeviceError(f"cannot create a mount of unknown kind for {spec}")
+        if timeout_s is None:
+            return SkyTrackerMount(spec.target, site=site, limits=limits)
+        return SkyTrackerMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
+    raise DeviceOpenError(f"cannot create a mount of unknown kind for {spec}")
 
 
 async def open_mount(
@@ -138,7 +137,7 @@ async def open_mount(
 
     Without a kind, SynScan is tried first (its echo ``K`` is harmless to a Sky Tracker, whose
     driver resynchronises the line anyway), then Sky Tracker, each with a short reply timeout.
-    Raises :class:`DeviceError` with a hint when nothing answered or the port cannot be opened.
+    Raises :class:`DeviceOpenError` with a hint when nothing answered or the port cannot be opened.
     """
     parsed = parse_device(spec) if isinstance(spec, str) else spec
     if parsed.kind is not None:
@@ -147,7 +146,7 @@ async def open_mount(
         )
         try:
             await _connect(mount, parsed)
-        except DeviceError:
+        except DeviceOpenError:
             await _close_quietly(mount)  # a caller trying again must find the port free
             raise
         return mount
@@ -159,13 +158,13 @@ async def open_mount(
         )
         try:
             await _connect(mount, candidate)
-        except DeviceError as error:
+        except DeviceOpenError as error:
             _log.debug("autodetect: not %s: %s", kind, error)
             failures.append(f"{kind}: {error}")
             await _close_quietly(mount)  # the next kind needs the port to itself
             continue
         return mount
-    raise DeviceError(
+    raise DeviceOpenError(
         f"nothing recognisable answered on {parsed.target} ({'; '.join(failures)})",
         "check the cable and that the hand control is powered and past its start-up "
         "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection",
@@ -194,10 +193,10 @@ async def _connect(mount: Mount, spec: DeviceSpec) -> None:
     try:
         await mount.connect()
     except LinkError as error:
-        raise DeviceError(f"cannot open {spec.target}: {error}", _PORT_HINT) from None
+        raise DeviceOpenError(f"cannot open {spec.target}: {error}", _PORT_HINT) from None
     except MountError as error:
         # Drivers report a port that would not open as a MountError saying "cannot open".
         hint = _PORT_HINT if "cannot open" in str(error) else ""
-        raise DeviceError(f"{spec}: {error}", hint) from None
+        raise DeviceOpenError(f"{spec}: {error}", hint) from None
     except TimeoutError:
-        raise DeviceError(f"{spec}: no reply") from None
+        raise DeviceOpenError(f"{spec}: no reply") from None

@@ -1,0 +1,112 @@
+"""The Sky Tracker driver's state: one poll (``R`` status, then the position through the bus
+unless a GOTO keeps it), explicit reads of position and status, waiting for a GOTO to end.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+
+from scopelink.links import LinkError
+from scopelink.mount import DeviceError, MountError, MountState, NotConnectedError
+from scopelink.mount.scheduling import Priority
+from scopelink.protocol.skytracker import (
+    ReadPosition,
+    ReadStatus,
+    Reply,
+    StatusReply,
+    TrackerMode,
+    TrackerStatus,
+)
+
+from .base import pointing_of
+from .connection import SkyTrackerConnection
+from .exchange import BusRefusedError, SkyTrackerLine
+
+__all__ = ["SkyTrackerPolling"]
+
+logger = logging.getLogger(__name__)
+
+GOTO_STATUS_POLL_S = 0.05
+"""Status polls during a GOTO (by wait_for_goto, and the poller's refreshes) are this far apart."""
+
+
+class SkyTrackerPolling(SkyTrackerConnection):
+    """Read the state (see :class:`SkyTrackerMount`)."""
+
+    async def refresh(self) -> MountState:
+        """``R`` status; then, unless a GOTO keeps the bus, the position through the bus.
+
+        A lost link (closed, or the box silent longer than ``stale_after_s``) reads as not
+        connected; while engaged, the next refresh opens it anew and identifies the box again.
+        """
+        try:
+            await self._reconnection.run_if(
+                lambda: self._engaged and self._needs_reconnect(), self._reconnect
+            )
+        except (MountError, LinkError) as error:
+            self._problems = (f"reconnecting: {error}",)
+            self._link_lost = True
+            self._publish_now()
+            raise
+        line = self._require_line()
+        if self._mode is TrackerMode.GOTO:
+            # During a GOTO a poll is one status byte (the bus is refused): back-to-back polls
+            # would read it hundreds of times a second; GOTO_STATUS_POLL_S apart is plenty.
+            since = time.monotonic() - self._goto_status_at
+            if since < GOTO_STATUS_POLL_S:
+                await asyncio.sleep(GOTO_STATUS_POLL_S - since)
+        try:
+            self._note_status(await self._read_status(line, Priority.POLL))
+            self._goto_status_at = time.monotonic()
+            if self._mode is not TrackerMode.GOTO and self._commander_present is not False:
+                await self._poll_position(line)
+        except (DeviceError, NotConnectedError) as error:
+            self._problems = (str(error),)
+            silent_s = time.monotonic() - line.last_answer_s
+            if line.link.closed or silent_s > self.stale_after_s:
+                # The link is gone (or the box silent): so is the connection, until reopened.
+                if not self._link_lost:
+                    logger.warning("the Sky Tracker on %s is lost: %s", self.spec, error)
+                self._link_lost = True
+            self._publish_now()
+            raise
+        self._problems = ()
+        return self._publish_now()
+
+    async def _poll_position(self, line: SkyTrackerLine) -> None:
+        """The position for a poll: one immediate retry after a garbled or missing grant; a
+        refusal means a GOTO began since the status read (the position is then kept)."""
+        try:
+            (reply,) = await line.commander([ReadPosition()], Priority.POLL, retry_delays_s=(0.0,))
+        except BusRefusedError as error:
+            if error.unanswered:
+                raise
+            self._mode = TrackerMode.GOTO
+            return
+        self._position = pointing_of(reply, self.now(), self.site)
+
+    async def read_position(self) -> tuple[float, float]:
+        """J2000 (RA hours, Dec degrees) from the Sky Commander now, backing off on refusals."""
+        position = await self._read_position(self._require_line(), Priority.COMMAND, retry=True)
+        self._publish_now()
+        return position.ra_j2000_hours, position.dec_j2000_deg
+
+    async def read_status(self) -> TrackerStatus:
+        """``R``: the box's mode flags and pressed arrows now."""
+        self._note_status(await self._read_status(self._require_line(), Priority.COMMAND))
+        assert self._status is not None
+        return self._status
+
+    async def _read_status(self, line: SkyTrackerLine, priority: Priority) -> Reply:
+        """``R``; a status other than the last one is read again (the byte has no redundancy)."""
+        last = StatusReply(self._status) if self._status is not None else None
+        return await self._read_agreed(line, ReadStatus(), priority, expected=last)
+
+    async def wait_for_goto(self, timeout_s: float | None = None) -> MountState:
+        """Poll ``R`` until the GOTO bit clears (TRACK follows), then refresh everything."""
+        async with asyncio.timeout(timeout_s):
+            while (await self.read_status()).mode is TrackerMode.GOTO:  # noqa: ASYNC110
+                await asyncio.sleep(GOTO_STATUS_POLL_S)
+        return await self.refresh()
