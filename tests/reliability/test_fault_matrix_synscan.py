@@ -775,7 +775,10 @@ def test_the_fault_recovery_benchmark_runs_and_prints_its_tables() -> None:
     """A tiny run of ``bench.fault_recovery_synscan`` (so the benchmark code cannot rot); it exits
     on a wrong position or a motion left running."""
     result = run_bench("bench.fault_recovery_synscan", "--timeout", "0.3", timeout_s=60)
-    lines = result.stdout.splitlines()
+    printed = result.stdout.splitlines()
+    assert printed[0].startswith("date "), printed[0]  # provenance first (bench/provenance.py)
+    (title,) = [n for n, line in enumerate(printed) if line.startswith("SynScan driver fault")]
+    lines = printed[title:]
     assert lines[0].startswith("SynScan driver fault recovery, timeout 0.3 s")
     cases = lines.index("", 2) - 2  # one row per case, then a blank line
     rows = {line[:22].strip(): line.split() for line in lines[2 : 2 + cases]}
