@@ -44,6 +44,7 @@ from scopelink.protocol.skytracker import (
 
 from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
+from .memory import stored_object
 from .motion import axis_motion, guide_button, plan_buttons
 from .polling import SkyTrackerPolling
 
@@ -212,6 +213,15 @@ class SkyTrackerMount(SkyTrackerPolling):
             f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced "
             "position after 'N', twice (is 'N' lost on the line?)"
         )
+
+    async def store_object(self, slot: int, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """``Q`` ``Lnn ...`` ``q``: store J2000 coordinates in slot ``slot`` (0-58) of the Sky
+        Commander's memory (not made current: a GOTO under way is not disturbed, but the box
+        lends no bus during one, so this waits out the bus back-off, then fails)."""
+        command = stored_object(slot, ra_j2000_hours, dec_j2000_deg)
+        (reply,) = await self._require_commander().commander([command])
+        if not isinstance(reply, Acknowledge):
+            raise DeviceError(f"the Sky Commander did not acknowledge {command.describe()}")
 
     async def _set_site(self, site: Site) -> None:
         """The box keeps no site: only the PC-side alt/az of the last reading changes."""
