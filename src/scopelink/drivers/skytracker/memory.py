@@ -195,11 +195,11 @@ async def upload(
                 f"{error} ({len(written)} of {len(entries)} slots were written before it)",
                 written,
             ) from error
-        done = SlotEntry(
+        done = SlotEntry(  # as the box holds it: the wire carries 3 decimals
             entry.slot,
             entry.label,
-            entry.ra_j2000_hours,
-            entry.dec_j2000_deg,
+            round(entry.ra_j2000_hours, 3) % 24.0,
+            round(entry.dec_j2000_deg, 3),
             now.isoformat(timespec="seconds"),
         )
         mirror.record(done)
