@@ -246,7 +246,7 @@ async def test_pushto_is_live_until_ctrl_c_and_exits_clean(
         env={**environment(config), "XDG_STATE_HOME": str(state_dir)},
     )
     assert process.stdout is not None
-    lines = []
+    lines: list[str] = []
     async with asyncio.timeout(20):
         while len(lines) < 3:
             line = (await process.stdout.readline()).decode()
