@@ -4,20 +4,27 @@ slot mirror and the push-to figures, all against the real emulators over TCP."""
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
 import pytest
 
-from scopelink.drivers.skytracker import SkyCommanderMount
+from scopelink.cli.skycommander_command import DEFAULT_PUSHTO_INTERVAL_S
+from scopelink.drivers.skytracker import DEFAULT_TIMEOUT_S, SkyCommanderMount
+from scopelink.drivers.skytracker.commander_mount import COMMANDER_BAUDRATE, QUIET_S
 from scopelink.drivers.skytracker.memory import (
+    SLOT_COUNT,
+    SUN_DRIFT_MARGIN_DEG,
     SlotEntry,
     SlotMirror,
     UploadInterruptedError,
+    placeholder,
     upload,
 )
-from scopelink.drivers.skytracker.pushto import push_to
+from scopelink.drivers.skytracker.mount import SYNC_TOLERANCE_DEG
+from scopelink.drivers.skytracker.pushto import ON_TARGET_DEG, push_to
 from scopelink.mount import InvalidValueError, MountAxis, NotSupportedError
 from scopelink.protocol.skytracker import LoadObject
 from scopelink.servers.skytracker import SkyCommanderEmulator
@@ -148,3 +155,22 @@ async def test_push_to_figures_agree_with_the_sky_commanders_own_offsets(tmp_pat
         figures = push_to("here", *on, state=state, when=state.read_at, site=SITE)
         assert figures.on_target
         assert "on target" in figures.describe()
+
+
+def test_the_documented_limits_and_defaults_are_the_code_s() -> None:
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    text = (docs / "drivers-skytracker.md").read_text(encoding="utf-8")
+    section = " ".join(text[text.index("## Sky Commander memory and push-to") :].split())
+    assert f"{SLOT_COUNT} objects" in section
+    assert f"plus {SUN_DRIFT_MARGIN_DEG:g}° (`SUN_DRIFT_MARGIN_DEG`" in section
+    assert f"within {ON_TARGET_DEG:g}° on both axes (`ON_TARGET_DEG`)" in section
+    assert f"{QUIET_S:g} s of quiet (`QUIET_S`)" in section
+    assert f"reply timeout {DEFAULT_TIMEOUT_S:g} s (`timeout_s`" in section
+    assert f"`SYNC_TOLERANCE_DEG` = {SYNC_TOLERANCE_DEG:g}°" in section
+    assert f"{COMMANDER_BAUDRATE} baud 8N1" in section
+    assert inspect.signature(SkyCommanderMount).parameters["timeout_s"].default == DEFAULT_TIMEOUT_S
+    assert placeholder(SITE) == (0.0, 90.0)
+    assert "RA 0 h Dec +90°" in section
+    cli = " ".join((docs / "cli.md").read_text(encoding="utf-8").split())
+    assert f"`--interval` seconds (default {DEFAULT_PUSHTO_INTERVAL_S:g}" in cli
+    assert "`--from N` (default 0)" in cli

@@ -17,6 +17,7 @@ import logging
 import time
 from collections.abc import Callable
 from datetime import datetime
+from typing import Any, Self
 
 from scopelink.astro import Site, angular_separation_deg
 from scopelink.drivers.common import LinkFactory, Pointing, link_factory
@@ -99,6 +100,13 @@ class SkyCommanderMount(Mount):
         self._client = CommanderClient()
         self._position: Pointing | None = None
         self._problems: tuple[str, ...] = ()
+
+    @classmethod
+    async def open(cls, link: str | LinkFactory, **options: Any) -> Self:
+        """Construct the driver for ``link`` and connect it; ``options`` are the constructor's."""
+        mount = cls(link, **options)
+        await mount.connect()
+        return mount
 
     @property
     def capabilities(self) -> Capabilities:
