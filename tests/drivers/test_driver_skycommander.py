@@ -13,7 +13,8 @@ import pytest
 
 from scopelink.cli.skycommander_command import DEFAULT_PUSHTO_INTERVAL_S
 from scopelink.drivers.skytracker import DEFAULT_TIMEOUT_S, SkyCommanderMount
-from scopelink.drivers.skytracker.commander_mount import COMMANDER_BAUDRATE, QUIET_S
+from scopelink.drivers.skytracker.base import BAUDRATE
+from scopelink.drivers.skytracker.exchange import RESYNC_QUIET_S
 from scopelink.drivers.skytracker.memory import (
     SLOT_COUNT,
     SUN_DRIFT_MARGIN_DEG,
@@ -164,10 +165,10 @@ def test_the_documented_limits_and_defaults_are_the_code_s() -> None:
     assert f"{SLOT_COUNT} objects" in section
     assert f"plus {SUN_DRIFT_MARGIN_DEG:g}° (`SUN_DRIFT_MARGIN_DEG`" in section
     assert f"within {ON_TARGET_DEG:g}° on both axes (`ON_TARGET_DEG`)" in section
-    assert f"{QUIET_S:g} s of quiet (`QUIET_S`)" in section
+    assert f"{RESYNC_QUIET_S:g} s of quiet (`RESYNC_QUIET_S`" in section
     assert f"reply timeout {DEFAULT_TIMEOUT_S:g} s (`timeout_s`" in section
     assert f"`SYNC_TOLERANCE_DEG` = {SYNC_TOLERANCE_DEG:g}°" in section
-    assert f"{COMMANDER_BAUDRATE} baud 8N1" in section
+    assert f"{BAUDRATE} baud 8N1" in section
     assert inspect.signature(SkyCommanderMount).parameters["timeout_s"].default == DEFAULT_TIMEOUT_S
     assert placeholder(SITE) == (0.0, 90.0)
     assert "RA 0 h Dec +90°" in section

@@ -49,18 +49,15 @@ from scopelink.protocol.skytracker import (
     StrayByte,
 )
 
-from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, ReplyTimeoutError
+from .base import BAUDRATE
+from .exchange import DEFAULT_TIMEOUT_S, RESYNC_QUIET_S, BadReplyError, ReplyTimeoutError
 from .memory import stored_object
 from .mount import SYNC_TOLERANCE_DEG
 
-__all__ = ["COMMANDER_BAUDRATE", "SkyCommanderMount"]
+__all__ = ["SkyCommanderMount"]
 
 logger = logging.getLogger(__name__)
 
-COMMANDER_BAUDRATE = 9600
-"""The Sky Commander's own port: 9600 8N1 (as INDI's Sky Commander driver opens it)."""
-QUIET_S = 0.1
-"""After a failed exchange, input is drained until the line has been quiet this long."""
 
 
 class SkyCommanderMount(Mount):
@@ -90,7 +87,7 @@ class SkyCommanderMount(Mount):
             link,
             name=name,
             unnamed="Sky Commander link",
-            baudrate=COMMANDER_BAUDRATE,
+            baudrate=BAUDRATE,  # the Sky Commander's own port: 9600 8N1, as INDI opens it
             stopbits=1,
             pace=True,
         )
@@ -233,12 +230,12 @@ class SkyCommanderMount(Mount):
             raise NotConnectedError(f"the link {self.spec} failed: {error}") from error
 
     async def _drain(self) -> None:
-        """Read and drop input until the line has been quiet for :data:`QUIET_S`; a fresh codec."""
+        """Drop input until the line has been quiet for ``RESYNC_QUIET_S``; a fresh codec."""
         link = self._link
         if link is not None:
             with contextlib.suppress(TimeoutError, LinkError):
                 while True:
-                    async with asyncio.timeout(QUIET_S):
+                    async with asyncio.timeout(RESYNC_QUIET_S):
                         await link.read()
         self._client = CommanderClient()
 
