@@ -59,7 +59,6 @@ __all__ = ["SkyCommanderMount"]
 logger = logging.getLogger(__name__)
 
 
-
 class SkyCommanderMount(Mount):
     """A Sky Commander on ``link`` (a serial port, ``tcp://HOST:PORT``, a pty path).
 
