@@ -260,3 +260,24 @@ async def test_pushto_is_live_until_ctrl_c_and_exits_clean(
     stderr = (await process.stderr.read()).decode() if process.stderr else ""
     assert status == 0, stderr
     assert "Traceback" not in stderr
+
+
+def test_pushto_works_on_any_mount_that_reports_a_position(config: Path, state_dir: Path) -> None:
+    result = run(config, state_dir, "pushto", "Vega", "--once", "-d", "sim")
+    assert result.returncode == 0, result.stderr
+    figures(result.stdout)
+    assert result.stdout.startswith("Vega: ")
+
+
+def test_a_plan_that_is_not_a_small_text_file_is_refused_unread(
+    config: Path, state_dir: Path, tmp_path: Path
+) -> None:
+    result = run(config, state_dir, "upload", "--plan", "/dev/zero", "-d", "skycommander:/dev/null")
+    assert result.returncode == 1
+    assert "is over 1048576 bytes" in result.stderr
+    binary = tmp_path / "plan.bin"
+    binary.write_bytes(b"M 31\n\xff\xfe\n")
+    result = run(config, state_dir, "upload", "--plan", str(binary), "-d", "skycommander:/dev/null")
+    assert result.returncode == 1
+    assert "nothing uploaded: cannot read the plan" in result.stderr
+    assert "Traceback" not in result.stderr

@@ -32,6 +32,8 @@ __all__ = ["DEFAULT_PUSHTO_INTERVAL_S", "register"]
 DEFAULT_PUSHTO_INTERVAL_S: Final = 0.5
 """``pushto`` refreshes its line twice a second."""
 KINDS: Final = ("skytracker", "skycommander")
+MAX_PLAN_BYTES: Final = 1 << 20
+"""A plan file larger than 1 MiB is refused unread (a wrong path such as /dev/zero)."""
 
 _EXAMPLES = """\
 examples:
@@ -134,10 +136,14 @@ def _mirror(args: argparse.Namespace) -> SlotMirror:
     return SlotMirror(mirror_key(_command(args).device.target))
 
 
-def _on_device(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int]]) -> int:
+def _on_device(
+    args: argparse.Namespace, body: Callable[[Mount], Awaitable[int]], *, any_mount: bool = False
+) -> int:
+    """Run ``body`` on the device; only a Sky Commander's unless ``any_mount`` (push-to)."""
     from scopelink.cli.mount_session import run_on_mount  # noqa: PLC0415
 
-    _command(args)
+    if not any_mount:
+        _command(args)
     return run_on_mount(args, body)
 
 
@@ -176,12 +182,18 @@ def _run_slots(args: argparse.Namespace) -> int:
 
 
 def _read_plan(path: str) -> str:
-    if path == "-":
-        return sys.stdin.read()
+    """The plan's text: at most :data:`MAX_PLAN_BYTES` of UTF-8 (59 objects need a few KiB)."""
     try:
-        return Path(path).read_text(encoding="utf-8")
+        if path == "-":
+            data = sys.stdin.buffer.read(MAX_PLAN_BYTES + 1)
+        else:
+            with Path(path).open("rb") as file:
+                data = file.read(MAX_PLAN_BYTES + 1)
+        if len(data) > MAX_PLAN_BYTES:
+            raise CommandError(f"nothing uploaded: the plan {path} is over {MAX_PLAN_BYTES} bytes")
+        return data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as error:
-        raise CommandError(f"cannot read the plan {path}: {error}") from None
+        raise CommandError(f"nothing uploaded: cannot read the plan {path}: {error}") from None
 
 
 def _run_upload(args: argparse.Namespace) -> int:
@@ -324,4 +336,4 @@ def _run_pushto(args: argparse.Namespace) -> int:
             print()
         return 0
 
-    return _on_device(args, body)
+    return _on_device(args, body, any_mount=True)

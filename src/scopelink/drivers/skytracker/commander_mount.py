@@ -129,7 +129,7 @@ class SkyCommanderMount(Mount):
         try:
             self._link = await self._open()
         except (LinkError, OSError) as error:
-            raise DeviceError(f"cannot open {self.spec}: {error}") from None
+            raise NotConnectedError(f"cannot open the Sky Commander's link: {error}") from error
         self._client = CommanderClient()
         try:
             await self.refresh()
