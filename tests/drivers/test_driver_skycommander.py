@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from scopelink.cli.skycommander_command import DEFAULT_PUSHTO_INTERVAL_S
+from scopelink.cli.skycommander_command import DEFAULT_PUSHTO_INTERVAL_S, MAX_PLAN_BYTES
 from scopelink.drivers.skytracker import DEFAULT_TIMEOUT_S, SkyCommanderMount
 from scopelink.drivers.skytracker.base import BAUDRATE
 from scopelink.drivers.skytracker.exchange import RESYNC_QUIET_S
@@ -175,3 +175,5 @@ def test_the_documented_limits_and_defaults_are_the_code_s() -> None:
     cli = " ".join((docs / "cli.md").read_text(encoding="utf-8").split())
     assert f"`--interval` seconds (default {DEFAULT_PUSHTO_INTERVAL_S:g}" in cli
     assert "`--from N` (default 0)" in cli
+    assert MAX_PLAN_BYTES == 1 << 20
+    assert "at most 1 MiB, `MAX_PLAN_BYTES`" in cli
