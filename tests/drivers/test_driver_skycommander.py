@@ -24,8 +24,8 @@ from scopelink.drivers.skytracker.memory import (
     placeholder,
     upload,
 )
-from scopelink.drivers.skytracker.mount import SYNC_TOLERANCE_DEG
 from scopelink.drivers.skytracker.pushto import ON_TARGET_DEG, push_to
+from scopelink.drivers.skytracker.realign import SYNC_TOLERANCE_DEG
 from scopelink.mount import InvalidValueError, MountAxis, NotSupportedError
 from scopelink.protocol.skytracker import LoadObject
 from scopelink.servers.skytracker import SkyCommanderEmulator

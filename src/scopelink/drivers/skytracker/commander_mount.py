@@ -19,7 +19,7 @@ from collections.abc import Callable
 from datetime import datetime
 from typing import Any, Self
 
-from scopelink.astro import Site, angular_separation_deg
+from scopelink.astro import Site
 from scopelink.drivers.common import LinkFactory, Pointing, link_factory
 from scopelink.links import Link, LinkError
 from scopelink.mount import (
@@ -52,7 +52,7 @@ from scopelink.protocol.skytracker import (
 from .base import BAUDRATE
 from .exchange import DEFAULT_TIMEOUT_S, RESYNC_QUIET_S, BadReplyError, ReplyTimeoutError
 from .memory import stored_object
-from .mount import SYNC_TOLERANCE_DEG
+from .realign import realign_on
 
 __all__ = ["SkyCommanderMount"]
 
@@ -161,27 +161,20 @@ class SkyCommanderMount(Mount):
 
     async def _sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """``L99`` then ``N`` (realign); the position read back tells that ``N`` took."""
-        off_by = 0.0
-        for _ in range(2):
-            reply = await self.ask(LoadObject.current(ra_j2000_hours, dec_j2000_deg))
-            if not isinstance(reply, Acknowledge):
-                raise DeviceError(f"the Sky Commander did not acknowledge the object: {reply}")
+        load = LoadObject.current(ra_j2000_hours, dec_j2000_deg)
+
+        async def load_and_realign() -> Reply | None:
+            reply = await self.ask(load)
             await self.ask(Realign())
+            return reply
+
+        async def read_back() -> tuple[float, float]:
             state = await self.refresh()
             assert state.ra_j2000_hours is not None
             assert state.dec_j2000_deg is not None
-            off_by = angular_separation_deg(
-                state.ra_j2000_hours * 15.0,
-                state.dec_j2000_deg,
-                ra_j2000_hours * 15.0,
-                dec_j2000_deg,
-            )
-            if off_by <= SYNC_TOLERANCE_DEG:
-                return
-        raise DeviceError(
-            f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced position "
-            "after 'N', twice"
-        )
+            return state.ra_j2000_hours, state.dec_j2000_deg
+
+        await realign_on(ra_j2000_hours, dec_j2000_deg, load_and_realign, read_back)
 
     async def _set_site(self, site: Site) -> None:
         if self._position is not None:
