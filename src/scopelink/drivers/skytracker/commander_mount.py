@@ -219,6 +219,7 @@ class SkyCommanderMount(Mount):
                 f"within {self.timeout_s:g} s"
             ) from None
         except LinkError as error:
+            self._publish_now()  # connected is false once the link has closed
             raise NotConnectedError(f"the link {self.spec} failed: {error}") from error
 
     async def _drain(self) -> None:
