@@ -177,3 +177,21 @@ def test_the_documented_limits_and_defaults_are_the_code_s() -> None:
     assert "`--from N` (default 0)" in cli
     assert MAX_PLAN_BYTES == 1 << 20
     assert "at most 1 MiB, `MAX_PLAN_BYTES`" in cli
+
+
+async def test_an_upload_during_a_goto_fails_clearly_and_records_only_what_landed(
+    tmp_path: Path,
+) -> None:
+    mirror = SlotMirror("skycommander-goto", tmp_path / "state")
+    async with rig(tmp_path / "box", "tcp") as sky:
+        await sky.driver.store_object(1, 1.0, 1.0)
+        await sky.driver.goto_equatorial(*sky_at(sky.sim, 60.0, 200.0))
+        entries = [SlotEntry(2, "M 31", 0.712, 41.269)]
+        with pytest.raises(UploadInterruptedError, match=r"GOTO is running.*0 of 1 slots"):
+            await upload(sky.driver, mirror, entries, sky.sim.clock.now())
+        assert mirror.entries() == {}
+        assert sky.emulator.commander.store.get(2) is None
+        await sky.driver.wait_for_goto(timeout_s=15.0)
+        written = await upload(sky.driver, mirror, entries, sky.sim.clock.now())
+        assert [e.slot for e in written] == [2]
+        assert sky.emulator.commander.store.get(2) == StoredObject(0.712, 41.269)
