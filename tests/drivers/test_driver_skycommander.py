@@ -26,8 +26,9 @@ from scopelink.drivers.skytracker.memory import (
 )
 from scopelink.drivers.skytracker.pushto import ON_TARGET_DEG, push_to
 from scopelink.drivers.skytracker.realign import SYNC_TOLERANCE_DEG
-from scopelink.mount import InvalidValueError, MountAxis, NotSupportedError
+from scopelink.mount import InvalidValueError, MountAxis, NotConnectedError, NotSupportedError
 from scopelink.protocol.skytracker import LoadObject
+from scopelink.servers.faults import Fault, FaultKind
 from scopelink.servers.skytracker import SkyCommanderEmulator
 from scopelink.servers.skytracker.objects import StoredObject
 from scopelink.sim import SimulatedMount
@@ -195,3 +196,16 @@ async def test_an_upload_during_a_goto_fails_clearly_and_records_only_what_lande
         written = await upload(sky.driver, mirror, entries, sky.sim.clock.now())
         assert [e.slot for e in written] == [2]
         assert sky.emulator.commander.store.get(2) == StoredObject(0.712, 41.269)
+
+
+async def test_a_link_that_closed_under_the_driver_is_opened_again(tmp_path: Path) -> None:
+    async with commander_rig(tmp_path) as (emulator, _, driver):
+        emulator.faults.add(Fault(FaultKind.CLOSE, "CR"))  # the next position read: link gone
+        with pytest.raises(NotConnectedError):
+            await driver.refresh()
+        assert not driver.state.connected
+        assert driver.engaged
+        state = await driver.refresh()  # opened again, and read
+        assert state.connected
+        await driver.store_object(9, 3.0, 4.0)
+        assert emulator.commander.store.get(9) == StoredObject(3.0, 4.0)

@@ -96,6 +96,8 @@ class SkyCommanderMount(Mount):
         self._client = CommanderClient()
         self._position: Pointing | None = None
         self._problems: tuple[str, ...] = ()
+        self._engaged = False
+        """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
 
     @classmethod
     async def open(cls, link: str | LinkFactory, **options: Any) -> Self:
@@ -114,7 +116,7 @@ class SkyCommanderMount(Mount):
 
     @property
     def engaged(self) -> bool:
-        return self._link is not None
+        return self._engaged
 
     def _line_bytes(self) -> tuple[int, int]:
         link = self._link
@@ -126,18 +128,23 @@ class SkyCommanderMount(Mount):
         """Open the link and read a position: a Sky Commander answers ``\\r`` with 16 bytes."""
         if self._link is not None and not self._link.closed:
             return
-        try:
-            self._link = await self._open()
-        except (LinkError, OSError) as error:
-            raise NotConnectedError(f"cannot open the Sky Commander's link: {error}") from error
-        self._client = CommanderClient()
+        await self._open_link()
         try:
             await self.refresh()
         except DeviceError as error:
             await self.disconnect()
             raise DeviceError(f"no Sky Commander answered on {self.spec}: {error}") from None
+        self._engaged = True
+
+    async def _open_link(self) -> None:
+        try:
+            self._link = await self._open()
+        except (LinkError, OSError) as error:
+            raise NotConnectedError(f"cannot open the Sky Commander's link: {error}") from error
+        self._client = CommanderClient()
 
     async def disconnect(self) -> None:
+        self._engaged = False
         link, self._link = self._link, None
         if link is not None:
             with contextlib.suppress(LinkError):
@@ -186,6 +193,10 @@ class SkyCommanderMount(Mount):
     ) -> Reply | None:
         """One command and its reply, in one turn; a failed exchange is tried once more."""
         async with self.scheduler.turn(priority):
+            link = self._link
+            if self._engaged and (link is None or link.closed):
+                logger.info("the Sky Commander's link %s closed: opening it again", self.spec)
+                await self._open_link()
             try:
                 return await self._exchange(command)
             except (ReplyTimeoutError, BadReplyError) as error:
