@@ -75,6 +75,11 @@ COMMANDS: Final = (
         "one guide pulse: DIRECTION (north/south/east/west) for MS milliseconds",
         "motion_commands",
     ),
+    Command(
+        "skycommander",
+        "the Sky Commander's memory (slots, upload, clear) and a live push-to view",
+        "skycommander_command",
+    ),
     Command("time", "set the mount's clock from this computer's (UTC)", "setup_commands"),
     Command("site", "send the configured site (or --site) to the mount", "setup_commands"),
     Command("config", "show or change the settings file", "config_command"),

@@ -7,6 +7,8 @@ Forms:
   this process (it starts afresh every run);
 - ``synscan:LINK``: a SynScan hand control; ``skytracker:LINK``: a Sky Tracker motor box
   (its Sky Commander, if fitted, answers on the same line);
+- ``skycommander:LINK``: a Sky Commander alone on its own port (push-to: reads, syncs and its
+  object memory; no motion);
 - ``LINK`` alone: try SynScan, then Sky Tracker (autodetect).
 
 LINK is anything :func:`scopelink.links.open_link` opens: ``/dev/ttyUSB0``, ``COM3``,
@@ -36,7 +38,7 @@ __all__ = [
 
 _log = logging.getLogger(__name__)
 
-KINDS: Final = ("sim", "synscan", "skytracker")
+KINDS: Final = ("sim", "synscan", "skytracker", "skycommander")
 DEFAULT_SIM_PRESET: Final = "eq6"
 AUTODETECT_TIMEOUT_S: Final = 1.5
 """Reply timeout while probing a device of unknown kind: long enough for any real hand control
@@ -122,6 +124,12 @@ def create_mount(
         if timeout_s is None:
             return SkyTrackerMount(spec.target, site=site, limits=limits)
         return SkyTrackerMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
+    if spec.kind == "skycommander":
+        from scopelink.drivers.skytracker import SkyCommanderMount  # noqa: PLC0415 - if used
+
+        if timeout_s is None:
+            return SkyCommanderMount(spec.target, site=site, limits=limits)
+        return SkyCommanderMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
     raise DeviceOpenError(f"cannot create a mount of unknown kind for {spec}")
 
 

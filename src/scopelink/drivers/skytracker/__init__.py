@@ -9,11 +9,15 @@ One class per concern, each building on the one before:
 
 Beside them: `exchange` (`SkyTrackerLine`, one exchange at a time, the Sky Commander bus,
 resynchronisation), `motion` (which arrows and modes give a rate), `calibration`.
+The Sky Commander alone on its port: `commander_mount` (`SkyCommanderMount`); its object memory
+and a mirror of it: `memory`, `plan` (a night's list); push-to figures: `pushto`; the sync both
+drivers do (``L99``, ``N``, read back): `realign`.
 
 See ``docs/drivers-skytracker.md``.
 """
 
 from .calibration import CalibrationFactors, CalibrationRuleError
+from .commander_mount import SkyCommanderMount
 from .exchange import (
     DEFAULT_TIMEOUT_S,
     BadReplyError,
@@ -37,6 +41,7 @@ __all__ = [
     "CalibrationRuleError",
     "LineOutOfSyncError",
     "ReplyTimeoutError",
+    "SkyCommanderMount",
     "SkyTrackerLine",
     "SkyTrackerMount",
     "SlewInProgressError",

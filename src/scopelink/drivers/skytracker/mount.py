@@ -14,7 +14,7 @@ import logging
 from dataclasses import replace
 from typing import Any, Self
 
-from scopelink.astro import Site, angular_separation_deg
+from scopelink.astro import Site
 from scopelink.drivers.common import LinkFactory
 from scopelink.links import LinkError
 from scopelink.mount import (
@@ -36,6 +36,7 @@ from scopelink.protocol.skytracker import (
     ReadStatus,
     Realign,
     ReleaseDirections,
+    Reply,
     SelectMode,
     SetGuideSpeed,
     TrackerCommand,
@@ -44,16 +45,14 @@ from scopelink.protocol.skytracker import (
 
 from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
+from .memory import stored_object
 from .motion import axis_motion, guide_button, plan_buttons
 from .polling import SkyTrackerPolling
+from .realign import realign_on
 
 __all__ = ["SkyTrackerMount", "SlewInProgressError"]
 
 logger = logging.getLogger(__name__)
-
-SYNC_TOLERANCE_DEG = 0.05
-"""After a sync the position read back must lie this close to the synced one (3-decimal
-coordinates both ways, and the sky's drift during the read)."""
 
 
 class SlewInProgressError(MountError):
@@ -188,30 +187,26 @@ class SkyTrackerMount(SkyTrackerPolling):
         """``Q`` ``L99 ...`` ``N`` ``q``: realign the Sky Commander on this position."""
         line = self._require_commander()
         self._check_sync_now(self.state)
-        # 'N' has no reply: the position read back tells whether the realign took. Realigning
-        # can be repeated, so a lost 'N' (the port is unbuffered) gets a second try.
-        off_by = 0.0
-        for _ in range(2):
-            load, _ = await line.commander(
-                [LoadObject.current(ra_j2000_hours, dec_j2000_deg), Realign()]
-            )
-            if not isinstance(load, Acknowledge):
-                raise DeviceError(f"the Sky Commander did not acknowledge the object: {load}")
+        load = LoadObject.current(ra_j2000_hours, dec_j2000_deg)
+
+        async def load_and_realign() -> Reply | None:
+            return (await line.commander([load, Realign()]))[0]
+
+        async def read_back() -> tuple[float, float]:
             after = await self._read_position(line, Priority.COMMAND, retry=True)
             self._publish_now()
-            off_by = angular_separation_deg(
-                after.ra_j2000_hours * 15.0,
-                after.dec_j2000_deg,
-                ra_j2000_hours * 15.0,
-                dec_j2000_deg,
-            )
-            if off_by <= SYNC_TOLERANCE_DEG:
-                return
-            logger.info("realign did not take (%.3f° off): once more", off_by)
-        raise DeviceError(
-            f"the Sky Commander did not realign: it reads {off_by:.3f}° from the synced "
-            "position after 'N', twice (is 'N' lost on the line?)"
-        )
+            return after.ra_j2000_hours, after.dec_j2000_deg
+
+        await realign_on(ra_j2000_hours, dec_j2000_deg, load_and_realign, read_back)
+
+    async def store_object(self, slot: int, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """``Q`` ``Lnn ...`` ``q``: store J2000 coordinates in slot ``slot`` (0-58) of the Sky
+        Commander's memory (not made current: a GOTO under way is not disturbed, but the box
+        lends no bus during one, so this waits out the bus back-off, then fails)."""
+        command = stored_object(slot, ra_j2000_hours, dec_j2000_deg)
+        (reply,) = await self._require_commander().commander([command])
+        if not isinstance(reply, Acknowledge):
+            raise DeviceError(f"the Sky Commander did not acknowledge {command.describe()}")
 
     async def _set_site(self, site: Site) -> None:
         """The box keeps no site: only the PC-side alt/az of the last reading changes."""
