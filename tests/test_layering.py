@@ -124,3 +124,21 @@ def test_the_cycle_check_finds_a_cycle() -> None:
     graph["scopelink.mount.types"].add("scopelink.mount.base")  # base imports types already
     with pytest.raises(graphlib.CycleError):
         tuple(graphlib.TopologicalSorter(graph).static_order())
+
+
+MAX_CLASS_LINES = 400
+"""No class over this many lines (issue #13): one concern per class; a bigger one is split."""
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted([*PACKAGE_ROOT.rglob("*.py"), *(PACKAGE_ROOT.parents[1] / "bench").rglob("*.py")]),
+    ids=lambda p: p.relative_to(PACKAGE_ROOT.parents[1]).as_posix(),
+)
+def test_no_class_is_over_400_lines(path: Path) -> None:
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ClassDef):
+            assert node.end_lineno is not None
+            lines = node.end_lineno - node.lineno + 1
+            assert lines <= MAX_CLASS_LINES, f"{path.name}: {node.name} has {lines} lines"
