@@ -26,34 +26,30 @@ from scopelink.protocol.synscan import (
 
 
 class LX200Session:
-    """SkySafari's end of one LX200 connection: each command encoded by the codec
-    (:func:`encode_command`) and its reply read by the shape the codec gives it
-    (:func:`reply_kind`), compared with the codec's own replies. The codec has no client-side
-    reply reader yet, so the two shapes read here (one character; text up to the terminator)
-    are cut by :meth:`char` and :meth:`text`."""
+    """SkySafari's end of one LX200 connection, on the codec's client connection: each command
+    encoded by it, and its reply cut by the shape the codec gives the command."""
 
     def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         self._reader = reader
         self._writer = writer
+        self._connection = lx200.LX200ClientConnection()
 
     def send(self, command: lx200.AnyCommand) -> str:
         """Send ``command``; its text (``:GR#``), which names the request in the records."""
-        frame = lx200.encode_command(command)
+        frame = self._connection.send(command)
         self._writer.write(frame)
         return frame.decode("ascii")
 
-    def char(self) -> Awaitable[bytes]:
-        return self._reader.readexactly(1)
-
-    def text(self) -> Awaitable[bytes]:
-        return self._reader.readuntil(_TERMINATOR)
-
-    def read(self, command: lx200.AnyCommand) -> Awaitable[bytes]:
-        """The reply to ``command`` (a one-character or a terminated one; the first character
-        of a slew's)."""
-        if lx200.reply_kind(command) is lx200.ReplyKind.TERMINATED:
-            return self.text()
-        return self.char()
+    async def read(self, command: lx200.AnyCommand) -> bytes:
+        """The reply to ``command`` (sent before the reply of any later command is read)."""
+        while (event := self._connection.next_event()) is lx200.NEED_DATA:
+            data = await self._reader.read(_LX200_READ_SIZE)
+            if not data:
+                raise EOFError("the LX200 server closed the connection")
+            self._connection.receive_data(data)
+        if not isinstance(event, lx200.LX200Reply) or event.command != command:
+            raise ValueError(event.describe())
+        return event.data
 
     async def close(self) -> None:
         self._writer.close()
@@ -61,8 +57,7 @@ class LX200Session:
             await self._writer.wait_closed()
 
 
-_TERMINATOR = lx200.text_reply("")
-"""What ends a text reply (``#``)."""
+_LX200_READ_SIZE = 256
 _POLLS = (lx200.Get(lx200.Query.RA), lx200.Get(lx200.Query.DEC))
 _HALT = lx200.Halt()
 
@@ -114,8 +109,7 @@ async def _lx200_goto(session: LX200Session, night: Night, chance: random.Random
     what = session.send(goto)
     reply = await night.timed("lx200", what, COMMAND_BOUND_S, session.read(goto))
     if reply != lx200.slew_reply(None):
-        reason = await night.timed("lx200", f"{what} reason", READ_BOUND_S, session.text())
-        night.answered_error("lx200", f"{what} {reply.decode()} {reason.decode(errors='replace')}")
+        night.answered_error("lx200", f"{what} {reply.decode(errors='replace')}")
     else:
         night.slews += 1
 
@@ -228,12 +222,13 @@ async def reconnecting(
     protocol: str, night: Night, connection: Callable[[], Awaitable[None]]
 ) -> None:
     """One client connection after another, as long as the night lasts. A connection that
-    breaks is recorded (a late reply already is, by :meth:`Night.timed`) and replaced."""
+    breaks (or whose replies go out of step: ValueError) is recorded (a late reply already is, by
+    :meth:`Night.timed`) and replaced."""
     while True:
         try:
             await connection()
         except TimeoutError:
             pass  # a reply came too late: recorded; a new connection starts from a clean stream
-        except (OSError, EOFError, LinkError, aiohttp.ClientError) as error:
+        except (OSError, EOFError, ValueError, LinkError, aiohttp.ClientError) as error:
             night.broken.append(f"{protocol} at {night.now():.1f} s: {error!r}")
         await asyncio.sleep(0.2)

@@ -3,7 +3,8 @@
 - `angles`: the sexagesimal forms on the wire, both precisions;
 - `commands`: typed commands, :func:`parse_command`, :func:`encode_command`, reply shapes;
 - `replies`: the handset's replies as bytes;
-- `connection`: :class:`LX200ServerConnection`, framing ``:...#`` commands and the ACK byte;
+- `connection`: :class:`LX200ServerConnection`, framing ``:...#`` commands and the ACK byte, and
+  :class:`LX200ClientConnection`, cutting the replies by the shape each command gets;
 - `skyfi`: SkySafari's SkyFi discovery datagrams.
 """
 
@@ -45,10 +46,15 @@ from scopelink.protocol.lx200.commands import (
 )
 from scopelink.protocol.lx200.connection import (
     MAX_COMMAND_LENGTH,
+    MAX_REPLY_LENGTH,
     NEED_DATA,
+    LX200ClientConnection,
+    LX200Reply,
     LX200ServerConnection,
+    MalformedReply,
     NeedData,
     StrayBytes,
+    UnexpectedReply,
 )
 from scopelink.protocol.lx200.replies import (
     DATE_SET_REPLY,
@@ -63,6 +69,7 @@ __all__ = [
     "ACK_BYTE",
     "DATE_SET_REPLY",
     "MAX_COMMAND_LENGTH",
+    "MAX_REPLY_LENGTH",
     "NEED_DATA",
     "SKYFI_PORT",
     "Ack",
@@ -71,8 +78,11 @@ __all__ = [
     "Get",
     "GotoTarget",
     "Halt",
+    "LX200ClientConnection",
+    "LX200Reply",
     "LX200ServerConnection",
     "MalformedCommand",
+    "MalformedReply",
     "Move",
     "NeedData",
     "PulseGuide",
@@ -92,6 +102,7 @@ __all__ = [
     "StrayBytes",
     "SyncTarget",
     "TogglePrecision",
+    "UnexpectedReply",
     "UnknownCommand",
     "boolean_reply",
     "encode_command",
