@@ -142,3 +142,77 @@ def test_no_class_is_over_400_lines(path: Path) -> None:
             assert node.end_lineno is not None
             lines = node.end_lineno - node.lineno + 1
             assert lines <= MAX_CLASS_LINES, f"{path.name}: {node.name} has {lines} lines"
+
+
+# --- docs/architecture.md, "three hops": every name in the table exists ----------------------
+
+HOPS_SECTION = "## From a seed command to its code: three hops"
+
+
+def _hop_rows(family: str) -> list[list[str]]:
+    """The table rows under the ``### family`` heading of the three-hop section, cells unquoted."""
+    docs = (PACKAGE_ROOT.parents[1] / "docs" / "architecture.md").read_text(encoding="utf-8")
+    section = docs[docs.index(HOPS_SECTION) :]
+    table = section[section.index(f"### {family}") :].split("\n\n")[1]
+    rows = [line.strip("|").split(" | ") for line in table.splitlines()[2:]]
+    return [[cell.strip().strip("`") for cell in row] for row in rows]
+
+
+def _has(packages: list[str], dotted: str) -> bool:
+    """Whether ``Class.member`` (or ``Class``) is defined in one of ``packages``' modules."""
+    import importlib
+    import pkgutil
+
+    class_name, _, member = dotted.partition(".")
+    for package_name in packages:
+        package = importlib.import_module(package_name)
+        names = [package_name] + [
+            f"{package_name}.{info.name}" for info in pkgutil.iter_modules(package.__path__)
+        ]
+        for name in names:
+            owner = getattr(importlib.import_module(name), class_name, None)
+            if owner is not None and (not member or hasattr(owner, member)):
+                return True
+    return False
+
+
+@pytest.mark.parametrize(
+    ("family", "codec", "drivers", "emulators"),
+    [
+        (
+            "SynScan",
+            "scopelink.protocol.synscan",
+            ["scopelink.drivers.synscan"],
+            ["scopelink.servers.synscan"],
+        ),
+        (
+            "Sky Tracker",
+            "scopelink.protocol.skytracker",
+            ["scopelink.drivers.skytracker"],
+            ["scopelink.servers.skytracker"],
+        ),
+    ],
+)
+def test_the_three_hop_table_names_code_that_exists_and_every_command(
+    family: str, codec: str, drivers: list[str], emulators: list[str]
+) -> None:
+    import importlib
+
+    rows = _hop_rows(family)
+    codec_module = importlib.import_module(codec)
+    for _, codec_class, driver_method, handler in rows:
+        assert isinstance(getattr(codec_module, codec_class, None), type), codec_class
+        if not driver_method.startswith("("):
+            assert _has(drivers, driver_method), driver_method
+        assert _has(emulators, handler), handler
+    listed = {row[1] for row in rows}
+    if family == "SynScan":
+        commands = {command.__name__ for command in codec_module.COMMANDS}
+    else:
+        bases = (codec_module.TrackerCommand, codec_module.CommanderCommand)
+        commands = {
+            name
+            for name, value in vars(codec_module).items()
+            if isinstance(value, type) and issubclass(value, bases) and value not in bases
+        }
+    assert listed == commands
