@@ -20,11 +20,21 @@ import psutil
 
 from scopelink.servers.access import IPNetwork
 
-__all__ = ["HostAllowList", "bound_beyond_loopback", "local_networks", "machine_addresses"]
+__all__ = [
+    "WARNED_MISDIRECTED",
+    "HostAllowList",
+    "bound_beyond_loopback",
+    "local_networks",
+    "machine_addresses",
+]
 
 logger = logging.getLogger(__name__)
 
 _LOOPBACK_NAMES = frozenset({"localhost", "localhost.localdomain", "ip6-localhost"})
+
+WARNED_MISDIRECTED = 10
+"""Requests for a foreign Host (answered 421) logged as warnings by each server; later ones are
+debug messages: a page trying DNS rebinding retries, and a warning each time would flood the log."""
 
 
 def bound_beyond_loopback(host: str) -> bool:

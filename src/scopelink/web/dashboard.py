@@ -29,7 +29,7 @@ from aiohttp.typedefs import Middleware
 from scopelink.decode import Protocol
 from scopelink.mount import Mount
 from scopelink.servers.access import AccessControl, AccessPolicy, retry_after
-from scopelink.servers.hosts import HostAllowList, machine_addresses
+from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList, machine_addresses
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
@@ -40,8 +40,6 @@ __all__ = ["PAIRING_HEADER", "Dashboard", "static_dir"]
 
 logger = logging.getLogger(__name__)
 
-_WARNED_MISDIRECTED = 10
-"""421s logged as warnings; later ones are debug messages."""
 PAIRING_HEADER = "X-Scopelink-Pairing"
 """A request header that can carry the pairing token instead of the cookie (scripts)."""
 PAIRING_TOKEN_BYTES = 16
@@ -94,7 +92,7 @@ def _host_and_origin(hosts: HostAllowList) -> Middleware:
         if not hosts.allows(host):
             misdirected[0] += 1
             # A rebinding page retries: warn on the first few, not on every one.
-            level = logging.WARNING if misdirected[0] <= _WARNED_MISDIRECTED else logging.DEBUG
+            level = logging.WARNING if misdirected[0] <= WARNED_MISDIRECTED else logging.DEBUG
             logger.log(
                 level, "dashboard: request for Host %r from %s refused", host, request.remote
             )

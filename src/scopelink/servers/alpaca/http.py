@@ -20,7 +20,7 @@ from urllib.parse import parse_qsl
 from aiohttp import web
 
 from scopelink.servers.access import AccessControl, retry_after
-from scopelink.servers.hosts import HostAllowList
+from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedRequestHandler
 
 __all__ = ["AlpacaHttpFront", "HttpReply", "HttpRequest"]
@@ -65,9 +65,6 @@ class HttpReply:
 
 Handler = Callable[[HttpRequest], Awaitable[HttpReply]]
 
-_WARNED_MISDIRECTED = 10
-"""421s logged as warnings; later ones are debug messages (a rebinding page retries)."""
-
 
 class AlpacaHttpFront:
     """The aiohttp request handler in front of an Alpaca dispatch ``handle``."""
@@ -91,7 +88,7 @@ class AlpacaHttpFront:
         if not self.hosts.allows(host):
             self.misdirected += 1
             # A page trying DNS rebinding retries: warn on the first few, not on every one.
-            level = logging.WARNING if self.misdirected <= _WARNED_MISDIRECTED else logging.DEBUG
+            level = logging.WARNING if self.misdirected <= WARNED_MISDIRECTED else logging.DEBUG
             logger.log(
                 level, "Alpaca: request for Host %r from %s refused (421)", host, request.remote
             )
