@@ -207,7 +207,7 @@ class ParkKeeper:
         if record is None:
             resume = Resume("no park record: nothing to restore")
         else:
-            state = await mount.current_state()
+            state = await mount.refresh()  # read now: a power cycle may be seconds old
             if state.slewing:
                 raise ParkRecordError(
                     "the mount is moving: nothing was restored (axis positions are never set "
