@@ -35,8 +35,10 @@ def _edit(path: Path, **values: float) -> None:
 
 
 def _off_deg(state: MountState, other: MountState) -> float:
-    assert state.alt_deg is not None and state.az_deg is not None
-    assert other.alt_deg is not None and other.az_deg is not None
+    assert state.alt_deg is not None
+    assert state.az_deg is not None
+    assert other.alt_deg is not None
+    assert other.az_deg is not None
     return float(angular_separation_deg(state.az_deg, state.alt_deg, other.az_deg, other.alt_deg))
 
 
