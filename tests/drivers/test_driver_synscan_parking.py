@@ -11,7 +11,13 @@ import pytest
 
 from scopelink.astro import angular_separation_deg
 from scopelink.drivers.synscan import NotAlignedError
-from scopelink.mount import MountState, ParkPosition
+from scopelink.drivers.synscan.parking import (
+    POLE_AMBIGUITY_DEG,
+    POWER_ON_TOLERANCE_DEG,
+    REFINE_PASSES,
+    RESTORE_TOLERANCE_DEG,
+)
+from scopelink.mount import Limits, MountState, ParkPosition
 from scopelink.mount.parking import ParkRecordError
 from scopelink.protocol.synscan import Axis, SlowGoto
 from tests.support.parking import settle, tube_off_target_deg
@@ -139,3 +145,30 @@ async def test_nothing_is_restored_while_the_mount_moves(tmp_path: Path) -> None
         assert _records(tmp_path)  # kept for the next try
         await settle(r)
         assert (await r.mount.unpark()).restored
+
+
+def _resumed(r: Rig) -> bool:
+    return r.mount.resumed
+
+
+async def test_a_reconnect_ends_the_resumed_gotos(tmp_path: Path) -> None:
+    """A lost link may have been a power cycle: the restored counters cannot be trusted."""
+    async with rig() as r:
+        await _park_at(r, tmp_path, ParkPosition(alt_deg=35.0, az_deg=220.0))
+        await r.emulator.power_cycle()
+        assert (await r.mount.unpark()).restored
+        assert _resumed(r)
+        await r.mount.disconnect()
+        await r.mount.connect()
+        assert not _resumed(r)
+        with pytest.raises(NotAlignedError):
+            await r.mount.goto_equatorial(5.0, 50.0)
+
+
+def test_the_documented_limits_are_the_code_s() -> None:
+    text = " ".join((Path(__file__).parents[2] / "docs" / "parking.md").read_text().split())
+    assert f"within {POWER_ON_TOLERANCE_DEG:g}° (`POWER_ON_TOLERANCE_DEG`)" in text
+    assert f"within {RESTORE_TOLERANCE_DEG:g}° (`RESTORE_TOLERANCE_DEG`)" in text
+    assert f"within {POLE_AMBIGUITY_DEG:g}° (`POLE_AMBIGUITY_DEG`)" in text
+    assert f"`REFINE_PASSES` = {REFINE_PASSES}" in text
+    assert f"limits.max_sync_deg {Limits().max_sync_deg:g}°" in text

@@ -41,7 +41,13 @@ from scopelink.protocol.synscan import (
 if TYPE_CHECKING:
     from scopelink.sim.geometry import Geometry
 
-__all__ = ["POWER_ON_TOLERANCE_DEG", "REFINE_PASSES", "RESTORE_TOLERANCE_DEG", "SynScanParking"]
+__all__ = [
+    "POLE_AMBIGUITY_DEG",
+    "POWER_ON_TOLERANCE_DEG",
+    "REFINE_PASSES",
+    "RESTORE_TOLERANCE_DEG",
+    "SynScanParking",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -78,6 +84,13 @@ class SynScanParking(SynScanPolling):
     """The counters the last park slow-goto went to (exact, for the park record)."""
     _refine: tuple[float, float] | None = None
     _refine_passes: int = 0
+
+    async def _identify(self, *, reopen: bool = True) -> None:
+        """Identifying the device anew (connect, reconnect) ends resumed mode: a link that was
+        lost may have been a power cycle, after which the restored counters are gone."""
+        self._resumed = False
+        self._refine = None
+        await super()._identify(reopen=reopen)
 
     @property
     def resumed(self) -> bool:
