@@ -64,7 +64,7 @@ async def test_the_record_is_written_on_arrival_and_used_once(tmp_path: Path) ->
     resume = await mount.unpark()
     assert resume.restored
     assert "keeps its own position" in resume.message
-    assert mount.correction == {"terms": {"IH": 0.1}}  # handed back
+    assert mount.pointing_correction_record() == {"terms": {"IH": 0.1}}  # handed back
     assert not _records(tmp_path)
     assert (await mount.unpark()).message == "no park record: nothing to restore"
 
