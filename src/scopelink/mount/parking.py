@@ -18,16 +18,14 @@ import math
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from scopelink.astro import angular_separation_deg
 from scopelink.mount.errors import MountError
 from scopelink.mount.limits import Limits
 from scopelink.mount.memory import DeviceMemory, RecordError, default_state_dir
-from scopelink.mount.types import MountState, PierSide
-
-if TYPE_CHECKING:
-    from scopelink.mount.base import Mount
+from scopelink.mount.syncs import SyncFrame
+from scopelink.mount.types import Identity, MountState, PierSide
 
 __all__ = [
     "PARK_RECORD",
@@ -35,6 +33,7 @@ __all__ = [
     "ParkKeeper",
     "ParkRecord",
     "ParkRecordError",
+    "Parkable",
     "PointingCorrectionKeeper",
     "Resume",
 ]
@@ -137,6 +136,19 @@ class PointingCorrectionKeeper(Protocol):
     def restore_pointing_correction(self, record: dict[str, Any]) -> None: ...
 
 
+class Parkable(Protocol):
+    """What the keeper needs of a mount (a ``Mount``; named here so that ``base`` may import
+    this module without a cycle)."""
+
+    @property
+    def identity(self) -> Identity: ...
+
+    @property
+    def sync_frame(self) -> SyncFrame: ...
+
+    async def refresh(self) -> MountState: ...
+
+
 class ParkKeeper:
     """Writes the park record when the mount arrives parked; reads it back at unpark.
 
@@ -153,7 +165,7 @@ class ParkKeeper:
     def enable(self, state_dir: Path | None = None) -> None:
         self.state_dir = state_dir or default_state_dir()
 
-    def memory_for(self, mount: Mount) -> DeviceMemory | None:
+    def memory_for(self, mount: Parkable) -> DeviceMemory | None:
         """The device's memory (by protocol, model and link), or None while disabled."""
         if self.state_dir is None:
             return None
@@ -161,7 +173,7 @@ class ParkKeeper:
         key = f"{identity.protocol}-{identity.model}-{identity.link}"
         return DeviceMemory(key, self.state_dir)
 
-    def observe(self, mount: Mount, state: MountState) -> None:
+    def observe(self, mount: Parkable, state: MountState) -> None:
         """Record the park when ``state`` is the first parked one (never raises: a record
         that cannot be written is logged, and the mount is parked all the same)."""
         arrived = state.parked and not self._was_parked
@@ -191,7 +203,7 @@ class ParkKeeper:
         except OSError as error:
             logger.warning("the park record could not be written: %s", error)
 
-    def load(self, mount: Mount) -> ParkRecord | None:
+    def load(self, mount: Parkable) -> ParkRecord | None:
         memory = self.memory_for(mount)
         if memory is None:
             return None
@@ -201,7 +213,7 @@ class ParkKeeper:
             raise ParkRecordError(str(error)) from None
         return None if data is None else ParkRecord.from_json(data, memory.path(PARK_RECORD))
 
-    async def resume(self, mount: Mount) -> Resume:
+    async def resume(self, mount: Parkable) -> Resume:
         """Judge and use the park record for an unpark (see the module's docstring)."""
         record = self.load(mount)
         if record is None:
