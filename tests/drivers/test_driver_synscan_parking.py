@@ -10,18 +10,21 @@ from pathlib import Path
 import pytest
 
 from scopelink.astro import angular_separation_deg
-from scopelink.drivers.synscan import NotAlignedError
+from scopelink.drivers.synscan import NotAlignedError, SynScanMount
 from scopelink.drivers.synscan.parking import (
     POLE_AMBIGUITY_DEG,
     POWER_ON_TOLERANCE_DEG,
     REFINE_PASSES,
     RESTORE_TOLERANCE_DEG,
+    SlowGotoRefusedError,
 )
 from scopelink.mount import Limits, MountState, ParkPosition
 from scopelink.mount.parking import ParkRecordError
 from scopelink.protocol.synscan import Axis, SlowGoto
+from scopelink.servers.synscan import SynScanEmulator
+from scopelink.sim import EQ6, SimClock, SimulatedMount
 from tests.support.parking import settle, tube_off_target_deg
-from tests.support.synscan_driver import Rig, rig
+from tests.support.synscan_driver import MADRID, START, Rig, rig
 
 
 def _records(directory: Path) -> list[Path]:
@@ -172,3 +175,29 @@ def test_the_documented_limits_are_the_code_s() -> None:
     assert f"within {POLE_AMBIGUITY_DEG:g}° (`POLE_AMBIGUITY_DEG`)" in text
     assert f"`REFINE_PASSES` = {REFINE_PASSES}" in text
     assert f"limits.max_sync_deg {Limits().max_sync_deg:g}°" in text
+
+
+async def test_the_default_park_falls_back_to_b_where_slow_gotos_are_refused(
+    tmp_path: Path,
+) -> None:
+    """A bridge (``scopelink serve``) answers slow gotos as failed passthroughs."""
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(START))
+    async with SynScanEmulator(sim, axis_passthrough=False) as emulator:
+        host, port = await emulator.on_tcp("127.0.0.1", 0)
+        mount = SynScanMount(f"tcp://{host}:{port}", site=MADRID, clock=sim.now)
+        await mount.connect()
+        try:
+            await mount.park()
+            for _ in range(100):
+                sim.step(5.0)
+                state = await mount.refresh()
+                if not state.slewing:
+                    break
+            assert state.parked
+            assert state.alt_deg == pytest.approx(MADRID.latitude_deg, abs=0.6)  # the pole
+            mount.park_position = mount.park_position_at_axes(-30.0, 60.0)
+            await mount.unpark()
+            with pytest.raises(SlowGotoRefusedError):  # given as axes: no other way
+                await mount.park()
+        finally:
+            await mount.disconnect()

@@ -25,7 +25,7 @@ from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site, angular_separat
 from scopelink.drivers.common import LinkFactory
 from scopelink.drivers.synscan.base import AXES, rate_zero
 from scopelink.drivers.synscan.identify import synscan_tracking
-from scopelink.drivers.synscan.parking import SynScanParking
+from scopelink.drivers.synscan.parking import SlowGotoRefusedError, SynScanParking
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.mount import (
     AlignmentMode,
@@ -34,6 +34,7 @@ from scopelink.mount import (
     MountAxis,
     MountError,
     NotSupportedError,
+    ParkPosition,
     Priority,
     TrackingMode,
 )
@@ -390,7 +391,16 @@ class SynScanMount(SynScanParking):
         see ``docs/parking.md``); parked until unpark."""
         park = self.park_position
         self._limits.check_altaz(park.alt_deg, park.az_deg, what="park position")
-        axes = self._slow_park_axes(park)
+        try:
+            await self._park_at(park, self._slow_park_axes(park))
+        except SlowGotoRefusedError as error:
+            if park.axes_deg is not None or self.resumed:
+                raise
+            logger.warning("%s: %s: parking with an Alt-Az goto", self.wire.name, error)
+            self._slow_goto_refused = True  # the default park goes by 'b' from now on
+            await self._park_at(park, None)
+
+    async def _park_at(self, park: ParkPosition, axes: tuple[float, float] | None) -> None:
         if axes is None:
             await self._require_aligned("park goto")
         pulsing = await self._cancel_pulses()

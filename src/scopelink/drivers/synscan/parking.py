@@ -34,6 +34,7 @@ from scopelink.protocol.synscan import (
     GotoInProgress,
     IsAligned,
     IsGotoInProgress,
+    PassthroughFailed,
     SetAxisPosition,
     SlowGoto,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "POWER_ON_TOLERANCE_DEG",
     "REFINE_PASSES",
     "RESTORE_TOLERANCE_DEG",
+    "SlowGotoRefusedError",
     "SynScanParking",
 ]
 
@@ -68,6 +70,10 @@ REFINE_PASSES = 2
 where the target was when it started, each pass after it where the target is then."""
 
 
+class SlowGotoRefusedError(DeviceError):
+    """The hand control answered a slow goto as a failed passthrough (a bridge does)."""
+
+
 def _separation_deg(state: MountState, alt_deg: float, az_deg: float) -> float:
     assert state.alt_deg is not None
     assert state.az_deg is not None
@@ -84,6 +90,8 @@ class SynScanParking(SynScanPolling):
     """The counters the last park slow-goto went to (exact, for the park record)."""
     _refine: tuple[float, float] | None = None
     _refine_passes: int = 0
+    _slow_goto_refused = False
+    """The device answered a slow goto as a failed passthrough (a bridge): park by ``b``."""
 
     async def _identify(self, *, reopen: bool = True) -> None:
         """Identifying the device anew (connect, reconnect) ends resumed mode: a link that was
@@ -121,13 +129,17 @@ class SynScanParking(SynScanPolling):
         if self.resumed:
             return self.axes_for(park.alt_deg, park.az_deg)
         equatorial = self._capabilities.alignment_mode is not AlignmentMode.ALT_AZ
-        if equatorial and not self.park_position_chosen:
+        if equatorial and not self.park_position_chosen and not self._slow_goto_refused:
             return self.geometry().home  # counterweight down at the pole: SynScan's home
         return None
 
     async def _slow_goto_axes(self, axes: tuple[float, float]) -> None:
         for axis, degrees in zip(MountAxis, axes, strict=True):
-            await self._ask_passthrough(SlowGoto.from_degrees(AXES[axis], degrees))
+            command = SlowGoto.from_degrees(AXES[axis], degrees)
+            if isinstance(await self._wire_ask(command), PassthroughFailed):
+                raise SlowGotoRefusedError(
+                    f"{command.describe()!r}: the hand control answered a failed passthrough"
+                )
 
     def _follow(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Refine the resumed goto that just started once it lands (tracked targets move)."""
