@@ -16,11 +16,12 @@ from scopelink.drivers.synscan.parking import (
     POWER_ON_TOLERANCE_DEG,
     REFINE_PASSES,
     RESTORE_TOLERANCE_DEG,
+    STILL_DEG,
     SlowGotoRefusedError,
 )
 from scopelink.mount import Limits, MountState, ParkPosition
 from scopelink.mount.parking import ParkRecordError
-from scopelink.protocol.synscan import Axis, SlowGoto
+from scopelink.protocol.synscan import Axis, FixedRateSlew, SlowGoto
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from tests.support.parking import settle, tube_off_target_deg
@@ -174,6 +175,7 @@ def test_the_documented_limits_are_the_code_s() -> None:
     assert f"within {RESTORE_TOLERANCE_DEG:g}° (`RESTORE_TOLERANCE_DEG`)" in text
     assert f"within {POLE_AMBIGUITY_DEG:g}° (`POLE_AMBIGUITY_DEG`)" in text
     assert f"`REFINE_PASSES` = {REFINE_PASSES}" in text
+    assert f"more than {STILL_DEG:g}° (`STILL_DEG`)" in text
     assert f"limits.max_sync_deg {Limits().max_sync_deg:g}°" in text
 
 
@@ -201,3 +203,20 @@ async def test_the_default_park_falls_back_to_b_where_slow_gotos_are_refused(
                 await mount.park()
         finally:
             await mount.disconnect()
+
+
+async def test_nothing_is_restored_during_a_keypad_slew_which_l_does_not_report(
+    tmp_path: Path,
+) -> None:
+    async with rig(clock=SimClock.accelerated(50.0, START)) as r:
+        r.mount.park_keeper.enable(tmp_path)
+        r.mount.park_position = ParkPosition(alt_deg=35.0, az_deg=220.0)
+        await r.mount.park()
+        await r.mount.wait_for(lambda state: state.parked, timeout_s=30.0)
+        await r.emulator.power_cycle()
+        # the keypad's Dec arrow at speed 4 (32x sidereal): 'L' says no goto runs. (The RA
+        # axis turning at the pole changes no reading: the read-back after the restore catches it)
+        await r.emulator.hand_control.answer(FixedRateSlew(Axis.ALT_DEC, positive=False, rate=4))
+        with pytest.raises(ParkRecordError, match="moving"):
+            await r.mount.unpark()
+        assert _records(tmp_path)  # kept for the next try

@@ -47,6 +47,7 @@ __all__ = [
     "POWER_ON_TOLERANCE_DEG",
     "REFINE_PASSES",
     "RESTORE_TOLERANCE_DEG",
+    "STILL_DEG",
     "SlowGotoRefusedError",
     "SynScanParking",
 ]
@@ -56,6 +57,10 @@ logger = logging.getLogger(__name__)
 POWER_ON_TOLERANCE_DEG = 1.0
 """An unaligned hand control whose reading is farther than this from where its counters point at
 power-on has been moved since (on the keypad): its counters are not restored."""
+
+STILL_DEG = 0.01
+"""Two readings in a row farther apart than this: an axis turns (a keypad slew, which ``L`` does
+not report), and no axis position is set."""
 
 RESTORE_TOLERANCE_DEG = 0.05
 """After "set axis position" the reading must be this close to the park record (else the hand
@@ -192,21 +197,28 @@ class SynScanParking(SynScanPolling):
                 restored=True,
                 record=record,
             )
+        running = (await self._ask(IsGotoInProgress(), GotoInProgress)).in_progress
+        again = await self._read_state(Priority.COMMAND)  # a keypad slew shows no L: it moves
+        assert again.alt_deg is not None
+        assert again.az_deg is not None
+        if (
+            running
+            or self._slewing
+            or _separation_deg(state, again.alt_deg, again.az_deg) > STILL_DEG
+        ):
+            raise ParkRecordError(
+                "the mount is moving: axis positions are never set while it moves; stop it and "
+                "unpark again"
+            )
         if record.axes_deg is None:
             return Resume("the park record has no axis positions: nothing was restored")
         geometry = self.geometry()
         home_alt, home_az = geometry.to_observed(*geometry.home)
-        moved = _separation_deg(state, home_alt, home_az)
+        moved = _separation_deg(again, home_alt, home_az)
         if moved > POWER_ON_TOLERANCE_DEG:
             return Resume(
                 f"not restored: the hand control is not aligned but points {moved:.1f}° from "
                 "where its counters start at power-on (moved on the keypad since?): align it"
-            )
-        running = (await self._ask(IsGotoInProgress(), GotoInProgress)).in_progress
-        if running or self._slewing:
-            raise ParkRecordError(
-                "the mount is moving: axis positions are never set while it moves; stop it and "
-                "unpark again"
             )
         async with self.wire.exclusive():
             for axis, degrees in zip(MountAxis, record.axes_deg, strict=True):
