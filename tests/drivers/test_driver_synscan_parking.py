@@ -85,9 +85,10 @@ async def test_park_power_cycle_unpark_and_a_goto_lands_without_a_new_alignment(
         ra, dec = (ra + 3.0) % 24.0, 50.0
         await r.mount.goto_equatorial(ra, dec)
         await settle(r)
-        assert tube_off_target_deg(r.sim, ra, dec) <= 0.1
+        # the issue's bound is 0.1°; measured 0.5" with the refining passes (docs/parking.md)
+        assert tube_off_target_deg(r.sim, ra, dec) <= 0.01
         r.sim.step(600.0)  # and it tracks
-        assert tube_off_target_deg(r.sim, ra, dec) <= 0.1
+        assert tube_off_target_deg(r.sim, ra, dec) <= 0.01
 
 
 async def test_the_default_park_goes_home_by_slow_goto_and_records_it(tmp_path: Path) -> None:
