@@ -221,3 +221,15 @@ async def test_nothing_is_restored_during_a_keypad_slew_which_l_does_not_report(
         with pytest.raises(ParkRecordError, match="moving"):
             await r.mount.unpark()
         assert _records(tmp_path)  # kept for the next try
+
+
+async def test_an_unaligned_hand_control_is_not_parked_by_axis_positions() -> None:
+    """Unaligned (and not resumed) the counters say nothing of where the tube points."""
+    async with rig() as r:
+        await r.emulator.power_cycle()
+        r.mount.park_position = r.mount.park_position_at_axes(-30.0, 60.0)
+        counters = [axis.position for axis in r.sim.axes]
+        with pytest.raises(NotAlignedError):
+            await r.mount.park()
+        r.sim.step(60.0)
+        assert [axis.position for axis in r.sim.axes] == counters

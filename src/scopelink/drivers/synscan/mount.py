@@ -401,7 +401,9 @@ class SynScanMount(SynScanParking):
             await self._park_at(park, None)
 
     async def _park_at(self, park: ParkPosition, axes: tuple[float, float] | None) -> None:
-        if axes is None:
+        if not self.resumed:  # unaligned, counters say nothing of where the tube points
+            if axes is not None:
+                self._aligned = False  # ask 'J' anew: the hand control obeys slow gotos anyway
             await self._require_aligned("park goto")
         pulsing = await self._cancel_pulses()
         with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
