@@ -211,6 +211,9 @@ class ParkKeeper:
             data = memory.load(PARK_RECORD)
         except RecordError as error:
             raise ParkRecordError(str(error)) from None
+        except OSError as error:
+            where = memory.path(PARK_RECORD)
+            raise ParkRecordError(f"{where} cannot be read ({error.strerror or error})") from None
         return None if data is None else ParkRecord.from_json(data, memory.path(PARK_RECORD))
 
     async def resume(self, mount: Parkable) -> Resume:
@@ -234,8 +237,11 @@ class ParkKeeper:
             if resume.restored and record.correction is not None and keeper is not None:
                 keeper.restore_pointing_correction(record.correction)
             memory = self.memory_for(mount)
-            if memory is not None:
-                memory.forget(PARK_RECORD)  # used once: a later power cycle needs a new park
+            try:
+                if memory is not None:
+                    memory.forget(PARK_RECORD)  # used once: a later power cycle needs a new park
+            except OSError as error:
+                logger.warning("the used park record could not be removed: %s", error)
         self.last_resume = resume.message
         logger.info("unpark: %s", resume.message)
         return resume
