@@ -161,6 +161,9 @@ class ParkKeeper:
         self.last_resume = ""
         """What the last unpark did with the record (one line, for the front ends)."""
         self._was_parked = False
+        self._resuming = False
+        """An unpark is judging the record: the readings it takes (parked, once the counters
+        are back) are no new park."""
 
     def enable(self, state_dir: Path | None = None) -> None:
         self.state_dir = state_dir or default_state_dir()
@@ -178,7 +181,7 @@ class ParkKeeper:
         that cannot be written is logged, and the mount is parked all the same)."""
         arrived = state.parked and not self._was_parked
         self._was_parked = state.parked
-        if not arrived:
+        if not arrived or self._resuming:
             return
         memory = self.memory_for(mount)
         if memory is None or state.alt_deg is None or state.az_deg is None:
@@ -217,9 +220,14 @@ class ParkKeeper:
         return None if data is None else ParkRecord.from_json(data, memory.path(PARK_RECORD))
 
     async def resume(self, mount: Parkable) -> Resume:
-        """Judge and use the park record for an unpark (see the module's docstring)."""
+        """Judge and use the park record for an unpark (see the module's docstring).
+
+        The record is removed before anything is restored (a record that cannot be removed is
+        never used: a later unpark would restore it again), and written back only when the
+        driver finds the mount moving (nothing was judged)."""
         record = self.load(mount)
-        if record is None:
+        memory = self.memory_for(mount)
+        if record is None or memory is None:
             resume = Resume("no park record: nothing to restore")
         else:
             state = await mount.refresh()  # read now: a power cycle may be seconds old
@@ -228,22 +236,37 @@ class ParkKeeper:
                     "the mount is moving: nothing was restored (axis positions are never set "
                     "while it moves); stop it and unpark again"
                 )
-            if isinstance(mount, AxisResuming):
-                resume = await mount.resume_axes(record, state)
-            else:
-                kept = "this mount keeps its own position: nothing to restore"
-                resume = Resume(kept, restored=True, record=record)
-            keeper = mount if isinstance(mount, PointingCorrectionKeeper) else None
-            if resume.restored and record.correction is not None and keeper is not None:
-                keeper.restore_pointing_correction(record.correction)
-            memory = self.memory_for(mount)
             try:
-                if memory is not None:
-                    memory.forget(PARK_RECORD)  # used once: a later power cycle needs a new park
+                memory.forget(PARK_RECORD)  # used once: a later power cycle needs a new park
             except OSError as error:
-                logger.warning("the used park record could not be removed: %s", error)
+                raise ParkRecordError(
+                    f"{memory.path(PARK_RECORD)} cannot be removed ({error.strerror or error}): "
+                    "nothing was restored"
+                ) from None
+            self._resuming = True
+            try:
+                resume = await self._judge(mount, record, state, memory)
+            finally:
+                self._resuming = False
         self.last_resume = resume.message
         logger.info("unpark: %s", resume.message)
+        return resume
+
+    async def _judge(
+        self, mount: Parkable, record: ParkRecord, state: MountState, memory: DeviceMemory
+    ) -> Resume:
+        if not isinstance(mount, AxisResuming):
+            kept = "this mount keeps its own position: nothing to restore"
+            resume = Resume(kept, restored=True, record=record)
+        else:
+            try:
+                resume = await mount.resume_axes(record, state)
+            except ParkRecordError:  # refused before judging (moving): keep it for the retry
+                memory.save(PARK_RECORD, record.to_json())
+                raise
+        keeper = mount if isinstance(mount, PointingCorrectionKeeper) else None
+        if resume.restored and record.correction is not None and keeper is not None:
+            keeper.restore_pointing_correction(record.correction)
         return resume
 
 
