@@ -53,3 +53,23 @@ def test_a_bad_power_on_position_is_one_clear_line(config: Path) -> None:
     assert done.returncode == 2
     assert "azimuth,altitude" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_the_park_position_in_the_settings_file(config: Path) -> None:
+    done = scopelink(config, "config", "set", "park.altitude", "30", "park.azimuth", "200")
+    assert done.returncode == 0, done.stderr
+    done = scopelink(config, "park", "--device", "sim", "--clock-rate", "100")
+    assert done.returncode == 0, done.stderr
+    assert "Alt +30°00'00\" Az +200°00'00\"" in done.stdout
+    bad = scopelink(config, "config", "set", "park.altitude", "-20")
+    assert bad.returncode != 0
+    assert "park" in bad.stderr
+    assert "Traceback" not in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) <= 2  # the error and its hint
+
+
+def test_config_show_reads_the_park_position_back(config: Path) -> None:
+    done = scopelink(config, "config", "set", "park.altitude", "30", "park.azimuth", "200")
+    assert done.returncode == 0, done.stderr
+    shown = scopelink(config, "config", "show")
+    assert "[park]\naltitude = 30.0\nazimuth = 200.0" in shown.stdout
