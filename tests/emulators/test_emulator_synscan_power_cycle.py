@@ -4,6 +4,8 @@ SynScan client over TCP, byte for byte."""
 
 from __future__ import annotations
 
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import asynccontextmanager
 from datetime import UTC, datetime
 
 import pytest
@@ -13,6 +15,8 @@ from scopelink.links import open_tcp
 from scopelink.mount import InvalidValueError, PierSide, TrackingMode
 from scopelink.protocol.synscan import (
     Aligned,
+    AnyCommand,
+    AnyReply,
     Axis,
     GetAzAlt,
     GotoRaDec,
@@ -32,51 +36,62 @@ MADRID = Site(40.4, -3.7)
 START = datetime(2026, 3, 1, 22, 0, tzinfo=UTC)
 
 
+Asker = Callable[[AnyCommand], Awaitable[AnyReply]]
+
+
 def _sim() -> SimulatedMount:
     return SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(START))
 
 
-async def test_power_cycle_keeps_the_tube_and_forgets_counters_and_alignment() -> None:
-    sim = _sim()
+@asynccontextmanager
+async def _client(sim: SimulatedMount) -> AsyncIterator[tuple[SynScanEmulator, Asker]]:
+    """The emulator in front of ``sim`` and a SynScan client of it over TCP."""
     async with SynScanEmulator(sim) as emulator:
         link = await open_tcp(*await emulator.on_tcp("127.0.0.1", 0))
         async with link:
             client = SynScanClientConnection()
-            await sim.goto_horizontal(40.0, 120.0)
-            await sim.set_tracking(TrackingMode.SIDEREAL)
-            sim.step(120.0)
-            tube = tube_altaz(sim)
-            assert await ask(link, client, IsAligned()) == Aligned(True)
 
-            await emulator.power_cycle()
+            async def asker(command: AnyCommand) -> AnyReply:
+                return await ask(link, client, command)
 
-            sim.step(5.0)  # the tube did not move (but for the tracking motor's stop, 0.01")
-            assert tube_altaz(sim) == pytest.approx(tube, abs=1e-4)
-            tube = tube_altaz(sim)
-            assert [axis.position for axis in sim.axes] == pytest.approx([0.0, 90.0], abs=1e-4)
-            assert await ask(link, client, IsAligned()) == Aligned(False)
-            assert sim.state.tracking is TrackingMode.OFF
-            # unaligned Alt-Az readings are relative to where the counters started
-            reply = await ask(link, client, GetAzAlt(precise=True))
-            assert isinstance(reply, Position)
-            assert (reply.ra_hours * 15.0, reply.dec_degrees) == pytest.approx((0.0, 0.0), abs=1e-4)
-            # an unaligned hand control ignores gotos: acknowledged, nothing moves
-            await ask(link, client, GotoRaDec.from_hours_degrees(5.0, 30.0))
-            sim.step(30.0)
-            assert tube_altaz(sim) == pytest.approx(tube, abs=1e-9)
-            sim.step(600.0)  # the motors are off: no tracking either
-            assert tube_altaz(sim) == pytest.approx(tube, abs=1e-9)
+            yield emulator, asker
+
+
+async def test_power_cycle_keeps_the_tube_and_forgets_counters_and_alignment() -> None:
+    sim = _sim()
+    async with _client(sim) as (emulator, asker):
+        await sim.goto_horizontal(40.0, 120.0)
+        await sim.set_tracking(TrackingMode.SIDEREAL)
+        sim.step(120.0)
+        tube = tube_altaz(sim)
+        assert await asker(IsAligned()) == Aligned(True)
+
+        await emulator.power_cycle()
+
+        sim.step(5.0)  # the tube did not move (but for the tracking motor's stop, 0.01")
+        assert tube_altaz(sim) == pytest.approx(tube, abs=1e-4)
+        tube = tube_altaz(sim)
+        assert [axis.position for axis in sim.axes] == pytest.approx([0.0, 90.0], abs=1e-4)
+        assert await asker(IsAligned()) == Aligned(False)
+        assert sim.state.tracking is TrackingMode.OFF
+        # unaligned Alt-Az readings are relative to where the counters started
+        reply = await asker(GetAzAlt(precise=True))
+        assert isinstance(reply, Position)
+        assert (reply.ra_hours * 15.0, reply.dec_degrees) == pytest.approx((0.0, 0.0), abs=1e-4)
+        # an unaligned hand control ignores gotos: acknowledged, nothing moves
+        await asker(GotoRaDec.from_hours_degrees(5.0, 30.0))
+        sim.step(30.0)
+        assert tube_altaz(sim) == pytest.approx(tube, abs=1e-9)
+        sim.step(600.0)  # the motors are off: no tracking either
+        assert tube_altaz(sim) == pytest.approx(tube, abs=1e-9)
 
 
 async def test_set_axis_position_keeps_a_flipped_secondary_flipped() -> None:
     sim = _sim()
-    async with SynScanEmulator(sim) as emulator:
-        link = await open_tcp(*await emulator.on_tcp("127.0.0.1", 0))
-        async with link:
-            client = SynScanClientConnection()
-            await ask(link, client, SetAxisPosition.from_degrees(Axis.ALT_DEC, 200.0))
-            assert sim.axes[1].position == pytest.approx(200.0, abs=1e-4)
-            assert sim.state.pier_side is PierSide.WEST  # over the pole, not under it
+    async with _client(sim) as (_, asker):
+        await asker(SetAxisPosition.from_degrees(Axis.ALT_DEC, 200.0))
+        assert sim.axes[1].position == pytest.approx(200.0, abs=1e-4)
+        assert sim.state.pier_side is PierSide.WEST  # over the pole, not under it
 
 
 async def test_cold_start_with_the_tube_elsewhere() -> None:
