@@ -25,7 +25,13 @@ START_TIMEOUT_S = 20
 
 def environment(config: Path) -> dict[str, str]:
     """The user's environment with the settings file at ``config`` (which need not exist)."""
-    return {**os.environ, "SCOPELINK_CONFIG": str(config), "PYTHONUNBUFFERED": "1"}
+    state = str(config.parent / "state")  # park records stay out of the user's own directory
+    return {
+        **os.environ,
+        "SCOPELINK_CONFIG": str(config),
+        "PYTHONUNBUFFERED": "1",
+        "XDG_STATE_HOME": state,
+    }
 
 
 def scopelink(config: Path, *args: str) -> subprocess.CompletedProcess[str]:

@@ -19,9 +19,10 @@ from typing import Any, Final
 import platformdirs
 
 from scopelink.astro import Site
-from scopelink.mount import InvalidValueError, Limits
+from scopelink.mount import InvalidValueError, LimitError, Limits, ParkPosition
 from scopelink.mount.limits import DEFAULT_MAX_SYNC_DEG, SUN_AVOIDANCE_DEG
 from scopelink.mount.polling import DEFAULT_STALE_AFTER_S, PollPolicy, check_stale_after
+from scopelink.mount.setters import check_park_position
 from scopelink.servers.access import DEFAULT_POLICY, IPNetwork, parse_network
 
 __all__ = [
@@ -96,6 +97,9 @@ class Config:
     poll_policy: PollPolicy = field(default_factory=PollPolicy)
     """``[readings] idle_poll_s``, ``demand_hold_s``, ``max_poll_baud``: how often the mount is
     polled (docs/mount-api.md, "The poll policy")."""
+    park: ParkPosition | None = None
+    """``[park] altitude, azimuth``: where ``park`` goes (None: the mount's default, the pole;
+    docs/parking.md)."""
 
 
 def config_path() -> Path:
@@ -129,7 +133,8 @@ def parse_config(text: str, path: Path) -> Config:
     return _Reader(path).config(data)
 
 
-_TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers", "readings")
+_TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers", "readings", "park")
+_PARK_KEYS: Final = ("altitude", "azimuth")
 _READINGS_KEYS: Final = ("stale_after_s", "idle_poll_s", "demand_hold_s", "max_poll_baud")
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
@@ -174,16 +179,34 @@ class _Reader:
             )
         site_table = self.table(data, "site")
         site = self.site(site_table) if site_table else GREENWICH
+        limits = self.limits(self.table(data, "horizon"), self.table(data, "limits"))
         return Config(
             path=self.path,
             device=device.strip() if isinstance(device, str) else None,
             site=site,
             site_configured=bool(site_table),
-            limits=self.limits(self.table(data, "horizon"), self.table(data, "limits")),
+            limits=limits,
             servers=self.servers(self.table(data, "servers")),
             stale_after_s=self.readings(self.table(data, "readings")),
             poll_policy=self.poll_policy(self.table(data, "readings")),
+            park=self.park(self.table(data, "park"), limits),
         )
+
+    def park(self, table: dict[str, Any], limits: Limits) -> ParkPosition | None:
+        """``[park]``: both keys or none, a position inside the limits (else every park would
+        drive the mount out of them)."""
+        self.known(table, "park.", _PARK_KEYS)
+        if not table:
+            return None
+        alt, az = self.number(table, "altitude", "park"), self.number(table, "azimuth", "park")
+        if alt is None or az is None:
+            raise self.error("park", "give both altitude and azimuth (degrees)")
+        try:
+            position = ParkPosition(alt, az % 360.0)
+            check_park_position(position, limits)
+        except (InvalidValueError, LimitError) as error:
+            raise self.error("park", str(error)) from None
+        return position
 
     def readings(self, table: dict[str, Any]) -> float:
         self.known(table, "readings.", _READINGS_KEYS)

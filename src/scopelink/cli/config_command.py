@@ -53,6 +53,10 @@ synscan = 11880
 # idle_poll_s = 1.0                 # poll period while nothing needs more (0.1-2.5 s)
 # demand_hold_s = 2.0               # a client's read keeps the full poll rate this long
 # max_poll_baud = 9600              # polls never move more than a line of this many baud
+
+# [park]                            # where 'park' goes (default: the pole; docs/parking.md)
+# altitude = 30                     # both or neither, inside the limits
+# azimuth = 200
 """
 
 _EXAMPLES = f"""\
@@ -201,4 +205,7 @@ def show(config: Config) -> str:
         f"demand_hold_s = {config.poll_policy.demand_hold_s}",
         f"max_poll_baud = {config.poll_policy.max_poll_baud}",
     ]
+    if config.park is not None:
+        lines += ["", "[park]", f"altitude = {config.park.alt_deg}"]
+        lines.append(f"azimuth = {config.park.az_deg}")
     return "\n".join(lines) + "\n"

@@ -14,7 +14,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from scopelink.astro import Site
+from scopelink.astro import PierSide, Site
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import parse_site
@@ -31,7 +31,7 @@ from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
 from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
 from scopelink.servers.skytracker import SkyCommanderEmulator, SkyTrackerEmulator
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
-from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount
+from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount, geometry_for
 
 __all__ = ["EMULATORS", "EmulatedDevice", "EmulatorOptions", "register", "run"]
 
@@ -81,6 +81,13 @@ def _add_synscan_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--unaligned", action="store_true", help="the hand control is not aligned")
     parser.add_argument(
+        "--power-on-at",
+        type=_az_alt,
+        metavar="AZ,ALT",
+        help="start as just switched on with the tube at this azimuth and altitude (degrees): "
+        "the counters at their power-on values, not aligned (docs/parking.md)",
+    )
+    parser.add_argument(
         "--latency", type=float, default=0.0, metavar="S", help="delay every reply (0-5 s)"
     )
     parser.add_argument(
@@ -102,6 +109,17 @@ def _add_synscan_arguments(parser: argparse.ArgumentParser) -> None:
         help="unanswerable passthroughs answer '#' instead of the failed form",
     )
     parser.add_argument("--swapped-model", action="store_true", help="'m' answers '#' first")
+
+
+def _az_alt(text: str) -> tuple[float, float]:
+    try:
+        az, alt = (float(part) for part in text.split(","))
+    except ValueError:
+        message = f"{text!r} is not an azimuth,altitude like 180,45"
+        raise argparse.ArgumentTypeError(message) from None
+    if not (0.0 <= az < 360.0 and -90.0 <= alt <= 90.0):
+        raise argparse.ArgumentTypeError(f"{text!r}: azimuth in [0, 360), altitude in [-90, 90]")
+    return az, alt
 
 
 def _version(text: str) -> Version:
@@ -134,8 +152,17 @@ async def _create_synscan(args: argparse.Namespace, options: EmulatorOptions) ->
         latency_s=args.latency,
         quirks=quirks,
     )
-    mount = SimulatedMount(preset, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS)
-    return SynScanEmulator(mount, config, faults=options.faults, wire=options.wire)
+    home = None
+    if args.power_on_at is not None:  # the tube points there; the counters restart at power-on
+        az, alt = args.power_on_at
+        geometry = geometry_for(preset.alignment_mode, options.site.latitude_deg)
+        home = geometry.to_axes(alt, az, PierSide.UNKNOWN)
+    mount = SimulatedMount(
+        preset, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS, home=home
+    )
+    return SynScanEmulator(
+        mount, config, faults=options.faults, wire=options.wire, cold_start=home is not None
+    )
 
 
 _DEVICE_LIMITS = Limits(sun_avoidance_deg=0.0)

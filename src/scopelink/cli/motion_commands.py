@@ -20,6 +20,7 @@ from scopelink.mount import (
     GuideDirection,
     Mount,
     MountAxis,
+    ParkPosition,
     TrackingMode,
 )
 
@@ -103,17 +104,38 @@ def register(commands: CommandParsers) -> None:
         commands,
         "park",
         description="Park: slew to the park position, stop tracking, refuse motion until "
-        "'scopelink unpark'. Waits for the slew (Ctrl-C stops the mount).",
-        examples=("  scopelink park\n  scopelink park --no-wait\n"),
+        "'scopelink unpark'. Waits for the slew (Ctrl-C stops the mount). Once parked, where "
+        "the mount is goes on record, so that 'scopelink unpark' can resume after a power "
+        "cycle without a new alignment (docs/parking.md).",
+        examples=(
+            "  scopelink park\n  scopelink park --no-wait\n  scopelink park --at 30,200\n"
+            "  scopelink park --axes=-30,60     (SynScan: axis positions, by slow goto)\n"
+        ),
     )
     park.add_argument("--no-wait", action="store_true", help="return once the slew has started")
+    where = park.add_mutually_exclusive_group()
+    where.add_argument(
+        "--at",
+        type=_two_numbers,
+        metavar="ALT,AZ",
+        help="park at this observed altitude and azimuth (degrees) instead of the default",
+    )
+    where.add_argument(
+        "--axes",
+        type=_two_numbers,
+        metavar="P,S",
+        help="SynScan: park at these axis positions (degrees; docs/parking.md)",
+    )
+    accept_negative_values(park)
     add_device_arguments(park)
     park.set_defaults(run=_run_park)
 
     unpark = _add(
         commands,
         "unpark",
-        description="Unpark: the mount accepts motion commands again.",
+        description="Unpark: the mount accepts motion commands again. A SynScan hand control "
+        "that was switched off and on while parked gets its axis positions back from the "
+        "park record first, so gotos land without a new alignment (docs/parking.md).",
         examples=("  scopelink unpark && scopelink track on\n"),
     )
     add_device_arguments(unpark)
@@ -215,8 +237,29 @@ def _run_track(args: argparse.Namespace) -> int:
 # --- park ------------------------------------------------------------------------------------
 
 
+def _two_numbers(text: str) -> tuple[float, float]:
+    try:
+        first, second = (float(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not two numbers like 30,200") from None
+    return first, second
+
+
+def _choose_park(mount: Mount, args: argparse.Namespace) -> None:
+    """``--at`` / ``--axes``: the park position for this park (checked like any other)."""
+    if args.at is not None:
+        alt, az = args.at
+        mount.park_position = ParkPosition(alt, az % 360.0)
+    elif args.axes is not None:
+        at_axes = getattr(mount, "park_position_at_axes", None)
+        if at_axes is None:
+            raise CommandError("this mount cannot park at axis positions", "use --at ALT,AZ")
+        mount.park_position = at_axes(*args.axes)
+
+
 def _run_park(args: argparse.Namespace) -> int:
     async def body(mount: Mount) -> int:
+        _choose_park(mount, args)
         async with until_stopped() as stop:
             await mount.park()
             if args.no_wait:
@@ -243,8 +286,8 @@ def _run_park(args: argparse.Namespace) -> int:
 
 def _run_unpark(args: argparse.Namespace) -> int:
     async def body(mount: Mount) -> int:
-        await mount.unpark()
-        print("unparked")
+        resume = await mount.unpark()
+        print(f"unparked: {resume.message}")
         return 0
 
     return run_on_mount(args, body)

@@ -139,6 +139,10 @@ async def open_device(command: DeviceCommand) -> Mount:
     except DeviceOpenError as error:
         raise CommandError(str(error), error.hint) from None
     mount.stale_after_s = command.config.stale_after_s
+    if command.config.park is not None:  # [park] in the settings file
+        mount.park_position = command.config.park
+    if mount.identity.protocol != "simulator":  # a new simulator starts afresh: nothing to keep
+        mount.park_keeper.enable()  # the park record, for unpark after a power cycle
     mount.poll_policy = command.config.poll_policy
     warn_if_sun_unguarded(mount.limits)
     return mount

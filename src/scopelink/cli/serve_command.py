@@ -386,6 +386,8 @@ async def open_device_patiently(command: DeviceCommand) -> Mount:
 
 async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
     mount = await open_device_patiently(command)
+    if args.state_dir is not None and mount.park_keeper.state_dir is not None:
+        mount.park_keeper.enable(args.state_dir)  # park records beside the Alpaca UniqueID
     if bound_beyond_loopback(plan.host):
         _log.warning("servers listen on %s: the mount can be driven from other machines", plan.host)
     try:

@@ -30,6 +30,7 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
+from scopelink.mount.parking import ParkKeeper, Resume
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
@@ -110,6 +111,8 @@ class Mount(StateCache):
         """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
+        self.park_keeper = ParkKeeper()
+        """Records the park and restores it at unpark (:mod:`scopelink.mount.parking`)."""
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -169,6 +172,7 @@ class Mount(StateCache):
             self._parking = False  # a device that reconnects says itself whether it is parked
         super()._publish(self._guard.annotate(state))
         self._guard.observe(self.state)
+        self.park_keeper.observe(self, self.state)
 
     def _publish_again(self) -> None:
         """Publish the current state again (with the guard's latest notice)."""
@@ -388,10 +392,16 @@ class Mount(StateCache):
         self._parking = True
         self._guard.motions_stopped()
 
-    async def unpark(self) -> None:
+    async def unpark(self) -> Resume:
+        """Allow motion again; first put back what the park record says where the device forgot
+        it in a power cycle (:mod:`scopelink.mount.parking`). Returns what was done with it."""
         self._require_connected()
+        resume = await self.park_keeper.resume(self)
+        if resume.restored and resume.record is not None:
+            self._sync_frame = SyncFrame(*resume.record.sync_frame_deg)
         await self._unpark()
         self._parking = False
+        return resume
 
     async def set_site(self, site: Site) -> None:
         """Use ``site`` from now on, and tell the device where supported."""

@@ -27,6 +27,7 @@ from scopelink.astro import Site
 from scopelink.astro.catalog import CatalogObject
 from scopelink.mount.base import Mount
 from scopelink.mount.limits import Limits
+from scopelink.mount.parking import Resume
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -194,8 +195,8 @@ class BlockingMount:
     def park(self) -> None:
         self._run(self.mount.park())
 
-    def unpark(self) -> None:
-        self._run(self.mount.unpark())
+    def unpark(self) -> Resume:
+        return self._run(self.mount.unpark())
 
     def set_site(self, site: Site) -> None:
         self._run(self.mount.set_site(site))

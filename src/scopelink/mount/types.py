@@ -131,10 +131,12 @@ class MountState:
 
 @dataclass(frozen=True, slots=True)
 class ParkPosition:
-    """Where ``park`` points the mount: an observed altitude and azimuth."""
+    """Where ``park`` points the mount: an observed altitude and azimuth, and the axis positions
+    there when it was given as those (a driver that can then parks on them exactly)."""
 
     alt_deg: float
     az_deg: float
+    axes_deg: tuple[float, float] | None = None
 
     @classmethod
     def pole(cls, latitude_deg: float) -> ParkPosition:

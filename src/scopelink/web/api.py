@@ -170,8 +170,14 @@ class _Api:
 
     async def unpark(self, request: web.Request) -> web.Response:
         await read_body(request)
-        await self.mount.unpark()
-        return self._ok()
+        resume = await self.mount.unpark()
+        return web.json_response(
+            {
+                "ok": True,
+                "state": state_json(self.mount, self.mount.state),
+                "resume": resume.message,
+            }
+        )
 
     async def site(self, request: web.Request) -> web.Response:
         body = await read_body(request)

@@ -25,14 +25,16 @@ from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site, angular_separat
 from scopelink.drivers.common import LinkFactory
 from scopelink.drivers.synscan.base import AXES, rate_zero
 from scopelink.drivers.synscan.identify import synscan_tracking
-from scopelink.drivers.synscan.polling import SynScanPolling
+from scopelink.drivers.synscan.parking import SlowGotoRefusedError, SynScanParking
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.mount import (
+    AlignmentMode,
     DeviceError,
     GuideDirection,
     MountAxis,
     MountError,
     NotSupportedError,
+    ParkPosition,
     Priority,
     TrackingMode,
 )
@@ -78,7 +80,7 @@ def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float
     return float(angular_separation_deg(ra1_hours * 15.0, dec1, ra2_hours * 15.0, dec2))
 
 
-class SynScanMount(SynScanPolling):
+class SynScanMount(SynScanParking):
     """A SynScan hand control on ``link``: a link spec (``/dev/ttyUSB0``, ``tcp://host:11880``,
     a pty path) or a factory that opens a :class:`~scopelink.links.Link`.
 
@@ -159,13 +161,37 @@ class SynScanMount(SynScanPolling):
             )
 
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        if self.resumed:  # counters restored after a power cycle: by slow goto (parking.py)
+            alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
+            await self._slow_goto(alt, az, tracking=self._sky_tracking())
+            self._follow(ra_j2000_hours, dec_j2000_deg)
+            return
         await self._require_aligned("goto")
         pulsing = await self._cancel_pulses()
         with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
             await self._ask(GotoRaDec.from_hours_degrees(ra_j2000_hours, dec_j2000_deg), Ack)
         self._goto_started(None)
 
+    def _sky_tracking(self) -> TrackingMode:
+        altaz = self._capabilities.alignment_mode is AlignmentMode.ALT_AZ
+        return TrackingMode.ALT_AZ if altaz else TrackingMode.SIDEREAL
+
+    async def _slow_goto(self, alt_deg: float, az_deg: float, *, tracking: TrackingMode) -> None:
+        """A resumed goto: tracking set first (it starts where the axes land), then a slow goto
+        per axis to the counters that point at ``alt_deg``/``az_deg``."""
+        pulsing = await self._cancel_pulses()
+        with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
+            async with self.wire.exclusive():
+                await self._ask(SetTrackingMode(synscan_tracking(tracking)), Ack)
+                self._tracking = tracking
+                await self._slow_goto_axes(self.axes_for(alt_deg, az_deg))
+        self._goto_started(None)
+        self._publish(dataclasses.replace(self.state, tracking=tracking))
+
     async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        if self.resumed:
+            await self._slow_goto(alt_deg, az_deg, tracking=TrackingMode.OFF)
+            return
         await self._require_aligned("goto")
         pulsing = await self._cancel_pulses()
         with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
@@ -174,6 +200,7 @@ class SynScanMount(SynScanPolling):
 
     def _goto_started(self, altaz_target: tuple[float, float] | None) -> None:
         self._axis_rates.clear()  # a goto takes over from manual motion, as on the keypad
+        self._refine = None
         self._motion_epoch += 1
         self._goto_running = True
         self._settle = None
@@ -231,6 +258,7 @@ class SynScanMount(SynScanPolling):
             raise
         self._motion_epoch += 1
         self._goto_running = False
+        self._refine = None
         self._settle = None
         self._publish(dataclasses.replace(self.state, slewing=False, pulse_guiding=False))
 
@@ -358,23 +386,43 @@ class SynScanMount(SynScanPolling):
         self._publish(dataclasses.replace(self.state, tracking=mode))
 
     async def _park(self) -> None:
-        """Tracking off, then an Alt-Az goto to :attr:`park_position`; parked until unpark."""
+        """Tracking off, then to :attr:`park_position`: by an Alt-Az goto, or by a slow goto
+        per axis (given as axis positions, the default home of an equatorial mount, resumed:
+        see ``docs/parking.md``); parked until unpark."""
         park = self.park_position
         self._limits.check_altaz(park.alt_deg, park.az_deg, what="park position")
-        await self._require_aligned("park goto")
+        try:
+            await self._park_at(park, self._slow_park_axes(park))
+        except SlowGotoRefusedError as error:
+            if park.axes_deg is not None or self.resumed:
+                raise
+            logger.warning("%s: %s: parking with an Alt-Az goto", self.wire.name, error)
+            self._slow_goto_refused = True  # the default park goes by 'b' from now on
+            await self._park_at(park, None)
+
+    async def _park_at(self, park: ParkPosition, axes: tuple[float, float] | None) -> None:
+        if not self.resumed:  # unaligned, counters say nothing of where the tube points
+            if axes is not None:
+                self._aligned = False  # ask 'J' anew: the hand control obeys slow gotos anyway
+            await self._require_aligned("park goto")
         pulsing = await self._cancel_pulses()
         with self._stops_owed_on_failure(cancel_goto=True, axes=pulsing):
             async with self.wire.exclusive():
                 await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
                 self._tracking = TrackingMode.OFF
-                await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
+                if axes is None:
+                    await self._ask(GotoAzAlt.from_degrees(park.az_deg, park.alt_deg), Ack)
+                else:
+                    await self._slow_goto_axes(axes)
         self._parked = True
         self._park_target = park
-        self._goto_started((park.alt_deg, park.az_deg))
+        self._park_axes = axes
+        self._goto_started((park.alt_deg, park.az_deg) if axes is None else None)
         self._publish(dataclasses.replace(self.state, parked=False, tracking=TrackingMode.OFF))
 
     async def _unpark(self) -> None:
         self._parked = False
+        self._park_axes = None
         self._publish(dataclasses.replace(self.state, parked=False))
 
     async def _set_site(self, site: Site) -> None:

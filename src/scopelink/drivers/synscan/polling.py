@@ -119,6 +119,8 @@ class SynScanPolling(SynScanConnection):
         if self._motion_epoch == epoch:
             # A goto sent while this poll waited for the wire is not over whatever L said.
             self._goto_running = self._goto_still_running(goto.in_progress, alt, az)
+            if not self._goto_running and await self._goto_landed():
+                self._goto_running = True  # a further pass to a moving target (parking.py)
         if self._parked and not self._slewing and not self._arrived_at_park(alt, az):
             problems += (
                 "the park goto ended away from the park position: not parked (park again, "
@@ -144,6 +146,10 @@ class SynScanPolling(SynScanConnection):
         )
         self._publish(state)
         return state
+
+    async def _goto_landed(self) -> bool:
+        """A goto has just ended: True if a further pass was sent (``parking.py``)."""
+        return False
 
     def _arrived_at_park(self, alt: float, az: float) -> bool:
         """Parked: the park goto has ended, within ``PARK_TOLERANCE_DEG`` of where it went."""

@@ -30,7 +30,7 @@ from scopelink.mount import (
 from scopelink.protocol import synscan
 from scopelink.protocol.synscan import AnyCommand, AnyReply, Axis, Tracking
 from scopelink.servers.synscan.config import SynScanConfig
-from scopelink.sim import synscan_fixed_rate_deg_s
+from scopelink.sim import SimulatedMount, synscan_fixed_rate_deg_s
 
 __all__ = ["AxisPositioning", "NoReply", "SynScanHandControl"]
 
@@ -141,6 +141,33 @@ class SynScanHandControl:
             logger.warning("power-on position from the last reading: %s", error)
             state = self.mount.state
         self._power_on_az_alt = (state.az_deg or 0.0, state.alt_deg or 0.0)
+
+    async def power_cycle(self) -> None:
+        """Switch the hand control and the motor controllers off and on again, as a real one.
+
+        The tube stays where it points; the motors stop (tracking too); the counters read their
+        power-on values again (the geometry's home: counterweight down at the pole, or level
+        pointing north) and the hand control forgets its alignment, any goto and that it was
+        parked. Its site and clock are kept (a real one asks for them at power-on: the observer
+        types the same). Only an emulated mount can be power-cycled (a bridge cannot switch off
+        the mount behind it): anything else raises :class:`InvalidValueError`.
+        """
+        mount = self.mount
+        if not isinstance(mount, SimulatedMount):
+            raise InvalidValueError("only an emulated mount can be power-cycled")
+        await mount.abort()  # the motors stop when the power goes
+        if mount.tracking is not TrackingMode.OFF:
+            await mount.set_tracking(TrackingMode.OFF)
+        await mount.unpark()  # the hand control does not remember that it was parked
+        for axis, home in zip(MountAxis, mount.geometry.home, strict=True):
+            mount.set_axis_position(axis, home)  # the counters restart; the tube does not move
+        mount.set_aligned(False)
+        self.aligned = False
+        self._goto_running = self._goto_sticky = False
+        self._goto_sent_at = None
+        self._axis_rates.clear()
+        logger.info("power cycled: counters at their power-on values, not aligned")
+        await self.power_on()
 
     def now(self) -> datetime:
         """The hand control's clock (UTC)."""
@@ -419,6 +446,10 @@ class SynScanHandControl:
         if not (self.axis_passthrough and isinstance(self.mount, AxisPositioning)):
             return self._unanswerable_passthrough(command)
         position = (command.degrees + 180.0) % 360.0 - 180.0
+        if axis is MountAxis.SECONDARY:
+            # [-90, 270): a German mount's flipped secondary lies in (90, 270] (sim.geometry),
+            # so a later slew from it turns the tube over the visible pole, never under it.
+            position = (command.degrees + 90.0) % 360.0 - 90.0
         if isinstance(command, synscan.SlowGoto):
             self.mount.slew_axis_to(axis, position)
             self._goto_running, self._goto_sticky = True, False

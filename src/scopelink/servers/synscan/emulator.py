@@ -32,6 +32,8 @@ class SynScanEmulator(HostedDevice):
     started when its link goes (a bridge for phone apps; a hand control on a cable cannot notice);
     ``axis_passthrough=False`` (a bridge) answers the motor passthrough "slow goto" and "set axis
     position" as over a real device, since they would move an axis past every limit check.
+    ``cold_start`` starts it as just switched on with the tube where ``mount`` points: the
+    counters at their power-on values, not aligned (see :meth:`power_cycle`).
     """
 
     def __init__(
@@ -44,7 +46,9 @@ class SynScanEmulator(HostedDevice):
         access: AccessPolicy | None = None,
         dead_man: bool = False,
         axis_passthrough: bool = True,
+        cold_start: bool = False,
     ) -> None:
+        self.cold_start = cold_start
         control = AccessControl(access, "SynScan")
         self.hand_control = SynScanHandControl(mount, config, axis_passthrough=axis_passthrough)
         self.server = SynScanServer(self.hand_control, faults, access=control, dead_man=dead_man)
@@ -61,5 +65,12 @@ class SynScanEmulator(HostedDevice):
     async def __aenter__(self) -> Self:
         if not self.mount.state.connected:
             await self.mount.connect()
-        await self.hand_control.power_on()
+        if self.cold_start:
+            await self.hand_control.power_cycle()
+        else:
+            await self.hand_control.power_on()
         return self
+
+    async def power_cycle(self) -> None:
+        """Switch the emulated hand control off and on: see ``SynScanHandControl.power_cycle``."""
+        await self.hand_control.power_cycle()

@@ -630,7 +630,10 @@ function setup() {
   $("abort").addEventListener("click", () => api("/api/abort"));
   $("tracking-apply").addEventListener("click", () => api("/api/tracking", { mode: $("tracking-mode").value }));
   $("park").addEventListener("click", async () => { if (await api("/api/park")) showMessage("parking", "info"); });
-  $("unpark").addEventListener("click", async () => { if (await api("/api/unpark")) showMessage("unparked", "info"); });
+  $("unpark").addEventListener("click", async () => {
+    const reply = await api("/api/unpark");
+    if (reply) showMessage(reply.resume ? `unparked: ${reply.resume}` : "unparked", "info");
+  });
 
   $("site-form").addEventListener("submit", async (event) => {
     event.preventDefault();

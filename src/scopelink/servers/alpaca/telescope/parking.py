@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
-from scopelink.mount import MountError, ParkPosition
+import logging
+
+from scopelink.mount import Mount, MountError, ParkPosition
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber, from_mount_error
 from scopelink.servers.alpaca.params import Params
 from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
 
 __all__ = ["ParkingMembers"]
+
+logger = logging.getLogger(__name__)
 
 
 class ParkingMembers(MemberGroup):
@@ -36,7 +40,13 @@ class ParkingMembers(MemberGroup):
         mount = self.session.mount
         if not mount.capabilities.can_park:
             raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount cannot unpark")
-        await self.session.call(mount.unpark())
+        await self.session.call(self._unpark_and_say(mount))
+
+    @staticmethod
+    async def _unpark_and_say(mount: Mount) -> None:
+        """Unpark; what was done with the park record is logged (Alpaca has no place for it)."""
+        resume = await mount.unpark()
+        logger.info("Unpark: %s", resume.message)
 
     def _set_park(self, _: Params) -> None:
         session = self.session
