@@ -292,6 +292,7 @@ class Mount(StateCache):
             predicted,
             can_choose=self.can_choose_pier_side,
             tracking=tracking,
+            leave=self._meridian.leaving,
         )
 
     def destination_side_of_pier(self, ra_j2000_hours: float, dec_j2000_deg: float) -> PierSide:

@@ -73,6 +73,9 @@ _LEAD_S = 0.5
 """The watch acts this long (real seconds at the measured clock rate) before the limit: its own
 check period plus the time a stop takes to reach the device."""
 
+_SETTLE_WAIT_S = 2.0
+"""How long (real) the watch waits at a time for a reading of the tube at rest after a goto."""
+
 _SIDE_NAMES = {PierSide.EAST: "east", PierSide.WEST: "west", PierSide.UNKNOWN: "unknown"}
 
 
@@ -147,6 +150,7 @@ def plan_goto_side(
     *,
     can_choose: bool,
     tracking: bool = True,
+    leave: PierSide | None = None,
 ) -> PierSide | None:
     """The pier side a goto to a target at ``ha_hours`` must ask for, or None when the side
     the device picks by itself (``predicted``) will do.
@@ -154,11 +158,14 @@ def plan_goto_side(
     The device's side is kept unless it is past the limit or (``tracking``) reaches it within
     ``min_track_minutes``; then the other side, if it is no worse. Raises ``LimitError`` naming
     the setting when no side is allowed, or when another side is needed and the device cannot be
-    told which (``can_choose`` False: a SynScan hand control picks its side itself).
+    told which (``can_choose`` False: a SynScan hand control picks its side itself). ``leave``:
+    the side an automatic flip leaves, never chosen.
     """
     if predicted is PierSide.UNKNOWN:
         predicted = destination_side_of_pier(ha_hours)
     problem = side_problem(limits, ha_hours, predicted, tracking=tracking)
+    if predicted is leave:
+        problem = f"a meridian flip must leave the {_SIDE_NAMES[predicted]} side of the pier"
     if problem is None:
         return None
     wanted = _other(predicted)
@@ -167,7 +174,7 @@ def plan_goto_side(
         allowed = [
             side
             for side in (predicted, wanted)
-            if side_problem(limits, ha_hours, side, tracking=False) is None
+            if side is not leave and side_problem(limits, ha_hours, side, tracking=False) is None
         ]
         if not allowed:
             other = side_problem(limits, ha_hours, wanted, tracking=False)
@@ -257,6 +264,9 @@ class MeridianWatch:
         """Why tracking was last stopped at the meridian (shown in ``state.problems``)."""
         self.stops = 0
         self.flips = 0
+        self._fresh_after = mount.now()
+        self.leaving: PierSide | None = None
+        """The side an automatic flip under way leaves (a goto then never lands on it)."""
 
     def observe(self, state: MountState) -> None:
         """Called with every published state: start watching when tracking is seen."""
@@ -270,8 +280,10 @@ class MeridianWatch:
         return state
 
     def command_accepted(self) -> None:
-        """A new goto or tracking command supersedes the last stop's notice."""
+        """A new goto or tracking command supersedes the last stop's notice; readings from
+        before it (or of the slew) say nothing about where tracking now carries the tube."""
         self.notice = ""
+        self._fresh_after = self._mount.now()
 
     def check_tracking(self, state: MountState) -> None:
         """Refuse to start tracking that would carry the tube further past the west limit."""
@@ -317,10 +329,13 @@ class MeridianWatch:
                 if last is not None and real - last[0] > 0.05:
                     rate = max((clock - last[1]) / (real - last[0]), 0.0)
                 last = (real, clock)
-                status = meridian_status(mount, mount.state)
+                state = await self._settled_state()
+                if state is None:
+                    continue
+                status = meridian_status(mount, state)
                 left = None if status is None else status.minutes_left
                 if status is not None and left is not None and left * 60.0 <= rate * _LEAD_S:
-                    await self._at_limit(mount.state, status)
+                    await self._at_limit(state, status)
                     last = None
                     continue
             except asyncio.CancelledError:
@@ -328,6 +343,22 @@ class MeridianWatch:
             except Exception:  # never leave tracking unwatched because of one bug
                 logger.exception("the meridian watch failed; watching again")
             await asyncio.sleep(_CHECK_S)
+
+    async def _settled_state(self) -> MountState | None:
+        """The last reading if it shows the tube tracking after the last goto's slew; else the
+        next such reading (the poller runs meanwhile), or None after a while (to look again)."""
+        state = self._mount.state
+        if not state.slewing and state.read_at >= self._fresh_after:
+            return state
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(_SETTLE_WAIT_S):
+                async with contextlib.aclosing(self._mount.states()) as states:
+                    async for state in states:
+                        if not self._needed(state):
+                            return None
+                        if not state.slewing and state.read_at >= self._fresh_after:
+                            return state
+        return None
 
     async def _at_limit(self, state: MountState, status: MeridianStatus) -> None:
         side = _SIDE_NAMES[status.side]
@@ -342,7 +373,11 @@ class MeridianWatch:
         if ra is None or dec is None:
             return
         try:
-            await self._mount.goto_equatorial(ra, dec)
+            self.leaving = status.side
+            try:
+                await self._mount.goto_equatorial(ra, dec)
+            finally:
+                self.leaving = None
             landed = await self._mount.wait_for_slew(timeout_s=FLIP_TIMEOUT_S)
         except (MountError, TimeoutError) as error:
             why = str(error) or f"it did not land within {FLIP_TIMEOUT_S:g} s"
