@@ -84,7 +84,7 @@ async def test_when_no_side_tracks_long_enough_the_side_within_the_limits_is_tak
 
 
 async def test_tracking_stops_at_the_west_limit_and_cannot_be_restarted(tmp_path: Path) -> None:
-    limits = Limits(meridian_east_deg=0.0, meridian_west_deg=1.0, min_track_minutes=0.0)
+    limits = Limits(meridian_east_deg=0.0, meridian_west_deg=1.0)  # 10 min to track
     mount = sim_mount(limits=limits, speed_up=200.0)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
@@ -105,7 +105,7 @@ async def test_tracking_stops_at_the_west_limit_and_cannot_be_restarted(tmp_path
         with pytest.raises(InvalidValueException, match=r"limits\.meridian_west_deg"):
             await blocking(lambda: setattr(telescope, "Tracking", True))
         assert tracking(mount) is TrackingMode.OFF
-        # A new goto to the same target lands on the east side and tracks on.
+        # A new goto to the same target lands on the east side: the west one tracks < 10 min.
         ra = ra_at_hour_angle(mount, status.hour_angle_hours)
         assert await blocking(partial(telescope.DestinationSideOfPier, ra, 20.0)) == (
             PierSide.pierEast

@@ -253,7 +253,7 @@ class Mount(StateCache):
         else:
             await self._goto_equatorial_on(ra_j2000_hours, dec_j2000_deg, side)
         self._guard.goto_started()
-        self._meridian.command_accepted()
+        self._meridian.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
     async def goto_object(self, name: str) -> CatalogObject:
@@ -279,6 +279,7 @@ class Mount(StateCache):
         else:
             await self._goto_horizontal_on(alt_deg, az_deg, side)
         self._guard.goto_started()
+        self._meridian.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
     def _meridian_side(self, ha_hours: float, dec_deg: float, *, tracking: bool) -> PierSide | None:
@@ -305,7 +306,7 @@ class Mount(StateCache):
             side = self._meridian_side(ha, dec, tracking=True)
         except LimitError:
             return PierSide.UNKNOWN
-        return side or self._predicted_pier_side(ha, dec)
+        return side if side is not None else self._predicted_pier_side(ha, dec)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Tell the mount it is pointing at this J2000 position, unless that is farther than

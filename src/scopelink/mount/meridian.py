@@ -73,6 +73,9 @@ _LEAD_S = 0.5
 """The watch acts this long (real seconds at the measured clock rate) before the limit: its own
 check period plus the time a stop takes to reach the device."""
 
+_MOVED_BACK_HOURS = 0.01
+"""How far (hour angle, 9′) the tube must be moved back east from where tracking was stopped at
+the limit before tracking may start again there."""
 _SETTLE_WAIT_S = 2.0
 """How long (real) the watch waits at a time for a reading of the tube at rest after a goto."""
 
@@ -267,6 +270,9 @@ class MeridianWatch:
         self._fresh_after = mount.now()
         self.leaving: PierSide | None = None
         """The side an automatic flip under way leaves (a goto then never lands on it)."""
+        self._stopped: tuple[PierSide, float] | None = None
+        """The side and hour angle where the watch last stopped tracking at the limit."""
+        """The side an automatic flip under way leaves (a goto then never lands on it)."""
 
     def observe(self, state: MountState) -> None:
         """Called with every published state: start watching when tracking is seen."""
@@ -285,14 +291,29 @@ class MeridianWatch:
         self.notice = ""
         self._fresh_after = self._mount.now()
 
+    def goto_started(self) -> None:
+        """A goto moves the tube away from where tracking was stopped."""
+        self.command_accepted()
+        self._stopped = None
+
     def check_tracking(self, state: MountState) -> None:
-        """Refuse to start tracking that would carry the tube further past the west limit."""
+        """Refuse to start tracking that would carry the tube further past the west limit, or
+        from where the watch stopped it at the limit (until a goto or a motion moves it back)."""
         status = meridian_status(self._mount, _tracking(state))
-        if status is not None and status.minutes_left == 0.0:
+        if status is None:
+            return
+        stopped = self._stopped
+        at_stop = (
+            stopped is not None
+            and status.side is stopped[0]
+            and status.hour_angle_hours > stopped[1] - _MOVED_BACK_HOURS
+        )
+        if status.minutes_left == 0.0 or at_stop:
             raise LimitError(
                 f"the tube is {status.past_deg:.1f}° past the meridian on the west side of the "
                 f"pier, at limits.meridian_west_deg ({status.limit_deg:g}°): tracking would carry "
-                "it into the pier; goto the target again (it lands on the east side)"
+                "it into the pier; nothing was sent (goto the target again: it lands on the "
+                "east side)"
             )
 
     def _needed(self, state: MountState) -> bool:
@@ -366,6 +387,7 @@ class MeridianWatch:
             f"tracking was stopped {status.past_deg:.1f}° past the meridian on the {side} side "
             f"of the pier: the meridian limit ({_setting(status.side)} {status.limit_deg:g}°)"
         )
+        self._stopped = (status.side, status.hour_angle_hours)
         await self._stop(reason)
         if not self._mount.limits.auto_flip:
             return
