@@ -351,6 +351,7 @@ class MeridianWatch:
                     rate = max((clock - last[1]) / (real - last[0]), 0.0)
                 last = (real, clock)
                 state = await self._settled_state()
+                _raise_if_cancelled()
                 if state is None:
                     continue
                 status = meridian_status(mount, state)
@@ -363,6 +364,7 @@ class MeridianWatch:
                 raise
             except Exception:  # never leave tracking unwatched because of one bug
                 logger.exception("the meridian watch failed; watching again")
+            _raise_if_cancelled()
             await asyncio.sleep(_CHECK_S)
 
     async def _settled_state(self) -> MountState | None:
@@ -433,6 +435,15 @@ class MeridianWatch:
             self._mount, self._settings, stop, reason, tell=tell, show_notice=self._show_notice
         )
         self._show_notice()
+
+
+def _raise_if_cancelled() -> None:
+    """End the watch if it was cancelled while inside ``states()``: leaving it stops the poller,
+    which swallows a cancellation that arrives meanwhile (``Poller.stop`` suppresses
+    ``CancelledError`` while it awaits the poll task)."""
+    task = asyncio.current_task()
+    if task is not None and task.cancelling():
+        raise asyncio.CancelledError
 
 
 def _tracking(state: MountState) -> MountState:
