@@ -39,18 +39,27 @@ def tracking(mount: SimulatedMount) -> TrackingMode:
     return mount.state.tracking
 
 
+WIDE_EAST = Limits(meridian_east_deg=10.0, meridian_west_deg=5.0, min_track_minutes=60.0)
+NARROW_EAST = Limits(meridian_east_deg=5.0, meridian_west_deg=5.0, min_track_minutes=60.0)
+
+
 @pytest.mark.parametrize(
-    ("ha_hours", "expected"),
+    ("limits", "ha_hours", "expected"),
     [
-        (-2.0, PierSide.pierWest),  # east of the meridian, 2 h 20 min of tracking: ASCOM's side
-        (-0.5, PierSide.pierEast),  # 50 min to the west limit < 60: counterweight up instead
-        (1.0, PierSide.pierEast),  # west of the meridian: tracking moves away from the limit
+        # East of the meridian, 2 h 20 min of tracking: ASCOM's side.
+        (WIDE_EAST, -2.0, PierSide.pierWest),
+        # 50 min to the west limit < 60: the east side, counterweight up, instead.
+        (WIDE_EAST, -0.5, PierSide.pierEast),
+        # West of the meridian: tracking moves away from the limit.
+        (WIDE_EAST, 1.0, PierSide.pierEast),
+        # 8° east: past the east limit on the east side; on the west side 13° (52 min) of
+        # tracking, less than the 60 asked for: the only side within the limits is taken.
+        (NARROW_EAST, -8.0 / 15.0, PierSide.pierWest),
     ],
 )
 async def test_destination_side_of_pier_is_where_the_goto_lands(
-    tmp_path: Path, ha_hours: float, expected: PierSide
+    tmp_path: Path, limits: Limits, ha_hours: float, expected: PierSide
 ) -> None:
-    limits = Limits(meridian_east_deg=10.0, meridian_west_deg=5.0, min_track_minutes=60.0)
     mount = sim_mount(limits=limits)
     async with serve(mount, state_dir=tmp_path) as server:
         telescope = client(server)
@@ -63,24 +72,10 @@ async def test_destination_side_of_pier_is_where_the_goto_lands(
         status = meridian_status(mount, mount.state)
         assert status is not None
         assert status.minutes_left is not None
-        assert status.minutes_left >= limits.min_track_minutes
-
-
-async def test_when_no_side_tracks_long_enough_the_side_within_the_limits_is_taken(
-    tmp_path: Path,
-) -> None:
-    # 8° east of the meridian: beyond the east limit on the east side; on the west side
-    # 13° (52 min) of tracking, less than the 60 min asked for: the west side is the only one.
-    limits = Limits(meridian_east_deg=5.0, meridian_west_deg=5.0, min_track_minutes=60.0)
-    mount = sim_mount(limits=limits)
-    async with serve(mount, state_dir=tmp_path) as server:
-        telescope = client(server)
-        await connect(telescope)
-        ra, dec = ra_at_hour_angle(mount, -8.0 / 15.0), 30.0
-        side = await blocking(partial(telescope.DestinationSideOfPier, ra, dec))
-        assert side == PierSide.pierWest
-        await slew(telescope, ra, dec)
-        assert await blocking(lambda: telescope.SideOfPier) == PierSide.pierWest
+        if limits is WIDE_EAST:
+            assert status.minutes_left >= limits.min_track_minutes
+        else:
+            assert 45.0 < status.minutes_left < limits.min_track_minutes
 
 
 async def test_tracking_stops_at_the_west_limit_and_cannot_be_restarted(tmp_path: Path) -> None:

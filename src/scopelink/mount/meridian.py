@@ -333,13 +333,6 @@ class MeridianWatch:
             return
         self._task = loop.create_task(self._run(), name="scopelink meridian watch")
 
-    async def close(self) -> None:
-        task, self._task = self._task, None
-        if task is not None:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
-
     async def _run(self) -> None:
         mount = self._mount
         rate = 1.0  # mount seconds per real second, measured between checks
