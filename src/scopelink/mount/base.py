@@ -31,12 +31,12 @@ from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
 from scopelink.mount.meridian import (
-    MeridianWatch,
     applies,
     hour_angle_of_altaz,
     hour_angle_of_j2000,
     plan_goto_side,
 )
+from scopelink.mount.meridian_watch import MeridianWatch
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
@@ -162,7 +162,8 @@ class Mount(StateCache):
 
     @property
     def meridian(self) -> MeridianWatch:
-        """What stops tracking at the meridian limit, or flips (:mod:`scopelink.mount.meridian`)."""
+        """What stops tracking at the meridian limit, or flips
+        (:mod:`scopelink.mount.meridian_watch`)."""
         return self._meridian
 
     def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
