@@ -11,7 +11,7 @@ import asyncio
 import pytest
 
 from scopelink.astro import PierSide
-from scopelink.mount import LimitError, Limits, TrackingMode
+from scopelink.mount import LimitError, Limits, MountAxis, MountState, TrackingMode
 from scopelink.mount.meridian import meridian_status
 from tests.support.meridian import ra_j2000_at_hour_angle, synscan_rig
 
@@ -99,3 +99,35 @@ async def test_auto_flip_is_checked_and_a_failed_flip_leaves_tracking_off(
             await mount.wait_for(lambda s: s.tracking is TrackingMode.OFF, timeout_s=10.0)
             assert sim.state.tracking is TrackingMode.OFF
             assert sim.state.pier_side is PierSide.WEST
+
+
+async def test_a_manual_motion_heading_past_the_limit_is_stopped_before_it() -> None:
+    limits = Limits(meridian_east_deg=0.0, meridian_west_deg=3.0)
+    async with synscan_rig(limits, hand_control=Limits(meridian_east_deg=0.0), speed_up=50.0) as (
+        mount,
+        sim,
+    ):
+        await mount.goto_equatorial(ra_j2000_at_hour_angle(mount, -1.0 / 15.0), 20.0)
+        assert (await mount.wait_for_slew(timeout_s=30.0)).pier_side is PierSide.WEST
+        await mount.set_tracking(TrackingMode.OFF)
+        sim.clock.set_rate(1.0)  # the motion in real time, as the guard sees a real one
+
+        def past(state: MountState) -> float:
+            status = meridian_status(mount, state)
+            assert status is not None
+            return status.past_deg
+
+        # Which way the polar axis turns the tube west: try 0.3 s, then head that way.
+        start = past(await mount.refresh())
+        await mount.move_axis(MountAxis.PRIMARY, 1.0)
+        await asyncio.sleep(0.3)
+        await mount.abort()
+        await mount.wait_for(lambda s: not s.slewing, timeout_s=5.0)
+        rate = 1.0 if past(await mount.refresh()) > start else -1.0
+        await mount.move_axis(MountAxis.PRIMARY, rate)
+        stopped = await mount.wait_for(
+            lambda s: mount.guard.stops > 0 and not s.slewing, timeout_s=15.0
+        )
+        assert 1.5 < past(stopped) <= 3.0, past(stopped)
+        assert "limits.meridian_west_deg" in mount.guard.notice
+        assert past(await mount.refresh()) <= 3.0

@@ -45,6 +45,7 @@ __all__ = [
     "applies",
     "hour_angle_of_altaz",
     "hour_angle_of_j2000",
+    "limit_of",
     "meridian_status",
     "minutes_left",
     "past_meridian_deg",
@@ -77,7 +78,8 @@ def past_meridian_deg(ha_hours: float, side: PierSide) -> float | None:
     return None
 
 
-def _limit_deg(limits: Limits, side: PierSide) -> float:
+def limit_of(limits: Limits, side: PierSide) -> float:
+    """The meridian limit (degrees past the meridian) of ``side``."""
     return limits.meridian_west_deg if side is PierSide.WEST else limits.meridian_east_deg
 
 
@@ -103,7 +105,7 @@ def side_problem(limits: Limits, ha_hours: float, side: PierSide, *, tracking: b
     past = past_meridian_deg(ha_hours, side)
     if past is None:
         return None
-    name, limit = SIDE_NAMES[side], _limit_deg(limits, side)
+    name, limit = SIDE_NAMES[side], limit_of(limits, side)
     if past > limit:
         return (
             f"on the {name} side of the pier it would point {past:.1f}° past the meridian, "
@@ -211,4 +213,4 @@ def meridian_status(mount: GuardedMount, state: MountState) -> MeridianStatus | 
     past = past_meridian_deg(ha, side)
     assert past is not None  # the side is known
     left = minutes_left(mount.limits, ha, side) if tracking else None
-    return MeridianStatus(side, ha, past, _limit_deg(mount.limits, side), left)
+    return MeridianStatus(side, ha, past, limit_of(mount.limits, side), left)
