@@ -138,7 +138,16 @@ _PARK_KEYS: Final = ("altitude", "azimuth")
 _READINGS_KEYS: Final = ("stale_after_s", "idle_poll_s", "demand_hold_s", "max_poll_baud")
 _SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
 _HORIZON_KEYS: Final = ("altitude", "profile")
-_LIMITS_KEYS: Final = ("max_altitude", "sun_avoidance_deg", "max_sync_deg")
+_LIMITS_KEYS: Final = (
+    "max_altitude",
+    "sun_avoidance_deg",
+    "max_sync_deg",
+    "meridian_east_deg",
+    "meridian_west_deg",
+    "min_track_minutes",
+    "auto_flip",
+)
+_MERIDIAN_KEYS: Final = ("meridian_east_deg", "meridian_west_deg", "min_track_minutes")
 _ACCESS_KEYS: Final = (
     "read_only",
     "allow",
@@ -289,8 +298,18 @@ class _Reader:
         sun = self.number(limits, "sun_avoidance_deg", "limits")
         max_sync = self.number(limits, "max_sync_deg", "limits")
         profile = self.profile(horizon.get("profile", []))
+        meridian: dict[str, Any] = {}
+        for key in _MERIDIAN_KEYS:
+            value = self.number(limits, key, "limits")
+            if value is not None:
+                meridian[key] = value
+        auto_flip = limits.get("auto_flip", False)
+        if not isinstance(auto_flip, bool):
+            raise self.error("limits.auto_flip", f"expected true or false, got {auto_flip!r}")
         try:
             return Limits(
+                **meridian,
+                auto_flip=auto_flip,
                 horizon_deg=altitude if altitude is not None else 0.0,
                 max_altitude_deg=max_altitude if max_altitude is not None else 90.0,
                 horizon_profile=profile,
@@ -301,6 +320,8 @@ class _Reader:
             key = "limits.max_altitude" if "maximum" in str(error) else "horizon"
             key = "limits.sun_avoidance_deg" if "Sun" in str(error) else key
             key = "limits.max_sync_deg" if "max_sync_deg" in str(error) else key
+            for name in _MERIDIAN_KEYS:
+                key = f"limits.{name}" if f"({name})" in str(error) else key
             raise self.error(key, str(error)) from None
 
     def profile(self, value: object) -> tuple[tuple[float, float], ...]:

@@ -30,6 +30,10 @@ profile = [[0, 15], [90, 25], [200, 12]]   # optional [azimuth, altitude] points
 [limits]
 max_altitude = 88                   # keeps alt-az mounts out of the zenith
 # sun_avoidance_deg = 15            # no goto or motion within this of the Sun (0: off)
+# meridian_west_deg = 5             # German mounts: tracking stops this far past the meridian
+# meridian_east_deg = 5             # ... and a goto points at most this far east of it, flipped
+# min_track_minutes = 10            # a goto picks the pier side that tracks at least this long
+# auto_flip = false                 # at the limit, flip (goto the same target) instead of stopping
 
 [servers]                           # what 'scopelink serve' listens on; false turns one off
 host = "127.0.0.1"
@@ -177,6 +181,10 @@ def show(config: Config) -> str:
         f"max_altitude = {limits.max_altitude_deg}",
         f"sun_avoidance_deg = {limits.sun_avoidance_deg}",
         f"max_sync_deg = {limits.max_sync_deg}",
+        f"meridian_east_deg = {limits.meridian_east_deg}",
+        f"meridian_west_deg = {limits.meridian_west_deg}",
+        f"min_track_minutes = {limits.min_track_minutes}",
+        f"auto_flip = {_toml_value(limits.auto_flip)}",
         "",
         "[servers]",
         f"host = {_toml_value(servers.host)}",

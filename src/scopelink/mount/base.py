@@ -16,7 +16,7 @@ from collections.abc import Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
-from scopelink.astro import Site, j2000_to_observed
+from scopelink.astro import PierSide, Site, j2000_to_observed
 from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.mount.cache import StateCache
 from scopelink.mount.deadman import DeadMan, MotionClient
@@ -31,6 +31,13 @@ from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
 from scopelink.mount.parking import ParkKeeper, Resume
+from scopelink.mount.meridian import (
+    applies,
+    hour_angle_of_altaz,
+    hour_angle_of_j2000,
+    plan_goto_side,
+)
+from scopelink.mount.meridian_watch import MeridianWatch
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
@@ -105,6 +112,7 @@ class Mount(StateCache):
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
+        self._meridian = MeridianWatch(self, GuardSettings(), show_notice=self._publish_again)
         self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
         self._sync_frame = SyncFrame()
         self._sync_lock = asyncio.Lock()
@@ -155,6 +163,12 @@ class Mount(StateCache):
         """What stops rate motions and tracking at the limits (see :mod:`scopelink.mount.guard`)."""
         return self._guard
 
+    @property
+    def meridian(self) -> MeridianWatch:
+        """What stops tracking at the meridian limit, or flips
+        (:mod:`scopelink.mount.meridian_watch`)."""
+        return self._meridian
+
     def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
         """The dead-man for one client of a front end: inside ``async with``, rate motions are
         owned by the client, and those still running when the block ends are stopped."""
@@ -170,9 +184,10 @@ class Mount(StateCache):
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
             self._parking = False  # a device that reconnects says itself whether it is parked
-        super()._publish(self._guard.annotate(state))
+        super()._publish(self._meridian.annotate(self._guard.annotate(state)))
         self._guard.observe(self.state)
         self.park_keeper.observe(self, self.state)
+        self._meridian.observe(self.state)
 
     def _publish_again(self) -> None:
         """Publish the current state again (with the guard's latest notice)."""
@@ -235,9 +250,15 @@ class Mount(StateCache):
         alt, az = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
         self._limits.check_altaz(alt, az)
         await self._check_sun(alt, az)
+        ha, dec = hour_angle_of_j2000(self, ra_j2000_hours, dec_j2000_deg)
+        side = self._meridian_side(ha, dec, tracking=True)
         self._motion_commanded()
-        await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        if side is None:
+            await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        else:
+            await self._goto_equatorial_on(ra_j2000_hours, dec_j2000_deg, side)
         self._guard.goto_started()
+        self._meridian.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
     async def goto_object(self, name: str) -> CatalogObject:
@@ -256,10 +277,41 @@ class Mount(StateCache):
         self._require_unparked()
         self._limits.check_altaz(alt_deg, az_deg)
         await self._check_sun(alt_deg, az_deg)
+        side = self._meridian_side(*hour_angle_of_altaz(self, alt_deg, az_deg), tracking=False)
         self._motion_commanded()
-        await self._goto_horizontal(alt_deg, az_deg)
+        if side is None:
+            await self._goto_horizontal(alt_deg, az_deg)
+        else:
+            await self._goto_horizontal_on(alt_deg, az_deg, side)
         self._guard.goto_started()
+        self._meridian.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
+
+    def _meridian_side(self, ha_hours: float, dec_deg: float, *, tracking: bool) -> PierSide | None:
+        """The pier side a goto must ask for (None: the device's own), or ``LimitError``."""
+        if not applies(self.capabilities):
+            return None
+        predicted = self._predicted_pier_side(ha_hours, dec_deg)
+        return plan_goto_side(
+            self._limits,
+            ha_hours,
+            predicted,
+            can_choose=self.can_choose_pier_side,
+            tracking=tracking,
+            leave=self._meridian.leaving,
+        )
+
+    def destination_side_of_pier(self, ra_j2000_hours: float, dec_j2000_deg: float) -> PierSide:
+        """Where a goto to this J2000 position would put the tube now (``UNKNOWN`` where it
+        would be refused by the meridian limits, or on a mount without a pier side)."""
+        if not applies(self.capabilities):
+            return PierSide.UNKNOWN
+        ha, dec = hour_angle_of_j2000(self, ra_j2000_hours, dec_j2000_deg)
+        try:
+            side = self._meridian_side(ha, dec, tracking=True)
+        except LimitError:
+            return PierSide.UNKNOWN
+        return side if side is not None else self._predicted_pier_side(ha, dec)
 
     async def sync_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Tell the mount it is pointing at this J2000 position, unless that is farther than
@@ -376,9 +428,11 @@ class Mount(StateCache):
             )
         if mode is not TrackingMode.OFF:
             self._require_unparked()
+            self._meridian.check_tracking(self.state)
         await self._set_tracking(mode)
         if mode is not TrackingMode.OFF:
             self._guard.command_accepted()
+            self._meridian.command_accepted()
 
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import math
 
-from scopelink.astro import wrap_signed_degrees
+from scopelink.astro import altaz_to_hadec, wrap_signed_degrees
 from scopelink.mount.budget import FLAT_SLOPE, Reading, altitude_slope, has_ceiling
 from scopelink.mount.errors import LimitError
 from scopelink.mount.guarded import GuardedMount, GuardSettings
+from scopelink.mount.meridian import SIDE_NAMES, applies, limit_of, past_meridian_deg, setting_of
 from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import AlignmentMode, MountAxis, MountState
 
@@ -137,11 +138,52 @@ def reading_danger(
             f"{what} was stopped at altitude {reading.alt_deg:.2f}°: it was heading above "
             f"the configured limit of {limits.max_altitude_deg:.2f}°"
         )
+    if rates:  # tracking towards the meridian limit is the meridian watch's
+        reason = _meridian_danger(mount, settings, readings, ahead_s=ahead_s, state=state)
+        if reason is not None:
+            return reason
     # Tracking closes in at most 0.5°/h (a thin Moon): the margin is for rate motions only, so
     # a target a goto was allowed to (at the zone's edge) stays tracked.
     sun_margin = settings.margin_deg if rates else 0.0
     return _sun_danger(
         mount, reading, (alt_then, az_then), ahead_s=ahead_s, what=what, margin_deg=sun_margin
+    )
+
+
+_POLE_DEC_DEG = 80.0
+"""Nearer the pole than this the hour angle of a reading says too little to judge the meridian."""
+
+
+def _meridian_danger(
+    mount: GuardedMount,
+    settings: GuardSettings,
+    readings: tuple[Reading, Reading],
+    *,
+    ahead_s: float,
+    state: MountState,
+) -> str | None:
+    """Why a rate motion heading past the meridian limit of a German mount must stop now (the
+    hour angle of the last two readings, extrapolated ``ahead_s``), or None (docs/meridian.md)."""
+    side = state.pier_side
+    if not applies(mount.capabilities):
+        return None
+    latitude = mount.site.latitude_deg
+    pasts = []
+    for reading in readings:
+        ha, dec = altaz_to_hadec(reading.alt_deg, reading.az_deg, latitude)
+        past = past_meridian_deg(ha, side)
+        if past is None or abs(dec) > _POLE_DEC_DEG:
+            return None
+        pasts.append(past)
+    (previous, reading), (past_before, past_now) = readings, pasts
+    ahead = past_now + (past_now - past_before) / (reading.at_s - previous.at_s) * ahead_s
+    limit = limit_of(mount.limits, side)
+    if ahead < limit - settings.margin_deg or ahead <= past_now:
+        return None
+    return (
+        f"a manual motion was stopped {past_now:.1f}° past the meridian on the "
+        f"{SIDE_NAMES[side]} side of the pier: it was heading past the meridian limit "
+        f"({setting_of(side)} {limit:g}°)"
     )
 
 

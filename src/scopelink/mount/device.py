@@ -13,7 +13,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from datetime import datetime
 
-from scopelink.astro import Site
+from scopelink.astro import PierSide, Site, destination_side_of_pier
 from scopelink.mount.errors import NotSupportedError
 from scopelink.mount.types import (
     Capabilities,
@@ -84,3 +84,22 @@ class MountDevice(ABC):
 
     async def _set_time(self, utc: datetime) -> None:
         raise NotSupportedError("this mount keeps no time")
+
+    # --- the pier side of a goto (meridian limits: scopelink.mount.meridian) --------------------
+
+    can_choose_pier_side: bool = False
+    """Whether a goto can be told which side of the pier to land on (``_goto_*_on``); a hand
+    control that picks its side itself cannot (a SynScan hand control)."""
+
+    def _predicted_pier_side(self, ha_hours: float, dec_deg: float) -> PierSide:
+        """The side of the pier the device's own goto to (``ha_hours``, ``dec_deg``) lands on:
+        by default ASCOM's destination side (the meridian decides)."""
+        return destination_side_of_pier(ha_hours)
+
+    async def _goto_equatorial_on(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, side: PierSide
+    ) -> None:
+        raise NotSupportedError("this mount cannot be told the pier side of a goto")
+
+    async def _goto_horizontal_on(self, alt_deg: float, az_deg: float, side: PierSide) -> None:
+        raise NotSupportedError("this mount cannot be told the pier side of a goto")

@@ -44,7 +44,7 @@ from scopelink.mount.errors import DeviceError, MountError, NotConnectedError
 from scopelink.mount.guarded import GuardedMount, GuardSettings
 from scopelink.mount.types import MountAxis, MountState, TrackingMode
 
-__all__ = ["HorizonGuard"]
+__all__ = ["HorizonGuard", "stop_until_confirmed"]
 
 logger = logging.getLogger(__name__)
 
@@ -397,13 +397,13 @@ class HorizonGuard:
         def tell(notice: str) -> None:
             self.notice = notice
 
-        await _until_confirmed(
+        await stop_until_confirmed(
             self._mount, self.settings, stop, reason, tell=tell, show_notice=self._show_notice
         )
         self._show_notice()  # now, not at the next poll
 
 
-async def _until_confirmed(
+async def stop_until_confirmed(
     mount: GuardedMount,
     settings: GuardSettings,
     stop: Callable[[], Awaitable[None]],

@@ -8,7 +8,16 @@ from dataclasses import dataclass, field
 
 from scopelink.mount.errors import InvalidValueError, LimitError
 
-__all__ = ["DEFAULT_MAX_SYNC_DEG", "MAX_SUN_AVOIDANCE_DEG", "SUN_AVOIDANCE_DEG", "Limits"]
+__all__ = [
+    "DEFAULT_MAX_SYNC_DEG",
+    "DEFAULT_MERIDIAN_DEG",
+    "DEFAULT_MIN_TRACK_MINUTES",
+    "MAX_MERIDIAN_DEG",
+    "MAX_MIN_TRACK_MINUTES",
+    "MAX_SUN_AVOIDANCE_DEG",
+    "SUN_AVOIDANCE_DEG",
+    "Limits",
+]
 
 SUN_AVOIDANCE_DEG = 15.0
 """Default radius of the Sun avoidance zone (degrees)."""
@@ -17,6 +26,16 @@ MAX_SUN_AVOIDANCE_DEG = 45.0
 DEFAULT_MAX_SYNC_DEG = 10.0
 """How far a sync may correct the pointing (``limits.max_sync_deg``): the reach of a
 plate-solve correction; farther is a wrong object or a typo, and would move every limit."""
+DEFAULT_MERIDIAN_DEG = 5.0
+"""How far past the meridian (degrees of hour angle, 20 minutes of tracking) a German mount's
+counterweight may rise, on either side (``limits.meridian_east_deg``, ``meridian_west_deg``)."""
+MAX_MERIDIAN_DEG = 45.0
+"""Largest meridian limit accepted: three hours of tracking with the counterweight up."""
+DEFAULT_MIN_TRACK_MINUTES = 10.0
+"""A goto picks the pier side on which tracking lasts at least this long before the meridian
+limit (``limits.min_track_minutes``)."""
+MAX_MIN_TRACK_MINUTES = 180.0
+"""Longest ``min_track_minutes`` accepted (what the largest meridian limit allows)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,7 +48,9 @@ class Limits:
     the azimuth speed diverges. ``sun_avoidance_deg`` is the radius of the zone around the Sun
     that no goto, park, sync or motion may enter (0 turns it off; :mod:`scopelink.mount.sun`).
     ``max_sync_deg`` bounds how far syncs may move the frame the limits are judged in (see
-    :mod:`scopelink.mount.syncs`).
+    :mod:`scopelink.mount.syncs`). ``meridian_east_deg`` / ``meridian_west_deg``,
+    ``min_track_minutes`` and ``auto_flip`` are the meridian limits of German equatorial mounts
+    (:mod:`scopelink.mount.meridian`; other mounts ignore them).
     """
 
     horizon_deg: float = 0.0
@@ -37,6 +58,10 @@ class Limits:
     horizon_profile: tuple[tuple[float, float], ...] = field(default=())
     sun_avoidance_deg: float = SUN_AVOIDANCE_DEG
     max_sync_deg: float = DEFAULT_MAX_SYNC_DEG
+    meridian_east_deg: float = DEFAULT_MERIDIAN_DEG
+    meridian_west_deg: float = DEFAULT_MERIDIAN_DEG
+    min_track_minutes: float = DEFAULT_MIN_TRACK_MINUTES
+    auto_flip: bool = False
 
     def __post_init__(self) -> None:
         if not -10.0 <= self.horizon_deg <= 89.0:
@@ -61,6 +86,21 @@ class Limits:
             raise InvalidValueError(
                 f"the sync reach (max_sync_deg) {self.max_sync_deg}° must lie in (0°, 180°]"
             )
+        for name in ("meridian_east_deg", "meridian_west_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= MAX_MERIDIAN_DEG):
+                raise InvalidValueError(
+                    f"the meridian limit ({name}) {value}° must lie between 0° and "
+                    f"{MAX_MERIDIAN_DEG:g}° past the meridian"
+                )
+        minutes = self.min_track_minutes
+        if not (math.isfinite(minutes) and 0.0 <= minutes <= MAX_MIN_TRACK_MINUTES):
+            raise InvalidValueError(
+                f"the tracking time a goto keeps before the meridian limit (min_track_minutes) "
+                f"{minutes} must lie between 0 and {MAX_MIN_TRACK_MINUTES:g} minutes"
+            )
+        if not isinstance(self.auto_flip, bool):
+            raise InvalidValueError(f"auto_flip must be true or false, not {self.auto_flip!r}")
         azimuths = [az for az, _ in self.horizon_profile]
         if azimuths != sorted(set(azimuths)):
             raise InvalidValueError("horizon profile azimuths must be increasing and distinct")

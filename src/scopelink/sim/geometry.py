@@ -35,7 +35,8 @@ from scopelink.astro import (
     hadec_to_altaz,
     wrap_hour_angle,
 )
-from scopelink.mount import AlignmentMode, GuideDirection
+from scopelink.mount import AlignmentMode, GuideDirection, Limits
+from scopelink.mount.meridian import limit_of, past_meridian_deg
 
 __all__ = [
     "AltAzimuthGeometry",
@@ -85,6 +86,10 @@ class Geometry(ABC):
     def choose_side(self, alt_deg: float, az_deg: float, current: PierSide) -> PierSide:
         """Side of the pier a goto to (``alt_deg``, ``az_deg``) ends on."""
         return PierSide.UNKNOWN
+
+    def meridian_margin_deg(self, primary: float, secondary: float, limits: Limits) -> float:
+        """How far inside the meridian limits the tube is (only German mounts have them)."""
+        return math.inf
 
     def axis_margin_deg(self, primary: float, secondary: float) -> float:
         """How far (degrees) the counters are inside the mechanical limits (< 0: beyond)."""
@@ -183,6 +188,14 @@ class GermanEquatorialGeometry(_Equatorial):
 
     def axis_margin_deg(self, primary: float, secondary: float) -> float:
         return 90.0 + self.meridian_tolerance_deg - abs(primary)
+
+    def meridian_margin_deg(self, primary: float, secondary: float, limits: Limits) -> float:
+        """How far (degrees of hour angle) the tube is inside the configured meridian limit of
+        its pier side (``scopelink.mount.meridian``; the mechanical tolerance is apart)."""
+        side = self.pier_side(primary, secondary)
+        ha, _ = self.to_hadec(primary, secondary)
+        past = past_meridian_deg(ha, side)
+        return math.inf if past is None else limit_of(limits, side) - past
 
     def guide_axis(self, direction: GuideDirection, secondary: float) -> tuple[int, float]:
         s = self.hemisphere

@@ -101,7 +101,10 @@ class LimitSearch:
                 braking = rate * abs(rate) / (2.0 * axis.acceleration_deg_s2)
                 counters.append(axis.unwrapped_position_at(t) + braking)
         physical = [c - a.counter_offset_deg for c, a in zip(counters, self.axes, strict=True)]
-        margin = self.geometry.axis_margin_deg(physical[0], physical[1])
+        margin = min(
+            self.geometry.axis_margin_deg(physical[0], physical[1]),
+            self.geometry.meridian_margin_deg(physical[0], physical[1], self._limits),
+        )
         # The limits hold in the frame the user sees (the counters, after syncs) and, since the
         # simulator knows the truth, where the tube physically points.
         synced = any(axis.counter_offset_deg != 0.0 for axis in self.axes)

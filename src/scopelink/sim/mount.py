@@ -18,6 +18,7 @@ from scopelink.astro import (
     PierSide,
     Site,
     angular_separation_deg,
+    hadec_to_altaz,
     j2000_to_apparent,
     j2000_to_observed,
     observed_to_j2000,
@@ -224,7 +225,18 @@ class SimulatedMount(Mount):
 
     # --- Mount hooks ----------------------------------------------------------------------------
 
+    can_choose_pier_side = True  # the physics lands on either side
+
+    def _predicted_pier_side(self, ha_hours: float, dec_deg: float) -> PierSide:
+        alt, az = hadec_to_altaz(ha_hours, dec_deg, self._site.latitude_deg)
+        return self.geometry.choose_side(alt, az, self._side_at(self.elapsed()))
+
     async def _goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        await self._goto_equatorial_on(ra_j2000_hours, dec_j2000_deg, None)
+
+    async def _goto_equatorial_on(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, side: PierSide | None
+    ) -> None:
         t = self._begin(replan=True)
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
@@ -233,16 +245,23 @@ class SimulatedMount(Mount):
         alt, az = j2000_to_observed(
             ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
         )
-        side = self.geometry.choose_side(alt, az, self._side_at(t))
+        if side is None:
+            side = self.geometry.choose_side(alt, az, self._side_at(t))
         path = self._path(target, t, side)
         self._plan.land_both_on((path.primary, path.secondary), t)
         self._finish(limits_from=self._plan.goto_until)
 
     async def _goto_horizontal(self, alt_deg: float, az_deg: float) -> None:
+        await self._goto_horizontal_on(alt_deg, az_deg, None)
+
+    async def _goto_horizontal_on(
+        self, alt_deg: float, az_deg: float, side: PierSide | None
+    ) -> None:
         t = self._begin(replan=True)
         # ASCOM requires tracking off for alt/az slews: the mount lands and holds still.
         self._tracking = TrackingMode.OFF
-        side = self.geometry.choose_side(alt_deg, az_deg, self._side_at(t))
+        if side is None:
+            side = self.geometry.choose_side(alt_deg, az_deg, self._side_at(t))
         self._plan.slew_both_to(self.geometry.to_axes(alt_deg, az_deg, side), t)
         self._finish(limits_from=self._plan.goto_until)
 

@@ -5,9 +5,10 @@ from __future__ import annotations
 from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.astro.catalog import EphemerisRangeError
 from scopelink.mount import Limits, Mount, MountState, SlewTarget, TrackingMode
+from scopelink.mount.meridian import meridian_status
 from scopelink.mount.sun import SunZone
 
-__all__ = ["describe_mount", "horizon_outline", "state_json", "sun_json"]
+__all__ = ["describe_mount", "horizon_outline", "meridian_json", "state_json", "sun_json"]
 
 _OUTLINE_STEP_DEG = 2
 _SUN_WARNING_MIN = 60
@@ -68,6 +69,7 @@ def state_json(mount: Mount, state: MountState) -> dict[str, object]:
         if target_altaz is None
         else {"alt": round(target_altaz[0], 4), "az": round(target_altaz[1], 4)},
         "sun": sun_json(mount, state),
+        "meridian": meridian_json(mount, state),
         "health": {
             "polls": poller.polls,
             "failures": poller.failures,
@@ -108,6 +110,32 @@ def _sun_reaches_in_min(zone: SunZone, state: MountState | None) -> int | None:
     ):
         return None
     return zone.minutes_until_reached(state.alt_deg, state.az_deg, _SUN_WARNING_MIN)
+
+
+def meridian_json(mount: Mount, state: MountState) -> dict[str, object] | None:
+    """The tube against its meridian limit and the time left to it (None where the limits do
+    not apply: not a German mount, or the pier side or position unknown; docs/meridian.md)."""
+    status = meridian_status(mount, state)
+    if status is None:
+        return None
+    side = status.side.name.lower()
+    where = f"{side} side, {status.past_deg:+.1f}° of {status.limit_deg:g}° past the meridian"
+    left = status.minutes_left
+    if left is None:
+        text = f"not tracking ({where})"
+    elif left == float("inf"):
+        text = f"tracking away from the limit ({where})"
+    elif left <= 0.0:
+        text = f"at the limit ({where})"
+    else:
+        text = f"limit in {int(left) // 60} h {int(left) % 60:02d} min ({where})"
+    return {
+        "side": side,
+        "past_deg": round(status.past_deg, 3),
+        "limit_deg": status.limit_deg,
+        "minutes_left": None if left is None or left == float("inf") else round(left, 1),
+        "text": text,
+    }
 
 
 def horizon_outline(limits: Limits) -> list[list[float]]:

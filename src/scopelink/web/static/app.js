@@ -329,6 +329,7 @@ function renderState() {
   // A position older than stale_after_s (or from a lost link) is shown greyed, never as current.
   for (const id of ["st-j2000", "st-jnow", "st-altaz", "st-pier"]) $(id).classList.toggle("stale", s.stale);
   setText("st-pier", s.pier_side);
+  setText("st-meridian", s.meridian ? s.meridian.text : "—");  // German mounts only
   // While the link is down nobody knows whether the mount moves: no motion state is claimed.
   setText("st-slewing", s.connected ? yesNo(s.slewing) : "unknown (link down)");
   setText("st-tracking", s.connected ? s.tracking : "unknown (link down)");

@@ -6,7 +6,6 @@ whose reading is not current (``device._FRESH_READS``).
 
 from __future__ import annotations
 
-from scopelink.astro import destination_side_of_pier, hour_angle_hours, lst_hours
 from scopelink.mount import AlignmentMode
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
@@ -49,6 +48,7 @@ class PositionMembers(MemberGroup):
             raise AlpacaError(
                 ErrorNumber.NOT_IMPLEMENTED, "only a German equatorial mount has a pier side"
             )
-        ra_apparent, _ = self.session.to_apparent(ra % 24.0, dec)
-        lst = lst_hours(mount.now(), mount.site.longitude_deg)
-        return int(destination_side_of_pier(hour_angle_hours(lst, ra_apparent)))
+        # The side the goto would take now, the meridian limits included (docs/meridian.md);
+        # pierUnknown (-1) where the limits would refuse the goto.
+        ra_j2000, dec_j2000 = self.session.to_j2000(ra % 24.0, dec)
+        return int(mount.destination_side_of_pier(ra_j2000, dec_j2000))
