@@ -98,7 +98,7 @@ class Link(ABC):
     async def write(self, data: bytes | bytearray | memoryview) -> None:
         """Send ``data``; return once it is handed to the OS (or the wire pacing allows)."""
         self._raise_if_closed()
-        payload = bytes(data)
+        payload = data if type(data) is bytes else bytes(data)
         if not payload:
             return
         self.bytes_written += len(payload)
