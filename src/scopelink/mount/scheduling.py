@@ -57,8 +57,13 @@ class WireScheduler:
         self._busy = True
         return True
 
+    async def take(self, priority: Priority) -> None:
+        """Wait for the wire (then :meth:`release` it); a cancelled wait leaves the queue."""
+        if not self.try_take():
+            await self._acquire(priority)
+
     def release(self) -> None:
-        """Pass the wire on (after :meth:`try_take`)."""
+        """Pass the wire on (after :meth:`try_take` or :meth:`take`)."""
         self._release()
 
     async def _acquire(self, priority: Priority) -> None:
@@ -94,8 +99,7 @@ class _Turn:
         self._priority = priority
 
     async def __aenter__(self) -> None:
-        if not self._scheduler.try_take():
-            await self._scheduler._acquire(self._priority)
+        await self._scheduler.take(self._priority)
 
     async def __aexit__(
         self,

@@ -109,8 +109,9 @@ class SynScanWire:
         self._needs_resync = False
         self._next_echo = 0
         self._holder: asyncio.Task[object] | None = None
-        self._io = asyncio.Lock()
-        """Held while a task uses the link (one recovery and exchange, or a stop's write)."""
+        self._io = WireScheduler()
+        """Held while a task uses the link (one recovery and exchange, or a stop's write): a
+        lock that an uncontended exchange takes without an ``await``."""
         self._deadline = ReplyDeadline()
         """Bounds the read in progress, which a stop may cut short."""
         self._stops_waiting = 0
@@ -189,10 +190,13 @@ class SynScanWire:
     ) -> AnyReply:
         failure: _ExchangeError | None = None
         for _attempt in range(2):
+            io = self._io
+            if not io.try_take():
+                await io.take(Priority.COMMAND)
             try:
-                async with self._io:
-                    await self._recover_if_needed(command, failure)
-                    return await self._exchange(command, meanwhile)
+                if self._needs_resync or not self.is_open:
+                    await self._recover(command, failure)
+                return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
                 self.statistics.failures += 1
                 self._needs_resync |= error.sent
@@ -202,6 +206,8 @@ class SynScanWire:
                 if failure is not None:
                     raise DeviceError(f"{failure}; after recovering, again: {error}") from None
                 failure = error
+            finally:
+                io.release()
         raise AssertionError("unreachable")  # pragma: no cover
 
     async def stop_at_once(self, commands: Sequence[AnyCommand]) -> bool:
@@ -227,7 +233,7 @@ class SynScanWire:
                     interrupted = True
                 try:
                     async with asyncio.timeout(STOP_GRACE_S / 4.0):
-                        await self._io.acquire()
+                        await self._io.take(Priority.COMMAND)
                     break
                 except TimeoutError:
                     continue  # still busy: look again whether it is reading by now
@@ -261,9 +267,7 @@ class SynScanWire:
         finally:
             self._stops_waiting -= 1
 
-    async def _recover_if_needed(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
-        if self.is_open and not self._needs_resync:
-            return
+    async def _recover(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
         why = str(failure) if failure else "the previous exchange failed"
         try:
             if not self.is_open:
