@@ -23,6 +23,7 @@ import logging
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 from scopelink.drivers.common import LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkError
@@ -30,6 +31,7 @@ from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.protocol.skytracker import (
     NEED_DATA,
+    PAUSED,
     BadReply,
     BusAnswer,
     BusState,
@@ -43,7 +45,6 @@ from scopelink.protocol.skytracker import (
     TrackerClient,
     TrackerCommand,
     VersionReply,
-    Wait,
 )
 
 __all__ = [
@@ -368,7 +369,7 @@ class SkyTrackerLine:
         if isinstance(event, BadReply):
             await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
-        if isinstance(event, VersionReply) and self._sync_marker is None:
+        if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
         return event
 
@@ -377,11 +378,13 @@ class SkyTrackerLine:
             event = self._client.next_event()
             if event is NEED_DATA:
                 self._client.receive_data(await self.link.read())
-            elif isinstance(event, StrayByte):
+            # An exact type, not isinstance: the events derive from an ABC, whose isinstance
+            # check runs Python code on every reply (StrayByte has no subclasses).
+            elif type(event) is StrayByte:
                 self._note_stray(event)
             else:
-                assert not isinstance(event, Wait)  # a client never pauses
-                return event
+                assert event is not PAUSED  # a client never pauses
+                return cast(Reply | BadReply, event)
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:

@@ -29,6 +29,7 @@ import logging
 import time
 from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
+from typing import cast
 
 from scopelink.drivers.common import LinkFactory, LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkClosedError, LinkError
@@ -383,20 +384,22 @@ class SynScanWire:
         codec = self._codec
         while True:
             event = codec.next_event()
+            # Exact types, not isinstance: the events derive from an ABC, whose isinstance
+            # check runs Python code on every reply (the error events have no subclasses).
             if event is NEED_DATA:
                 data = await link.read()
                 self.statistics.bytes_received += len(data)
                 codec.receive_data(data)
-            elif isinstance(event, UnexpectedData):
+            elif type(event) is UnexpectedData:
                 self._discard(event.data)
                 if patient and not self._stops_waiting:
                     deadline = self._deadline
                     give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
                     deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
-            elif isinstance(event, MalformedReply):
+            elif type(event) is MalformedReply:
                 raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
             else:
-                return event
+                return cast(AnyReply, event)
 
     def _interruptible(self, seconds: float | None) -> ReplyDeadline:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
