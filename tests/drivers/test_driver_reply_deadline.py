@@ -15,6 +15,21 @@ import pytest
 from scopelink.drivers.common import ReplyDeadline
 
 
+async def reading_forever(deadline: ReplyDeadline, seconds: float | None) -> asyncio.Task[None]:
+    """A task inside ``deadline.start(seconds)`` waiting for a reply that never comes, once it
+    is waiting."""
+    reading = asyncio.Event()
+
+    async def read() -> None:
+        with deadline.start(seconds):
+            reading.set()
+            await asyncio.get_running_loop().create_future()
+
+    task = asyncio.create_task(read())
+    await reading.wait()
+    return task
+
+
 async def test_a_reply_later_than_the_timeout_leaves_with_timeout_error() -> None:
     deadline = ReplyDeadline()
     never = asyncio.get_running_loop().create_future()
@@ -76,17 +91,8 @@ async def test_a_deadline_moved_on_by_later_reads_times_out_at_the_latest_one() 
 
 
 async def test_a_stop_interrupts_the_read_in_progress() -> None:
-    loop = asyncio.get_running_loop()
     deadline = ReplyDeadline()
-    reading = asyncio.Event()
-
-    async def read() -> None:
-        with deadline.start(None):
-            reading.set()
-            await loop.create_future()
-
-    task = asyncio.create_task(read())
-    await reading.wait()
+    task = await reading_forever(deadline, None)
     assert deadline.active
     deadline.interrupt()
     with pytest.raises(TimeoutError):
@@ -107,17 +113,8 @@ async def test_an_interrupt_of_a_read_that_completes_at_once_cancels_nothing_lat
 
 
 async def test_a_cancellation_from_elsewhere_stays_a_cancellation() -> None:
-    loop = asyncio.get_running_loop()
     deadline = ReplyDeadline()
-    reading = asyncio.Event()
-
-    async def read() -> None:
-        with deadline.start(5.0):
-            reading.set()
-            await loop.create_future()
-
-    task = asyncio.create_task(read())
-    await reading.wait()
+    task = await reading_forever(deadline, 5.0)
     task.cancel()
     with pytest.raises(asyncio.CancelledError):
         await task
@@ -128,15 +125,7 @@ async def test_a_cancellation_racing_the_timeout_stays_a_cancellation() -> None:
     """As with ``asyncio.timeout``: the deadline passed, and someone else cancelled too."""
     loop = asyncio.get_running_loop()
     deadline = ReplyDeadline()
-    reading = asyncio.Event()
-
-    async def read() -> None:
-        with deadline.start(0.02):
-            reading.set()
-            await loop.create_future()
-
-    task = asyncio.create_task(read())
-    await reading.wait()
+    task = await reading_forever(deadline, 0.02)
     deadline.interrupt()  # our cancellation, delivered from the loop next
     loop.call_soon(task.cancel)  # and one from elsewhere right after it
     with pytest.raises(asyncio.CancelledError):
