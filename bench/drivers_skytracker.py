@@ -1,7 +1,8 @@
 """Sky Tracker driver benchmarks: position polls per second against the 9600-baud wire limit, and
 CPU per command over an in-memory link, each beside a bare codec client measured in the same run.
 
-Goal (issue #14 part 2), one verdict per CPU row: the driver within 1.2x its bare client's CPU.
+Goal (issue #14 part 2), one verdict per CPU row it names: the driver within 1.2x its bare client's
+CPU; the refresh row is explained by its exchanges alone and by the astrometry of its reading.
 
 Run ``.venv/bin/python -m bench.drivers_skytracker`` (about half a minute) or with ``--quick`` (a
 few seconds, what the smoke test runs). See ``docs/benchmarks.md`` and
