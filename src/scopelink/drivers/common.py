@@ -180,7 +180,10 @@ class ReplyDeadline:
         self._loop.call_soon(self._expire, self._generation)
 
     def close(self) -> None:
-        """Drop the timer (the wire is closing); a later read arms a new one."""
+        """Drop the timer (the wire is closing) unless a read still needs it; a later read arms
+        a new one."""
+        if self._task is not None:
+            return  # the read in progress keeps its deadline (its link's close ends it anyway)
         if self._handle is not None:
             self._handle.cancel()
         self._handle, self._handle_at = None, float("inf")
