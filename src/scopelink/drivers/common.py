@@ -6,7 +6,8 @@ reconnect, and turn a J2000 reading into what the Mount API reports.
   and reopens, its link;
 - :class:`LinkStatistics`: the counters every driver keeps about its line (health displays,
   benchmarks, tests);
-- :class:`PendingRead`: the reply being waited for, which a stop may cut short;
+- :class:`ReplyDeadline`: bounds the reply being waited for, which a stop may cut short (one
+  timer for a wire's many exchanges: the per-command CPU budget of issue #14);
 - :class:`Reconnection`: one reconnection at a time, for a poll and a command that both find the
   link lost;
 - :class:`Pointing`: one J2000 reading and, computed once on demand, alt/az and RA/Dec of date.
@@ -31,9 +32,9 @@ from scopelink.links import Link, open_link
 __all__ = [
     "LinkFactory",
     "LinkStatistics",
-    "PendingRead",
     "Pointing",
     "Reconnection",
+    "ReplyDeadline",
     "link_factory",
 ]
 
@@ -90,17 +91,146 @@ class LinkStatistics:
     bus_refusals: int = 0
 
 
-@dataclass(slots=True)
-class PendingRead:
-    """A reply being waited for: its deadline, and whether a stop cut it short (both drivers'
-    ``stop_at_once`` interrupt the read in progress rather than wait for it)."""
+class ReplyDeadline:
+    """Bounds one wire's reads, one at a time: ``with deadline.start(seconds): await ...`` raises
+    ``TimeoutError`` out of the block once ``seconds`` have passed, or once :meth:`interrupt`
+    (a stop) cut the read short; :attr:`interrupted` tells which.
 
-    deadline: asyncio.Timeout
-    interrupted: bool = False
+    It does what ``asyncio.timeout`` does (cancel the waiting task, turn that cancellation into
+    ``TimeoutError``, leave a cancellation from elsewhere alone) at a fraction of the CPU: one
+    reusable object per wire and one timer handle for many exchanges. The handle is armed for
+    the earliest deadline not yet covered; when it fires and the read in progress is not yet
+    due (a later exchange moved the deadline on), it re-arms for that read's deadline. A wire
+    busy with exchanges that each take less than the timeout therefore handles one timer event
+    per timeout period, not one per exchange (issue #14: CPU per command).
+    """
+
+    __slots__ = (
+        "_cancelling",
+        "_expired",
+        "_generation",
+        "_handle",
+        "_handle_at",
+        "_loop",
+        "_task",
+        "_when",
+        "interrupted",
+        "since",
+    )
+
+    def __init__(self) -> None:
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._task: asyncio.Task[object] | None = None
+        """The task reading now (None between reads)."""
+        self._cancelling = 0
+        self._when: float | None = None
+        """Loop time at which the read in progress times out (None: only a stop ends it)."""
+        self._handle: asyncio.TimerHandle | None = None
+        self._handle_at = float("inf")
+        self._expired = False
+        self._generation = 0
+        self.interrupted = False
+        """The last read was cut short by :meth:`interrupt` (not by its timeout)."""
+        self.since = 0.0
+        """Loop time at which the read in progress (or the last one) started."""
+
+    @property
+    def active(self) -> bool:
+        """Whether a read is in progress (inside the ``with`` block)."""
+        return self._task is not None
+
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        """The running event loop (looked up once: each lookup costs a system call)."""
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            loop = self._loop = asyncio.get_running_loop()
+            self._handle, self._handle_at = None, float("inf")
+        return loop
+
+    def start(self, seconds: float | None) -> ReplyDeadline:
+        """Begin a read that times out after ``seconds`` (None: never); use as ``with``."""
+        assert self._task is None, "one read at a time"
+        loop = self.loop
+        task = asyncio.current_task(loop)
+        assert task is not None
+        now = loop.time()
+        self._task, self._cancelling = task, task.cancelling()
+        self._expired = self.interrupted = False
+        self.since = now
+        self._generation += 1
+        self._when = None if seconds is None else now + seconds
+        if self._when is not None and self._handle_at > self._when:
+            self._arm(self._when)
+        return self
+
+    def reschedule(self, when: float) -> None:
+        """Move the read's deadline to loop time ``when``."""
+        self._when = when
+        if self._task is not None and self._handle_at > when:
+            self._arm(when)
 
     def interrupt(self) -> None:
+        """Cut the read in progress short (a stop goes first); it leaves with TimeoutError."""
+        if self._task is None or self._expired or self._loop is None:
+            return
         self.interrupted = True
-        self.deadline.reschedule(asyncio.get_running_loop().time())
+        # From the loop, as asyncio.timeout's reschedule does: a read that completes without
+        # waiting (its bytes were there) is left alone rather than cancelled after it ended.
+        self._loop.call_soon(self._expire, self._generation)
+
+    def close(self) -> None:
+        """Drop the timer (the wire is closing) unless a read still needs it; a later read arms
+        a new one."""
+        if self._task is not None:
+            return  # the read in progress keeps its deadline (its link's close ends it anyway)
+        if self._handle is not None:
+            self._handle.cancel()
+        self._handle, self._handle_at = None, float("inf")
+
+    def __enter__(self) -> ReplyDeadline:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: object,
+    ) -> None:
+        task, self._task = self._task, None
+        # Our cancellation becomes TimeoutError, unless another came too: that one propagates.
+        if (
+            self._expired
+            and task is not None
+            and task.uncancel() <= self._cancelling
+            and exc_type is asyncio.CancelledError
+        ):
+            raise TimeoutError from exc
+
+    def _arm(self, when: float) -> None:
+        loop = self._loop
+        assert loop is not None
+        if self._handle is not None:
+            self._handle.cancel()
+        self._handle = loop.call_at(when, self._on_timer)
+        self._handle_at = when
+
+    def _on_timer(self) -> None:
+        self._handle, self._handle_at = None, float("inf")
+        when = self._when
+        if self._task is None or when is None or self._loop is None:
+            return  # no read in progress: the next one arms a timer of its own
+        if self._loop.time() >= when:
+            self._expire(self._generation)
+        else:
+            self._arm(when)
+
+    def _expire(self, generation: int) -> None:
+        task = self._task
+        if task is None or self._expired or generation != self._generation:
+            return  # that read ended meanwhile
+        self._expired = True
+        task.cancel()
 
 
 class Reconnection:

@@ -8,11 +8,12 @@ driver can time out a reply and resynchronise with :meth:`Link.drain_input`.
 from __future__ import annotations
 
 import asyncio
+import logging
 from abc import ABC, abstractmethod
 from types import TracebackType
 from typing import Self
 
-from scopelink.links.trace import trace_transfer
+from scopelink.links.trace import trace_logger, trace_transfer
 
 DEFAULT_READ_SIZE = 4096
 
@@ -74,14 +75,16 @@ class Link(ABC):
         """
         if max_bytes < 1:
             raise ValueError(f"max_bytes must be at least 1, not {max_bytes}")
-        self._raise_if_closed()
+        if self._closed:
+            raise LinkClosedError(f"{self._name} is closed")
         try:
             data = await self._read_some(max_bytes)
         except LinkClosedError:
             await self._release_after_end()
             raise
         self.bytes_read += len(data)
-        trace_transfer("<--", self._name, data)
+        if trace_logger.isEnabledFor(logging.DEBUG):  # inline: every reply passes here
+            trace_transfer("<--", self._name, data)
         return data
 
     async def read_exactly(self, count: int) -> bytes:
@@ -97,12 +100,14 @@ class Link(ABC):
 
     async def write(self, data: bytes | bytearray | memoryview) -> None:
         """Send ``data``; return once it is handed to the OS (or the wire pacing allows)."""
-        self._raise_if_closed()
-        payload = bytes(data)
+        if self._closed:
+            raise LinkClosedError(f"{self._name} is closed")
+        payload = data if type(data) is bytes else bytes(data)
         if not payload:
             return
         self.bytes_written += len(payload)
-        trace_transfer("-->", self._name, payload)
+        if trace_logger.isEnabledFor(logging.DEBUG):  # inline: every command passes here
+            trace_transfer("-->", self._name, payload)
         try:
             await self._write_all(payload)
         except LinkClosedError:
@@ -150,10 +155,6 @@ class Link(ABC):
         """The stream ended under us: nothing more can pass, so free the resources now."""
         self._closed = True
         await self._close_transport()
-
-    def _raise_if_closed(self) -> None:
-        if self._closed:
-            raise LinkClosedError(f"{self._name} is closed")
 
     @abstractmethod
     async def _read_some(self, max_bytes: int) -> bytes:

@@ -50,11 +50,15 @@ class TcpLink(Link):
         return data
 
     async def _write_all(self, data: bytes) -> None:
-        if self._writer.is_closing():
+        transport = self._writer.transport
+        if transport.is_closing():
             raise LinkClosedError(f"{self.name}: connection closed")
         try:
-            self._writer.write(data)
-            await self._writer.drain()
+            transport.write(data)
+            if transport.get_write_buffer_size():
+                # Not all sent at once: wait while the buffer is above its high-water mark. A
+                # write that went straight to the socket (every command) skips the await.
+                await self._writer.drain()
         except OSError as exc:
             raise LinkClosedError(f"{self.name}: connection lost ({exc})") from exc
 

@@ -12,8 +12,7 @@ import asyncio
 import enum
 import heapq
 import itertools
-from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
+from types import TracebackType
 
 __all__ = ["Priority", "WireScheduler"]
 
@@ -46,14 +45,26 @@ class WireScheduler:
             if not future.done() and (priority is None or level == priority)
         )
 
-    @asynccontextmanager
-    async def turn(self, priority: Priority) -> AsyncIterator[None]:
+    def turn(self, priority: Priority) -> _Turn:
         """Hold the wire for the body of the ``async with``; cancelled waiters leave the queue."""
-        await self._acquire(priority)
-        try:
-            yield
-        finally:
-            self._release()
+        return _Turn(self, priority)
+
+    def try_take(self) -> bool:
+        """Take the wire now if it is free and nobody waits (then :meth:`release` it); False
+        otherwise. The queue-less turn of an uncontended wire, without an ``await``."""
+        if self._busy or self._waiting:
+            return False
+        self._busy = True
+        return True
+
+    async def take(self, priority: Priority) -> None:
+        """Wait for the wire (then :meth:`release` it); a cancelled wait leaves the queue."""
+        if not self.try_take():
+            await self._acquire(priority)
+
+    def release(self) -> None:
+        """Pass the wire on (after :meth:`try_take` or :meth:`take`)."""
+        self._release()
 
     async def _acquire(self, priority: Priority) -> None:
         if not self._busy and not self._waiting:
@@ -76,3 +87,24 @@ class WireScheduler:
                 future.set_result(None)  # the wire passes directly to this waiter
                 return
         self._busy = False
+
+
+class _Turn:
+    """``async with scheduler.turn(priority)`` (a class, not a generator: it runs per command)."""
+
+    __slots__ = ("_priority", "_scheduler")
+
+    def __init__(self, scheduler: WireScheduler, priority: Priority) -> None:
+        self._scheduler = scheduler
+        self._priority = priority
+
+    async def __aenter__(self) -> None:
+        await self._scheduler.take(self._priority)
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self._scheduler._release()

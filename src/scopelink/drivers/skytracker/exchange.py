@@ -23,13 +23,15 @@ import logging
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
-from scopelink.drivers.common import LinkStatistics, PendingRead
+from scopelink.drivers.common import LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkError
 from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority, WireScheduler
 from scopelink.protocol.skytracker import (
     NEED_DATA,
+    PAUSED,
     BadReply,
     BusAnswer,
     BusState,
@@ -43,7 +45,6 @@ from scopelink.protocol.skytracker import (
     TrackerClient,
     TrackerCommand,
     VersionReply,
-    Wait,
 )
 
 __all__ = [
@@ -150,8 +151,8 @@ class SkyTrackerLine:
         how long it has been silent, which tells a lost box from a noisy line."""
         self._writing = asyncio.Lock()
         """Held while bytes are written: a stop never lands inside another command's bytes."""
-        self._reading: PendingRead | None = None
-        """The reply being waited for, which a stop may abandon."""
+        self._deadline = ReplyDeadline()
+        """Bounds the reply being waited for, which a stop may abandon."""
         self._stops = 0
         """Stops written at once so far; a turn that began before the last one ends."""
         self._turn_stops = 0
@@ -162,7 +163,14 @@ class SkyTrackerLine:
         self, command: TrackerCommand, priority: Priority = Priority.COMMAND
     ) -> Reply | None:
         """One Sky Tracker command and its reply (None for a command without one)."""
-        async with self.scheduler.turn(priority):
+        scheduler = self.scheduler
+        if scheduler.try_take():  # a free wire: no queue to join (the common case)
+            try:
+                self._turn_stops = self._stops
+                return await self._exchange(command, self.timeout_s)
+            finally:
+                scheduler.release()
+        async with scheduler.turn(priority):
             self._turn_stops = self._stops
             return await self._exchange(command, self.timeout_s)
 
@@ -244,9 +252,7 @@ class SkyTrackerLine:
         the turn and of any resynchronisation; a reply being waited for is abandoned. The stop
         is unconfirmed: the caller reads the status back through ordinary exchanges."""
         self._stops += 1
-        reading = self._reading
-        if reading is not None:
-            reading.interrupt()
+        self._deadline.interrupt()
         data = ReleaseBus().encode() + b"".join(command.encode() for command in commands)
         try:
             async with self._writing:
@@ -327,22 +333,19 @@ class SkyTrackerLine:
             )
         self._flush_strays()
         data = self._client.send(command)
-        reading: PendingRead | None = None
+        deadline = self._deadline
+        deadline.interrupted = False
         try:
             async with self._writing:
                 await self.link.write(data)
             self.statistics.commands_sent += 1
             if command.reply is None:
                 return None
-            async with asyncio.timeout(reply_within_s) as deadline:
-                reading = self._reading = PendingRead(deadline)
-                try:
-                    event = await self._next_reply()
-                finally:
-                    self._reading = None
+            with deadline.start(reply_within_s):
+                event = await self._next_reply()
         except TimeoutError:
             self._client.abandon_reply()
-            if reading is not None and reading.interrupted:
+            if deadline.interrupted:
                 self._interrupted = True  # resynchronised before the next exchange
                 raise ReplyTimeoutError(
                     f"the reply to {command.describe()!r} was abandoned: a stop went first"
@@ -366,7 +369,7 @@ class SkyTrackerLine:
         if isinstance(event, BadReply):
             await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
-        if isinstance(event, VersionReply) and self._sync_marker is None:
+        if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
         return event
 
@@ -375,11 +378,13 @@ class SkyTrackerLine:
             event = self._client.next_event()
             if event is NEED_DATA:
                 self._client.receive_data(await self.link.read())
-            elif isinstance(event, StrayByte):
+            # An exact type, not isinstance: the events derive from an ABC, whose isinstance
+            # check runs Python code on every reply (StrayByte has no subclasses).
+            elif type(event) is StrayByte:
                 self._note_stray(event)
             else:
-                assert not isinstance(event, Wait)  # a client never pauses
-                return event
+                assert event is not PAUSED  # a client never pauses
+                return cast(Reply | BadReply, event)
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:

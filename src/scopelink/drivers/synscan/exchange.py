@@ -29,8 +29,9 @@ import logging
 import time
 from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
+from typing import cast
 
-from scopelink.drivers.common import LinkFactory, LinkStatistics, PendingRead
+from scopelink.drivers.common import LinkFactory, LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkClosedError, LinkError
 from scopelink.mount import DeviceError, Priority, WireScheduler
 from scopelink.protocol.synscan import (
@@ -109,11 +110,11 @@ class SynScanWire:
         self._needs_resync = False
         self._next_echo = 0
         self._holder: asyncio.Task[object] | None = None
-        self._io = asyncio.Lock()
-        """Held while a task uses the link (one recovery and exchange, or a stop's write)."""
-        self._reading: PendingRead | None = None
-        """The scope of the read in progress, which a stop may cut short."""
-        self._reading_since = 0.0
+        self._io = WireScheduler()
+        """Held while a task uses the link (one recovery and exchange, or a stop's write): a
+        lock that an uncontended exchange takes without an ``await``."""
+        self._deadline = ReplyDeadline()
+        """Bounds the read in progress, which a stop may cut short."""
         self._stops_waiting = 0
         self.last_write_at = 0.0
         """Event-loop time at which the last command started to leave (times guide pulses)."""
@@ -144,6 +145,7 @@ class SynScanWire:
     async def close(self) -> None:
         """Close the link (idempotent)."""
         link, self._link = self._link, None
+        self._deadline.close()
         if link is not None:
             await link.close()
 
@@ -159,9 +161,15 @@ class SynScanWire:
         ``meanwhile`` runs right after the command has been written (again if it is re-sent): CPU
         work that then overlaps the device's answer instead of leaving the wire idle.
         """
+        scheduler = self.scheduler
+        if scheduler.try_take():  # a free wire: no queue to join (the common case)
+            try:
+                return await self._ask_holding_the_wire(command, meanwhile)
+            finally:
+                scheduler.release()
         if self._holder is not None and self._holder is asyncio.current_task():
             return await self._ask_holding_the_wire(command, meanwhile)
-        async with self.scheduler.turn(priority):
+        async with scheduler.turn(priority):
             return await self._ask_holding_the_wire(command, meanwhile)
 
     @asynccontextmanager
@@ -183,10 +191,13 @@ class SynScanWire:
     ) -> AnyReply:
         failure: _ExchangeError | None = None
         for _attempt in range(2):
+            io = self._io
+            if not io.try_take():
+                await io.take(Priority.COMMAND)
             try:
-                async with self._io:
-                    await self._recover_if_needed(command, failure)
-                    return await self._exchange(command, meanwhile)
+                if self._needs_resync or not self.is_open:
+                    await self._recover(command, failure)
+                return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
                 self.statistics.failures += 1
                 self._needs_resync |= error.sent
@@ -196,6 +207,8 @@ class SynScanWire:
                 if failure is not None:
                     raise DeviceError(f"{failure}; after recovering, again: {error}") from None
                 failure = error
+            finally:
+                io.release()
         raise AssertionError("unreachable")  # pragma: no cover
 
     async def stop_at_once(self, commands: Sequence[AnyCommand]) -> bool:
@@ -213,15 +226,15 @@ class SynScanWire:
         try:
             interrupted = False
             while True:
-                reading = self._reading
-                if reading is not None and (
-                    self._needs_resync or loop.time() - self._reading_since >= STOP_GRACE_S
+                reading = self._deadline
+                if reading.active and (
+                    self._needs_resync or loop.time() - reading.since >= STOP_GRACE_S
                 ):
                     reading.interrupt()  # the reader fails with "a stop went first"
                     interrupted = True
                 try:
                     async with asyncio.timeout(STOP_GRACE_S / 4.0):
-                        await self._io.acquire()
+                        await self._io.take(Priority.COMMAND)
                     break
                 except TimeoutError:
                     continue  # still busy: look again whether it is reading by now
@@ -255,9 +268,7 @@ class SynScanWire:
         finally:
             self._stops_waiting -= 1
 
-    async def _recover_if_needed(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
-        if self.is_open and not self._needs_resync:
-            return
+    async def _recover(self, command: AnyCommand, failure: _ExchangeError | None) -> None:
         why = str(failure) if failure else "the previous exchange failed"
         try:
             if not self.is_open:
@@ -287,13 +298,13 @@ class SynScanWire:
         self.statistics.resyncs += 1
         dropped = self._codec.reset()
         try:
-            async with self._interruptible() as scope:
+            with self._interruptible(None):
                 dropped += await link.drain_input(_DRAIN_QUIET_S, max_seconds=self.timeout_s)
         except LinkClosedError as error:
             await self.close()
             raise DeviceError(f"{why}, and {self.name} closed: {error}") from None
         except TimeoutError:
-            if not scope.interrupted:  # pragma: no cover - the scope has no deadline of its own
+            if not self._deadline.interrupted:  # pragma: no cover - no deadline of its own
                 raise
             self.statistics.interrupted += 1
             raise DeviceError(f"{why}; resynchronising was interrupted by a stop") from None
@@ -341,17 +352,17 @@ class SynScanWire:
         self.statistics.bytes_sent += len(data)
         completed = False
         try:
-            self.last_write_at = asyncio.get_running_loop().time()
+            self.last_write_at = self._deadline.loop.time()
             await link.write(data)
             if meanwhile is not None:
                 meanwhile()
-            async with self._interruptible(self.timeout_s) as scope:
-                reply = await self._read_reply(link, scope.deadline if patient else None)
+            with self._interruptible(self.timeout_s):
+                reply = await self._read_reply(link, patient)
             completed = True
             self.last_answer_s = time.monotonic()
             return reply
         except TimeoutError:
-            if scope.interrupted:
+            if self._deadline.interrupted:
                 self.statistics.interrupted += 1
                 raise _ExchangeError(
                     f"the reply to {command.describe()!r} was abandoned: a stop went first",
@@ -369,38 +380,35 @@ class SynScanWire:
                 # Cancelled or failed half way: the stream is out of step until resynchronised.
                 self._needs_resync = True
 
-    async def _read_reply(self, link: Link, deadline: asyncio.Timeout | None) -> AnyReply:
-        loop = asyncio.get_running_loop()
-        give_up_at = loop.time() + _ECHO_PATIENCE * self.timeout_s
+    async def _read_reply(self, link: Link, patient: bool) -> AnyReply:
+        codec = self._codec
         while True:
-            event = self._codec.next_event()
+            event = codec.next_event()
+            # Exact types, not isinstance: the events derive from an ABC, whose isinstance
+            # check runs Python code on every reply (the error events have no subclasses).
             if event is NEED_DATA:
                 data = await link.read()
                 self.statistics.bytes_received += len(data)
-                self._codec.receive_data(data)
-            elif isinstance(event, UnexpectedData):
+                codec.receive_data(data)
+            elif type(event) is UnexpectedData:
                 self._discard(event.data)
-                if deadline is not None and not self._stops_waiting:
-                    deadline.reschedule(min(loop.time() + self.timeout_s, give_up_at))
-            elif isinstance(event, MalformedReply):
+                if patient and not self._stops_waiting:
+                    deadline = self._deadline
+                    give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
+                    deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
+            elif type(event) is MalformedReply:
                 raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
             else:
-                return event
+                return cast(AnyReply, event)
 
-    @asynccontextmanager
-    async def _interruptible(self, seconds: float | None = None) -> AsyncIterator[PendingRead]:
+    def _interruptible(self, seconds: float | None) -> ReplyDeadline:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
-        either way ``TimeoutError`` leaves the block, and ``scope.interrupted`` tells which."""
-        loop = asyncio.get_running_loop()
-        async with asyncio.timeout(seconds) as deadline:
-            scope = PendingRead(deadline)
-            self._reading, self._reading_since = scope, loop.time()
-            try:
-                if self._stops_waiting and self._needs_resync:
-                    scope.interrupt()
-                yield scope
-            finally:
-                self._reading = None
+        either way ``TimeoutError`` leaves the ``with`` block, and ``self._deadline.interrupted``
+        tells which."""
+        deadline = self._deadline.start(seconds)
+        if self._stops_waiting and self._needs_resync:
+            deadline.interrupt()
+        return deadline
 
     def _discard(self, data: bytes) -> None:
         if data:
