@@ -30,7 +30,6 @@ from scopelink.mount.errors import (
 from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
-from scopelink.mount.parking import ParkKeeper, Resume
 from scopelink.mount.meridian import (
     applies,
     hour_angle_of_altaz,
@@ -38,6 +37,7 @@ from scopelink.mount.meridian import (
     plan_goto_side,
 )
 from scopelink.mount.meridian_watch import MeridianWatch
+from scopelink.mount.parking import ParkKeeper, Resume
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
