@@ -208,3 +208,36 @@ async def test_an_open_dashboard_page_raises_the_rate_and_its_departure_lowers_i
             assert await polls_in(driver, 0.5) >= 10
         await asyncio.sleep(DEFAULT_DEMAND_HOLD_S + 0.3)  # the page has gone
         assert driver.poller.watchers == 0 or await polls_in(driver, 1.0) <= 2
+
+
+async def test_stopping_the_poller_passes_a_cancellation_of_the_caller_on() -> None:
+    """A poll still finishing its exchange when ``stop`` waits for it: cancelling the task that
+    called ``stop`` must cancel it, not be swallowed (a shutdown hung 120 s on this)."""
+    from datetime import UTC, datetime
+
+    from scopelink.mount import MountState
+    from scopelink.mount.polling import StateBroadcast, StatePoller
+
+    started = asyncio.Event()
+
+    async def refresh() -> MountState:
+        started.set()
+        try:
+            await asyncio.sleep(10.0)
+        except asyncio.CancelledError:
+            await asyncio.sleep(0.3)  # the exchange in flight completes first, as a driver's does
+            raise
+        raise AssertionError("not reached")
+
+    state = MountState(read_at=datetime(2026, 1, 1, tzinfo=UTC))
+    poller = StatePoller(
+        refresh, lambda: True, lambda _: None, StateBroadcast(state), interval_s=0.1, retry_s=0.1
+    )
+    async with poller.watching():
+        await started.wait()
+        stopping = asyncio.create_task(poller.stop())
+        await asyncio.sleep(0.05)
+        stopping.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await stopping
+        assert stopping.cancelled()

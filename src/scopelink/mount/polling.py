@@ -288,8 +288,11 @@ class StatePoller:
         task, self._task = self._task, None
         if task is not None:
             task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+            # Wait without awaiting the task itself: its own cancellation is expected, but one of
+            # the caller (a shutdown) must go on to the caller, not be swallowed with it.
+            await asyncio.wait([task])
+            if not task.cancelled():
+                task.exception()  # retrieved: the poller logs its own failures
 
     async def _run(self) -> None:
         loop = asyncio.get_running_loop()
