@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import functools
+import logging
 import math
 from collections.abc import Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
-from scopelink.astro import Site, j2000_to_observed
+from scopelink.astro import Site, j2000_to_observed, observed_to_j2000
 from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.mount.cache import StateCache
 from scopelink.mount.deadman import DeadMan, MotionClient
@@ -26,10 +28,14 @@ from scopelink.mount.errors import (
     NotConnectedError,
     NotSupportedError,
     ParkedError,
+    SyncRefusedError,
 )
 from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
+from scopelink.mount.memory import DeviceMemory
+from scopelink.mount.pointing import PointingCorrection, SyncPoint
+from scopelink.mount.pointing_model import ModelFrame
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
@@ -51,6 +57,8 @@ from scopelink.mount.types import (
 )
 
 __all__ = ["MAX_PULSE_GUIDE_MS", "Mount", "utc_now"]
+
+_log = logging.getLogger(__name__)
 
 MAX_PULSE_GUIDE_MS = 60_000
 """Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
@@ -89,6 +97,22 @@ class Mount(StateCache):
     """Whether the device stops rate motions and tracking at the limits by itself (the
     simulator); otherwise :attr:`guard` watches them and stops them in time."""
 
+    syncs_on_device: bool = True
+    """Whether a sync goes to the device first (kept on the PC only if the device refuses it or
+    has none); False keeps every sync in :attr:`pointing` (docs/pointing.md)."""
+
+    def __init_subclass__(cls, **keywords: object) -> None:
+        """Every ``refresh`` a driver defines returns the corrected reading (:attr:`pointing`)."""
+        super().__init_subclass__(**keywords)
+        original = cls.__dict__.get("refresh")
+        if original is not None:
+
+            @functools.wraps(original)
+            async def refresh(self: Mount) -> MountState:
+                return self._corrected(await original(self))
+
+            setattr(cls, "refresh", refresh)  # noqa: B010 (a method, replaced on the class)
+
     def __init__(
         self,
         *,
@@ -110,6 +134,7 @@ class Mount(StateCache):
         """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
+        self._pointing = PointingCorrection()
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -162,7 +187,25 @@ class Mount(StateCache):
         that arrive apart from their client's connection, like the dashboard's HTTP calls)."""
         return self._dead_man.acting_for(token)
 
+    @property
+    def pointing(self) -> PointingCorrection:
+        """The syncs kept on the PC and the pointing model every reading and goto goes through
+        (:mod:`scopelink.mount.pointing`)."""
+        return self._pointing
+
+    def keep_pointing_in(self, memory: DeviceMemory) -> None:
+        """Keep the PC-side syncs in ``memory`` (restored now, saved on every change)."""
+        self._pointing.attach(memory, aligned=self.state.aligned if self.state.connected else None)
+        self._publish_again()
+
+    def _corrected(self, state: MountState) -> MountState:
+        equatorial = self.capabilities.alignment_mode is not AlignmentMode.ALT_AZ
+        self._pointing.set_frame(ModelFrame(equatorial, self._site.latitude_deg))
+        self._pointing.observe_alignment(state)
+        return self._pointing.correct(state, self._site)
+
     def _publish(self, state: MountState) -> None:
+        state = self._corrected(state)
         if state.parked and state.slewing:  # parked only once arrived and stopped
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
@@ -232,7 +275,11 @@ class Mount(StateCache):
         self._limits.check_altaz(alt, az)
         await self._check_sun(alt, az)
         self._motion_commanded()
-        await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        if self._pointing.active:  # checked above where the tube will point; sent in device terms
+            ra, dec = observed_to_j2000(*self._pointing.reading_of(alt, az), self.now(), self._site)
+            await self._goto_equatorial(ra, dec)
+        else:
+            await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
         self._guard.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
 
@@ -253,7 +300,7 @@ class Mount(StateCache):
         self._limits.check_altaz(alt_deg, az_deg)
         await self._check_sun(alt_deg, az_deg)
         self._motion_commanded()
-        await self._goto_horizontal(alt_deg, az_deg)
+        await self._goto_horizontal(*self._pointing.reading_of(alt_deg, az_deg))
         self._guard.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
 
@@ -271,8 +318,29 @@ class Mount(StateCache):
             distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
             frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
             check_sync(self._limits, distance, frame.reach_deg)
-            await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
-            self._sync_frame = frame
+            if self.syncs_on_device and not self._pointing.active:
+                try:
+                    await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+                    self._sync_frame = frame
+                    return
+                except (NotSupportedError, SyncRefusedError) as refusal:
+                    _log.info("sync kept on the PC: %s", refusal)
+            await self._keep_sync(ra_j2000_hours, dec_j2000_deg)
+
+    async def _keep_sync(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """Keep a sync in :attr:`pointing`: the raw reading and the true position at its time."""
+        raw = self._pointing.raw_state
+        if raw is None or raw.alt_deg is None or raw.az_deg is None:
+            raise LimitError("the mount has not reported where it points: no sync was kept")
+        true = j2000_to_observed(ra_j2000_hours, dec_j2000_deg, raw.read_at, self._site)
+        point = SyncPoint(
+            raw.read_at, ra_j2000_hours, dec_j2000_deg, (raw.alt_deg, raw.az_deg), true
+        )
+        self._pointing.check_reach(
+            self._pointing.trial(point), self._sync_frame.reach_deg, self._limits.max_sync_deg
+        )
+        self._pointing.add(point)
+        self._publish(raw)
 
     def _check_sync_now(self, state: MountState) -> None:
         """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""

@@ -40,6 +40,7 @@ from scopelink.sim.axis import Axis
 from scopelink.sim.clock import SimClock
 from scopelink.sim.geometry import Geometry, geometry_for
 from scopelink.sim.limit_search import LimitSearch, LimitStop
+from scopelink.sim.misalignment import Misalignment
 from scopelink.sim.models import EQ6, MountModel
 from scopelink.sim.motion import FOREVER, MotionPlan
 from scopelink.sim.tracking import (
@@ -81,6 +82,7 @@ class SimulatedMount(Mount):
         park_counters: tuple[float, float] | None = None,
         meridian_tolerance_deg: float = 7.5,
         guide_rate_deg_s: float | None = None,
+        misalignment: Misalignment | None = None,
     ) -> None:
         self.clock = clock if clock is not None else SimClock()
         super().__init__(site=site, limits=limits, clock=self.clock.now)
@@ -104,6 +106,8 @@ class SimulatedMount(Mount):
         self._tracking = TrackingMode.OFF
         self._plan = MotionPlan(self.axes)
         self._capabilities = _capabilities_of(model)
+        self.misalignment = misalignment or Misalignment()
+        """How the real sky differs from the mount's frame (:mod:`scopelink.sim.misalignment`)."""
 
     # --- identity -------------------------------------------------------------------------------
 
@@ -201,6 +205,13 @@ class SimulatedMount(Mount):
         """Advance the clock by ``seconds`` and return the state then (deterministic)."""
         self.clock.advance(seconds)
         return self.snapshot()
+
+    def true_pointing(self) -> tuple[float, float]:
+        """The true observed (alt, az) the tube points at now: the reading, moved by
+        :attr:`misalignment` (what a camera on the tube would plate-solve)."""
+        alt, az = self.observed_at(self.elapsed())
+        equatorial = self.model.alignment_mode is not AlignmentMode.ALT_AZ
+        return self.misalignment.true_of(alt, az, self._site.latitude_deg, equatorial=equatorial)
 
     def sync_distance_deg(self, ra_j2000_hours: float, dec_j2000_deg: float) -> float:
         """How far (degrees) a J2000 position is from where the mount believes it points."""

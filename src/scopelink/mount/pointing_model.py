@@ -1,0 +1,208 @@
+"""The pointing model: where the mount reads when the tube points at a true position, and back.
+
+Pure arithmetic on observed (refracted) altitude and azimuth, with numpy; no state, no I/O. The
+terms follow TPoint's names, each an exact geometric error rather than its first-order formula
+(so a 5° polar error is fitted to arcseconds, not to the ~10′ a linear model leaves):
+
+equatorial mounts (``EQUATORIAL_TERMS``)
+    ``IH``, ``ID`` zero points of the hour-angle and declination axes; ``CH`` collimation (cone:
+    ``CH·sec δ`` added to the hour angle, sec δ capped at |δ| = 85°); ``MA``, ``ME`` the polar
+    axis displaced in azimuth (a rotation of the sky about the zenith) and in elevation (about
+    the east-west axis).
+alt-az mounts (``ALTAZ_TERMS``)
+    ``IA``, ``IE`` zero points of the azimuth and elevation axes; ``CA`` collimation
+    (``CA·sec E`` added to the azimuth, capped at E = 85°); ``AN``, ``AW`` the base tilted
+    towards north (a rotation about the east-west axis) and towards west (about the north-south
+    axis).
+
+Sign convention: the model maps the *true* position to the mount's *reading*; each term is the
+reading minus the truth it causes (positive ``IH``: the mount reads a larger hour angle).
+:func:`fit` solves for the terms by Gauss-Newton least squares (``numpy.linalg.lstsq``) on the
+3-D unit-vector differences of the syncs; fewer than three syncs, or syncs too close together to
+tell the terms apart, fit the two zero points only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "ALTAZ_TERMS",
+    "EQUATORIAL_TERMS",
+    "FULL_MODEL_MIN_SYNCS",
+    "FittedModel",
+    "ModelFrame",
+    "fit",
+]
+
+EQUATORIAL_TERMS = ("IH", "ID", "CH", "MA", "ME")
+ALTAZ_TERMS = ("IA", "IE", "CA", "AN", "AW")
+FULL_MODEL_MIN_SYNCS = 3
+"""From this many syncs on, all five terms are fitted (fewer: the two zero points)."""
+_SEC_CAP_DEG = 85.0
+_MAX_CONDITION = 1.0e4
+"""A full fit whose normal matrix is worse conditioned than this (syncs bunched together, or on
+one great circle) falls back to the zero points: its terms would be noise."""
+
+Vector = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class ModelFrame:
+    """What the model is fitted for: the mount's kind and the site's latitude."""
+
+    equatorial: bool
+    latitude_deg: float
+
+    @property
+    def terms(self) -> tuple[str, ...]:
+        return EQUATORIAL_TERMS if self.equatorial else ALTAZ_TERMS
+
+
+def _unit(alt_deg: float, az_deg: float) -> Vector:
+    alt, az = math.radians(alt_deg), math.radians(az_deg)
+    return np.array([math.cos(alt) * math.cos(az), math.cos(alt) * math.sin(az), math.sin(alt)])
+
+
+def _altaz(v: Vector) -> tuple[float, float]:
+    x, y, z = (float(c) for c in v)
+    alt = math.degrees(math.atan2(z, math.hypot(x, y)))
+    return alt, math.degrees(math.atan2(y, x)) % 360.0
+
+
+def _rot(axis: int, angle_rad: float) -> Vector:
+    """Rotation of a vector by ``angle_rad`` about the frame's axis 0, 1 or 2."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    i, j = [k for k in range(3) if k != axis]
+    m = np.eye(3)
+    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
+    return m
+
+
+def _to_equator(latitude_deg: float) -> Vector:
+    """Alt-az (north, east, up) -> equatorial (h=0, h=-6h, pole) unit vectors."""
+    phi = math.radians(latitude_deg)
+    s, c = math.sin(phi), math.cos(phi)
+    return np.array([[-s, 0.0, c], [0.0, 1.0, 0.0], [c, 0.0, s]])
+
+
+def _sec(angle_rad: float) -> float:
+    cap = math.radians(_SEC_CAP_DEG)
+    return 1.0 / math.cos(max(-cap, min(cap, angle_rad)))
+
+
+@dataclass(frozen=True, slots=True)
+class FittedModel:
+    """Five terms (radians, in the frame's order; unfitted ones 0) and how they were found."""
+
+    frame: ModelFrame
+    terms_rad: tuple[float, ...]
+    fitted: tuple[str, ...]
+
+    def terms_arcmin(self) -> dict[str, float]:
+        return {
+            name: math.degrees(value) * 60.0
+            for name, value in zip(self.frame.terms, self.terms_rad, strict=True)
+        }
+
+    def _tilt(self) -> Vector:
+        _, _, _, a, b = self.terms_rad
+        if self.frame.equatorial:  # MA about the zenith, ME about the east axis
+            return _rot(2, a) @ _rot(1, -b)
+        return _rot(1, -a) @ _rot(0, b)  # AN about the east axis, AW about the north axis
+
+    def reading_of(self, alt_deg: float, az_deg: float) -> tuple[float, float]:
+        """Where the mount reads when the tube points at this true alt/az."""
+        return _altaz(self._reading_vector(_unit(alt_deg, az_deg)))
+
+    def true_of(self, alt_deg: float, az_deg: float) -> tuple[float, float]:
+        """Where the tube points when the mount reads this alt/az (the exact inverse)."""
+        zero1, zero2, cone, _, _ = self.terms_rad
+        v = _unit(alt_deg, az_deg)
+        if self.frame.equatorial:
+            to_eq = _to_equator(self.frame.latitude_deg)
+            e = to_eq @ v
+            h, d = math.atan2(-e[1], e[0]), math.asin(max(-1.0, min(1.0, float(e[2]))))
+            d -= zero2
+            h -= zero1 + cone * _sec(d)
+            e = np.array([math.cos(d) * math.cos(h), -math.cos(d) * math.sin(h), math.sin(d)])
+            v = to_eq.T @ e
+        else:
+            alt, az = _altaz(v)
+            el = math.radians(alt) - zero2
+            a = math.radians(az) - zero1 - cone * _sec(el)
+            v = np.array([math.cos(el) * math.cos(a), math.cos(el) * math.sin(a), math.sin(el)])
+        return _altaz(self._tilt().T @ v)
+
+    def _reading_vector(self, true: Vector) -> Vector:
+        zero1, zero2, cone, _, _ = self.terms_rad
+        v = self._tilt() @ true
+        if self.frame.equatorial:
+            to_eq = _to_equator(self.frame.latitude_deg)
+            e = to_eq @ v
+            h, d = math.atan2(-e[1], e[0]), math.asin(max(-1.0, min(1.0, float(e[2]))))
+            h += zero1 + cone * _sec(d)
+            d += zero2
+            e = np.array([math.cos(d) * math.cos(h), -math.cos(d) * math.sin(h), math.sin(d)])
+            return np.asarray(to_eq.T @ e)
+        el = math.atan2(float(v[2]), math.hypot(float(v[0]), float(v[1])))
+        a = math.atan2(float(v[1]), float(v[0])) + zero1 + cone * _sec(el)
+        el += zero2
+        return np.array([math.cos(el) * math.cos(a), math.cos(el) * math.sin(a), math.sin(el)])
+
+    def residual_arcmin(self, reading: tuple[float, float], true: tuple[float, float]) -> float:
+        """How far (arcmin) the model's predicted reading for ``true`` is from ``reading``."""
+        predicted = self._reading_vector(_unit(*true))
+        cosine = float(np.clip(predicted @ _unit(*reading), -1.0, 1.0))
+        return math.degrees(math.acos(cosine)) * 60.0
+
+
+def fit(
+    frame: ModelFrame, readings: list[tuple[float, float]], trues: list[tuple[float, float]]
+) -> FittedModel:
+    """The terms that best map each true alt/az to its reading (least squares)."""
+    if not readings:
+        return FittedModel(frame, (0.0,) * 5, ())
+    full = len(readings) >= FULL_MODEL_MIN_SYNCS
+    model = _gauss_newton(frame, readings, trues, 5 if full else 2)
+    if full and model is None:
+        model = _gauss_newton(frame, readings, trues, 2)
+    assert model is not None  # two zero points are always determined by one sync
+    return model
+
+
+def _gauss_newton(
+    frame: ModelFrame,
+    readings: list[tuple[float, float]],
+    trues: list[tuple[float, float]],
+    count: int,
+) -> FittedModel | None:
+    measured = np.concatenate([_unit(*r) for r in readings])
+    true_vectors = [_unit(*t) for t in trues]
+    names = frame.terms[:count]
+
+    def model_of(p: Vector) -> FittedModel:
+        return FittedModel(frame, (*(float(x) for x in p), *(0.0,) * (5 - count)), names)
+
+    def predicted(p: Vector) -> Vector:
+        m = model_of(p)
+        return np.concatenate([m._reading_vector(t) for t in true_vectors])
+
+    p = np.zeros(count)
+    step = 1.0e-7
+    for _ in range(12):
+        base = predicted(p)
+        jacobian = np.column_stack(
+            [(predicted(p + step * np.eye(count)[k]) - base) / step for k in range(count)]
+        )
+        if np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION and count > 2:
+            return None
+        delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=None)
+        p = p + delta
+        if float(np.max(np.abs(delta))) < 1.0e-10:
+            break
+    return model_of(p)
