@@ -317,8 +317,10 @@ class Mount(StateCache):
             await self._check_sun(alt, az, what="sync position", slew=False)
             distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
             frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
-            check_sync(self._limits, distance, frame.reach_deg)
-            if self.syncs_on_device and not self._pointing.active:
+            on_device = self.syncs_on_device and not self._pointing.active
+            # A sync kept on the PC leaves the device's frame; its model is checked instead.
+            check_sync(self._limits, distance, (frame if on_device else self._sync_frame).reach_deg)
+            if on_device:
                 try:
                     await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
                     self._sync_frame = frame

@@ -18,8 +18,9 @@ alt-az mounts (``ALTAZ_TERMS``)
 Sign convention: the model maps the *true* position to the mount's *reading*; each term is the
 reading minus the truth it causes (positive ``IH``: the mount reads a larger hour angle).
 :func:`fit` solves for the terms by Gauss-Newton least squares (``numpy.linalg.lstsq``) on the
-3-D unit-vector differences of the syncs; fewer than three syncs, or syncs too close together to
-tell the terms apart, fit the two zero points only.
+3-D unit-vector differences of the syncs. Fewer than three syncs, or syncs too close together to
+tell the terms apart, fit a rigid turn of the sky only (``ROTATION_TERMS``: the zero point of the
+primary axis and the two tilts, minimum norm), which moves no position farther than the syncs.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ __all__ = [
     "ALTAZ_TERMS",
     "EQUATORIAL_TERMS",
     "FULL_MODEL_MIN_SYNCS",
+    "ROTATION_TERMS",
     "FittedModel",
     "ModelFrame",
     "fit",
@@ -167,26 +169,37 @@ def fit(
     """The terms that best map each true alt/az to its reading (least squares)."""
     if not readings:
         return FittedModel(frame, (0.0,) * 5, ())
-    full = len(readings) >= FULL_MODEL_MIN_SYNCS
-    model = _gauss_newton(frame, readings, trues, 5 if full else 2)
-    if full and model is None:
-        model = _gauss_newton(frame, readings, trues, 2)
-    assert model is not None  # two zero points are always determined by one sync
+    model = None
+    if len(readings) >= FULL_MODEL_MIN_SYNCS:
+        model = _gauss_newton(frame, readings, trues, (0, 1, 2, 3, 4))
+    if model is None:
+        model = _gauss_newton(frame, readings, trues, ROTATION_TERMS)
+    assert model is not None  # a rotation is never refused
     return model
+
+
+ROTATION_TERMS = (0, 3, 4)
+"""The terms of a rigid turn of the sky: about the pole (or zenith), and two tilts. Fitted alone
+(minimum-norm least squares) with fewer than three syncs: the smallest turn that carries each
+reading onto its star, so no position moves farther than the syncs did."""
 
 
 def _gauss_newton(
     frame: ModelFrame,
     readings: list[tuple[float, float]],
     trues: list[tuple[float, float]],
-    count: int,
+    indices: tuple[int, ...],
 ) -> FittedModel | None:
     measured = np.concatenate([_unit(*r) for r in readings])
     true_vectors = [_unit(*t) for t in trues]
-    names = frame.terms[:count]
+    names = tuple(frame.terms[i] for i in indices)
+    count = len(indices)
 
     def model_of(p: Vector) -> FittedModel:
-        return FittedModel(frame, (*(float(x) for x in p), *(0.0,) * (5 - count)), names)
+        terms = [0.0] * 5
+        for i, value in zip(indices, p, strict=True):
+            terms[i] = float(value)
+        return FittedModel(frame, tuple(terms), names)
 
     def predicted(p: Vector) -> Vector:
         m = model_of(p)
@@ -199,9 +212,9 @@ def _gauss_newton(
         jacobian = np.column_stack(
             [(predicted(p + step * np.eye(count)[k]) - base) / step for k in range(count)]
         )
-        if np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION and count > 2:
+        if count == 5 and np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION:
             return None
-        delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=None)
+        delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=1.0e-6)
         p = p + delta
         if float(np.max(np.abs(delta))) < 1.0e-10:
             break
