@@ -20,16 +20,19 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from scopelink.astro import Site, j2000_to_apparent, observed_to_j2000
+from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, observed_to_j2000
 from scopelink.mount.errors import InvalidValueError, LimitError
 from scopelink.mount.memory import DeviceMemory, RecordError
 from scopelink.mount.pointing_model import FittedModel, ModelFrame, fit
 from scopelink.mount.types import Identity, MountState
 
-__all__ = ["POINTING_RECORD", "PointingCorrection", "SyncPoint", "device_key"]
+__all__ = ["POINTING_RECORD", "REPLACE_WITHIN_DEG", "PointingCorrection", "SyncPoint", "device_key"]
 
 POINTING_RECORD = "pointing"
 """The :class:`DeviceMemory` record name of the syncs."""
+REPLACE_WITHIN_DEG = 2.0
+"""A sync whose reading lies within this of an earlier one's replaces it (the observer centred
+the same place again: the newer is the better)."""
 _RECORD_VERSION = 1
 _logger = logging.getLogger(__name__)
 
@@ -117,14 +120,25 @@ class PointingCorrection:
         readings = [s.reading for s in self._syncs]
         self._model = fit(self._frame, readings, [s.true for s in self._syncs])
 
+    def _with(self, point: SyncPoint) -> list[SyncPoint]:
+        """The syncs with ``point`` added, replacing those it lies within ``REPLACE_WITHIN_DEG``
+        of (the mount's reading: the same place of the mount's frame, centred again)."""
+        kept = [
+            s
+            for s in self._syncs
+            if angular_separation_deg(s.reading[1], s.reading[0], *point.reading[::-1])
+            > REPLACE_WITHIN_DEG
+        ]
+        return [*kept, point]
+
     def trial(self, point: SyncPoint) -> FittedModel:
         """The model with ``point`` added (nothing kept)."""
         assert self._frame is not None
-        syncs = [*self._syncs, point]
+        syncs = self._with(point)
         return fit(self._frame, [s.reading for s in syncs], [s.true for s in syncs])
 
     def add(self, point: SyncPoint) -> None:
-        self._syncs.append(point)
+        self._syncs = self._with(point)
         self._refit()
         self._save()
 
