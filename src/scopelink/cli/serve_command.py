@@ -37,6 +37,8 @@ from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
+from scopelink.mount.memory import DeviceMemory
+from scopelink.mount.pointing import device_key
 from scopelink.protocol.lx200 import SKYFI_PORT
 from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy, IPNetwork, parse_network
 from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
@@ -396,6 +398,8 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
                 f"{site.latitude_deg:+.4f}°, {site.longitude_deg:+.4f}°",
                 flush=True,
             )
+            # The PC-side syncs of this device, kept between runs (docs/pointing.md).
+            mount.keep_pointing_in(DeviceMemory(device_key(mount.identity), args.state_dir))
             # One poller for every front end: reads come from the state cache.
             await stack.enter_async_context(mount.watching())
             for line in await _start_servers(stack, mount, plan, args):

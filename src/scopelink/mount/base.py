@@ -198,6 +198,11 @@ class Mount(StateCache):
         self._pointing.attach(memory, aligned=self.state.aligned if self.state.connected else None)
         self._publish_again()
 
+    def pointing_changed(self) -> None:
+        """Publish the last reading again, corrected by the changed :attr:`pointing`."""
+        if self._pointing.raw_state is not None:
+            self._publish(self._pointing.raw_state)
+
     def _corrected(self, state: MountState) -> MountState:
         equatorial = self.capabilities.alignment_mode is not AlignmentMode.ALT_AZ
         self._pointing.set_frame(ModelFrame(equatorial, self._site.latitude_deg))
@@ -342,7 +347,7 @@ class Mount(StateCache):
             self._pointing.trial(point), self._sync_frame.reach_deg, self._limits.max_sync_deg
         )
         self._pointing.add(point)
-        self._publish(raw)
+        self.pointing_changed()
 
     def _check_sync_now(self, state: MountState) -> None:
         """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""
