@@ -250,8 +250,9 @@ class PointingCorrection:
         self._memory = memory
         try:
             record = memory.load(POINTING_RECORD)
-        except RecordError as error:
-            _logger.warning("pointing model not restored: %s", error)
+        except RecordError as error:  # left as it is for the user to see; not written over
+            _logger.warning("pointing model not restored, nor saved this run: %s", error)
+            self._memory = None
             return
         if record is None or record.get("version") != _RECORD_VERSION:
             return

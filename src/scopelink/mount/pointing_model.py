@@ -173,15 +173,53 @@ def fit(
     if len(readings) >= FULL_MODEL_MIN_SYNCS:
         model = _gauss_newton(frame, readings, trues, (0, 1, 2, 3, 4))
     if model is None:
-        model = _gauss_newton(frame, readings, trues, ROTATION_TERMS)
+        # The smallest turn (axis-angle, minimum norm), then the same turn in the model's terms,
+        # fitted exactly on points spread over the sky.
+        turn = _smallest_turn(readings, trues)
+        spread = [(30.0, 0.0), (60.0, 90.0), (45.0, 180.0), (20.0, 270.0), (80.0, 45.0)]
+        turned = [_altaz(turn @ _unit(*t)) for t in spread]
+        model = _gauss_newton(frame, turned, spread, ROTATION_TERMS)
     assert model is not None  # a rotation is never refused
     return model
 
 
+def _rodrigues(omega: Vector) -> Vector:
+    angle = float(np.linalg.norm(omega))
+    if angle < 1.0e-15:
+        return np.eye(3)
+    k = omega / angle
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
+
+
+def _smallest_turn(readings: list[tuple[float, float]], trues: list[tuple[float, float]]) -> Vector:
+    """The rotation of least angle that best carries each true position onto its reading."""
+    measured = np.concatenate([_unit(*r) for r in readings])
+    true_vectors = [_unit(*t) for t in trues]
+
+    def predicted(omega: Vector) -> Vector:
+        turn = _rodrigues(omega)
+        return np.concatenate([turn @ t for t in true_vectors])
+
+    omega = np.zeros(3)
+    step = 1.0e-7
+    for _ in range(12):
+        base = predicted(omega)
+        jacobian = np.column_stack(
+            [(predicted(omega + step * np.eye(3)[k]) - base) / step for k in range(3)]
+        )
+        delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=1.0e-6)
+        omega = omega + delta
+        if float(np.max(np.abs(delta))) < 1.0e-12:
+            break
+    return _rodrigues(omega)
+
+
 ROTATION_TERMS = (0, 3, 4)
-"""The terms of a rigid turn of the sky: about the pole (or zenith), and two tilts. Fitted alone
-(minimum-norm least squares) with fewer than three syncs: the smallest turn that carries each
-reading onto its star, so no position moves farther than the syncs did."""
+"""The terms of a rigid turn of the sky: about the pole (or zenith), and two tilts. With fewer
+than three syncs they hold the smallest turn that carries each star onto its reading (least
+squares on the turn's axis-angle vector, minimum norm): with one sync no position moves farther
+than the sync did."""
 
 
 def _gauss_newton(
