@@ -189,7 +189,8 @@ def _rodrigues(omega: Vector) -> Vector:
         return np.eye(3)
     k = omega / angle
     cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
+    turn = np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
+    return np.asarray(turn, dtype=np.float64)
 
 
 def _smallest_turn(readings: list[tuple[float, float]], trues: list[tuple[float, float]]) -> Vector:
