@@ -69,7 +69,7 @@ async def test_a_new_alignment_forgets_the_syncs(tmp_path: Path) -> None:
     assert len(mount.pointing.syncs) == 1  # an unaligned mount may be resumed (#15 part 2)
     mount.set_aligned(True)
     assert (await mount.refresh()).alt_deg == pytest.approx(40.0, abs=1e-3)
-    assert not mount.pointing.syncs
+    assert mount.pointing.summary()["syncs"] == []
     assert DeviceMemory("sim-eq6", tmp_path).load(POINTING_RECORD) is None
 
 
