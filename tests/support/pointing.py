@@ -7,7 +7,7 @@ import math
 from datetime import datetime
 
 from scopelink.astro import Site, angular_separation_deg, j2000_to_observed, observed_to_j2000
-from scopelink.mount import AlignmentMode
+from scopelink.mount import AlignmentMode, Mount
 from scopelink.sim import SimulatedMount
 from scopelink.sim.misalignment import Misalignment
 
@@ -50,3 +50,36 @@ def pointing_error_arcmin(sim: SimulatedMount, ra_hours: float, dec_deg: float) 
 
 def rms(values: list[float]) -> float:
     return math.sqrt(sum(v * v for v in values) / len(values))
+
+
+def settle(sim: SimulatedMount) -> None:
+    """Step the simulated clock until the slew has landed."""
+    for _ in range(200):
+        if not sim.step(2.0).slewing:
+            return
+    raise AssertionError("the slew did not land")
+
+
+async def centre(sim: SimulatedMount, ra_hours: float, dec_deg: float) -> None:
+    """The observer centres the star in the eyepiece with the hand control's arrows (here: the
+    simulator slews to where its tube points at the star; twice, so tracking cannot drift)."""
+    for _ in range(2):
+        await sim.goto_equatorial(*reading_for(sim, ra_hours, dec_deg))
+        settle(sim)
+
+
+async def goto_error_arcmin(
+    mount: Mount, sim: SimulatedMount, ra_hours: float, dec_deg: float
+) -> float:
+    """Goto the star through ``mount`` (the driver) and return how far off the tube lands."""
+    await mount.goto_equatorial(ra_hours, dec_deg)
+    settle(sim)
+    await mount.refresh()
+    return pointing_error_arcmin(sim, ra_hours, dec_deg)
+
+
+async def sync_on(mount: Mount, sim: SimulatedMount, ra_hours: float, dec_deg: float) -> None:
+    """Centre the star, then sync on it through ``mount``."""
+    await centre(sim, ra_hours, dec_deg)
+    await mount.refresh()
+    await mount.sync_equatorial(ra_hours, dec_deg)
