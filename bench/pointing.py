@@ -18,12 +18,13 @@ import asyncio
 import random
 import time
 
+from tests.support.pointing import FIVE_DEGREES, goto_error_arcmin, rms, stars, sync_on
+from tests.support.synscan_driver import START, rig
+
 from bench.provenance import print_provenance
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, EQ6, MountModel
 from scopelink.sim.misalignment import Misalignment
-from tests.support.pointing import FIVE_DEGREES, goto_error_arcmin, rms, stars, sync_on
-from tests.support.synscan_driver import START, rig
 
 GOAL_RMS_ARCMIN = 2.0
 SYNCS = 6

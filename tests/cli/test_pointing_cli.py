@@ -14,11 +14,20 @@ from pathlib import Path
 from typing import Any
 
 from scopelink.astro import angular_separation_deg
+from scopelink.links import open_tcp
 from scopelink.protocol.lx200 import parse_sexagesimal
+from scopelink.protocol.synscan import Ack, GetRaDec, Position, SyncRaDec, SynScanClientConnection
 from tests.support.cli import scopelink, synscan_emulator
 from tests.support.serve import ALL_OFF, listening, serving
+from tests.support.synscan import ask
 
-SERVERS = (*ALL_OFF, "--alpaca-port=0", "--lx200-port=0", "--dashboard-port=0")
+SERVERS = (
+    *ALL_OFF,
+    "--alpaca-port=0",
+    "--lx200-port=0",
+    "--synscan-port=0",
+    "--dashboard-port=0",
+)
 
 
 def alpaca(base: str, method: str, name: str, **form: object) -> Any:
@@ -133,6 +142,21 @@ async def test_syncs_from_alpaca_and_lx200_are_kept_listed_removed_and_restored(
             assert "1 sync(s) kept" in out, (out, err)
             status, out, err = await asyncio.to_thread(pointing, tmp_path, dashboard, "clear")
             assert "no syncs kept on the PC" in out
+
+            # The SynScan server's 's', 8° from the reading: serve is a bridge, not a hand control
+            # with a ~7° limit of its own.
+            async with await open_tcp("127.0.0.1", listening(printed, "SynScan")) as link:
+                client = SynScanClientConnection()
+                here = await ask(link, client, GetRaDec(precise=True))
+                assert isinstance(here, Position)
+                target = (here.ra_hours, here.dec_degrees - 8.0)
+                sync = SyncRaDec.from_hours_degrees(*target, precise=True)
+                assert isinstance(await ask(link, client, sync), Ack)
+                now = await ask(link, client, GetRaDec(precise=True))
+                assert isinstance(now, Position)
+                assert abs(now.dec_degrees - target[1]) < 0.05
+            status, out, err = await asyncio.to_thread(pointing, tmp_path, dashboard)
+            assert "1 sync(s) kept" in out, (out, err)
 
     status, out, err = await asyncio.to_thread(pointing, tmp_path, 1)
     assert status != 0

@@ -46,7 +46,7 @@ from scopelink.servers.alpaca.server import StateDirError
 from scopelink.servers.hosts import bound_beyond_loopback, local_networks
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
-from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
+from scopelink.servers.synscan import Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimulatedMount
 from scopelink.web import Dashboard, protocol_by_port
 
@@ -463,7 +463,9 @@ async def _start_servers(
         lines.append(f"Stellarium  tcp {host}:{stellarium.port}  ({frame.value})")
     decoded: dict[int, Protocol] = {}
     if plan.synscan is not None or plan.synscan_pty is not None:
-        config = SynScanConfig(model=synscan_model_code(mount))
+        # A bridge, not a hand control: no ~7° sync limit of its own; the Mount judges every
+        # sync (limits.max_sync_deg) and keeps it on the PC if need be (docs/pointing.md).
+        config = SynScanConfig(model=synscan_model_code(mount), quirks=Quirks(sync_limit_deg=None))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
         # dead_man: a phone app that drops must not leave the mount slewing. No motor
         # passthrough positioning: it would move an axis past every limit check.
