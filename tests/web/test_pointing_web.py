@@ -33,7 +33,7 @@ async def test_the_pointing_api_lists_removes_and_clears() -> None:
         await sync_twice(s)
         status, model = await s.get("/api/pointing")
         assert [sync["number"] for sync in model["syncs"]] == [1, 2]
-        assert model["fitted"] == ["IH", "MA", "ME"]  # two syncs: a turn of the sky
+        assert model["fitted"] == ["IH", "ID", "MA", "ME"]  # two syncs: a turn and ID
         assert model["rms_arcmin"] < 60.0
         status, body = await s.post("/api/pointing", {"remove": 3})
         assert status == 400

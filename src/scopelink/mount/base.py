@@ -335,7 +335,9 @@ class Mount(StateCache):
             await self._keep_sync(ra_j2000_hours, dec_j2000_deg)
 
     async def _keep_sync(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
-        """Keep a sync in :attr:`pointing`: the raw reading and the true position at its time."""
+        """Keep a sync in :attr:`pointing`: a reading taken now (not one a poll may have started
+        before the observer centred the star) and the true position at its time."""
+        await self.refresh()
         raw = self._pointing.raw_state
         if raw is None or raw.alt_deg is None or raw.az_deg is None:
             raise LimitError("the mount has not reported where it points: no sync was kept")

@@ -18,9 +18,10 @@ alt-az mounts (``ALTAZ_TERMS``)
 Sign convention: the model maps the *true* position to the mount's *reading*; each term is the
 reading minus the truth it causes (positive ``IH``: the mount reads a larger hour angle).
 :func:`fit` solves for the terms by Gauss-Newton least squares (``numpy.linalg.lstsq``) on the
-3-D unit-vector differences of the syncs. Fewer than three syncs, or syncs too close together to
-tell the terms apart, fit a rigid turn of the sky only (``ROTATION_TERMS``: the zero point of the
-primary axis and the two tilts, minimum norm), which moves no position farther than the syncs.
+3-D unit-vector differences of the syncs. Two syncs fit the two zero points and the two tilts (four
+equations, four terms). One sync, or syncs too close together to tell the terms apart, fit a rigid
+turn of the sky only (``ROTATION_TERMS``: the zero point of the primary axis and the two tilts,
+minimum norm), which moves no position farther than the sync.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ __all__ = [
 EQUATORIAL_TERMS = ("IH", "ID", "CH", "MA", "ME")
 ALTAZ_TERMS = ("IA", "IE", "CA", "AN", "AW")
 FULL_MODEL_MIN_SYNCS = 3
-"""From this many syncs on, all five terms are fitted (fewer: the two zero points)."""
+"""From this many syncs on, all five terms are fitted (fewer: see :func:`fit`)."""
 _SEC_CAP_DEG = 85.0
 _MAX_CONDITION = 1.0e4
 """A full fit whose normal matrix is worse conditioned than this (syncs bunched together, or on
@@ -172,6 +173,8 @@ def fit(
     model = None
     if len(readings) >= FULL_MODEL_MIN_SYNCS:
         model = _gauss_newton(frame, readings, trues, (0, 1, 2, 3, 4))
+    elif len(readings) == 2:  # four equations: the turn and the secondary zero point
+        model = _gauss_newton(frame, readings, trues, (0, 1, 3, 4))
     if model is None:
         # The smallest turn (axis-angle, minimum norm), then the same turn in the model's terms,
         # fitted exactly on points spread over the sky.
@@ -251,7 +254,7 @@ def _gauss_newton(
         jacobian = np.column_stack(
             [(predicted(p + step * np.eye(count)[k]) - base) / step for k in range(count)]
         )
-        if count == 5 and np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION:
+        if count > 3 and np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION:
             return None
         delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=1.0e-6)
         p = p + delta
