@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import re
+import subprocess
+import sys
 import urllib.parse
 import urllib.request
 from pathlib import Path
@@ -162,3 +165,39 @@ async def test_syncs_from_alpaca_and_lx200_are_kept_listed_removed_and_restored(
     assert status != 0
     assert "no scopelink dashboard answers" in err
     assert "Traceback" not in err
+
+
+def run_cli(home: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """``scopelink ARGS`` with a scratch state directory (where the syncs are kept)."""
+    env = {
+        **os.environ,
+        "SCOPELINK_CONFIG": str(home / "absent.toml"),
+        "XDG_STATE_HOME": str(home / "state"),
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "scopelink", *args],
+        env=env,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        timeout=60,
+        check=False,
+    )
+
+
+def test_scopelink_sync_is_kept_for_the_next_commands(tmp_path: Path) -> None:
+    """A one-shot 'scopelink sync' on a SynScan mount keeps the sync on the PC, for this device,
+    so that the next 'scopelink status' reads through it (the hand control was not told)."""
+    with synscan_emulator("--misalign", "0.5,0.5,0,0") as device:
+        before = run_cli(tmp_path, "status", "--json", "--device", device)
+        assert before.returncode == 0, before.stderr
+        assert json.loads(before.stdout)["dec_j2000_deg"] > 89.5  # the hand control's home
+        synced = run_cli(tmp_path, "sync", "Polaris", "--device", device)
+        assert synced.returncode == 0, synced.stderr
+        after = run_cli(tmp_path, "status", "--json", "--device", device)
+        assert after.returncode == 0, after.stderr
+        assert abs(json.loads(after.stdout)["dec_j2000_deg"] - 89.264) < 0.02
+        listed = list(
+            (tmp_path / "state" / "scopelink" / "devices").glob("synscan-*/pointing.json")
+        )
+        assert len(listed) == 1

@@ -248,6 +248,8 @@ class PointingCorrection:
         """Keep the syncs in ``memory`` from now on, starting from what it holds (unless it was
         recorded unaligned and the mount is aligned now: a new alignment since)."""
         self._memory = memory
+        self._syncs = []
+        self._refit()
         try:
             record = memory.load(POINTING_RECORD)
         except RecordError as error:  # left as it is for the user to see; not written over
