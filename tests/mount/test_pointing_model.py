@@ -87,3 +87,18 @@ def test_the_emulator_misalignment_option_is_checked() -> None:
     for bad in ["1,2,3", "1,2,3,x", "1,2,3,11", "nan,0,0,0"]:
         with pytest.raises(ValueError, match="four numbers of degrees within ±10"):
             parse_misalignment(bad)
+
+
+def test_the_documented_figures_are_the_code_s() -> None:
+    """docs/pointing.md states the model's limits and defaults; they are the code's."""
+    from pathlib import Path
+
+    from scopelink.mount import pointing, pointing_model
+
+    docs = (Path(__file__).parents[2] / "docs" / "pointing.md").read_text(encoding="utf-8")
+    assert f"`FULL_MODEL_MIN_SYNCS` = {pointing_model.FULL_MODEL_MIN_SYNCS}" in docs
+    assert f"`REPLACE_WITHIN_DEG` = {pointing.REPLACE_WITHIN_DEG:g}°" in docs
+    assert f"capped at {pointing_model._SEC_CAP_DEG:g}°" in docs
+    assert "condition number above 10⁴" in docs
+    assert pointing_model._MAX_CONDITION == 1.0e4
+    assert f"record `{pointing.POINTING_RECORD}`" in docs
