@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from scopelink.astro import Site, observed_to_j2000
-from scopelink.mount import LimitError
+from scopelink.mount import LimitError, Limits
 from scopelink.mount.memory import DeviceMemory
 from scopelink.mount.pointing import POINTING_RECORD
 from scopelink.sim import EQ6, SimClock, SimulatedMount
@@ -16,16 +16,18 @@ from scopelink.sim import EQ6, SimClock, SimulatedMount
 SITE = Site(48.0, 11.0)
 
 
-async def pc_synced_mount(tmp_path: Path, *, sync: bool = True) -> SimulatedMount:
+async def pc_synced_mount(
+    tmp_path: Path, *, sync: bool = True, site: Site = SITE, limits: Limits | None = None
+) -> SimulatedMount:
     """A simulated mount that keeps its syncs on the PC, at alt 40° az 200°, synced 3° higher."""
-    mount = SimulatedMount(EQ6, site=SITE, clock=SimClock.stepped())
+    mount = SimulatedMount(EQ6, site=site, clock=SimClock.stepped(), limits=limits)
     mount.syncs_on_device = False
     await mount.connect()
     mount.keep_pointing_in(DeviceMemory("sim-eq6", tmp_path))
     await mount.goto_horizontal(40.0, 200.0)
     mount.step(200.0)
     if sync:
-        await mount.sync_equatorial(*observed_to_j2000(43.0, 200.0, mount.now(), SITE))
+        await mount.sync_equatorial(*observed_to_j2000(43.0, 200.0, mount.now(), site))
     return mount
 
 
@@ -87,3 +89,29 @@ async def test_a_model_that_would_move_the_sky_too_far_is_refused(tmp_path: Path
     with pytest.raises(LimitError, match=r"limits\.max_sync_deg"):
         await mount.sync_equatorial(*observed_to_j2000(50.5, 200.0, mount.now(), SITE))
     assert not mount.pointing.active
+
+
+async def test_syncs_of_another_site_or_beyond_lowered_limits_are_not_used(
+    tmp_path: Path,
+) -> None:
+    await pc_synced_mount(tmp_path)
+    elsewhere = await pc_synced_mount(tmp_path, sync=False, site=Site(40.0, 11.0))
+    assert not elsewhere.pointing.active
+    assert DeviceMemory("sim-eq6", tmp_path).load(POINTING_RECORD) is not None  # left alone
+    stricter = await pc_synced_mount(tmp_path, sync=False, limits=Limits(max_sync_deg=2.0))
+    assert not stricter.pointing.active
+    assert DeviceMemory("sim-eq6", tmp_path).load(POINTING_RECORD) is not None
+    again = await pc_synced_mount(tmp_path, sync=False)
+    assert len(again.pointing.syncs) == 1
+
+
+async def test_a_record_with_impossible_angles_is_not_used(tmp_path: Path) -> None:
+    await pc_synced_mount(tmp_path)
+    memory = DeviceMemory("sim-eq6", tmp_path)
+    record = memory.load(POINTING_RECORD)
+    assert record is not None
+    record["syncs"][0]["reading_alt_az"] = [float("nan"), 200.0]
+    memory.save(POINTING_RECORD, record)
+    mount = await pc_synced_mount(tmp_path, sync=False)
+    assert not mount.pointing.active
+    assert (await mount.refresh()).alt_deg == pytest.approx(40.0, abs=1e-3)

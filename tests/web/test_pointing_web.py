@@ -40,6 +40,9 @@ async def test_the_pointing_api_lists_removes_and_clears() -> None:
         assert "there is no sync 3" in body["error"]
         status, body = await s.post("/api/pointing", {"nothing": 1})
         assert status == 400
+        status, body = await s.post("/api/pointing", {"remove": 1.5})
+        assert status == 400
+        assert "not 1.5" in body["error"]
         status, model = await s.post("/api/pointing", {"remove": 1})
         assert status == 200
         assert len(model["syncs"]) == 1

@@ -196,7 +196,15 @@ class Mount(StateCache):
     def keep_pointing_in(self, memory: DeviceMemory) -> None:
         """Keep the PC-side syncs in ``memory`` (restored now, saved on every change)."""
         self._pointing.attach(memory, aligned=self.state.aligned if self.state.connected else None)
-        self._publish_again()
+        model = self._pointing.model
+        if model is not None:  # the limits may have been lowered since it was fitted
+            try:
+                self._pointing.check_reach(
+                    model, self._sync_frame.reach_deg, self._limits.max_sync_deg
+                )
+            except LimitError as error:
+                self._pointing.drop(str(error))
+        self.pointing_changed()
 
     def pointing_changed(self) -> None:
         """Publish the last reading again, corrected by the changed :attr:`pointing`."""

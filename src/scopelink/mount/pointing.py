@@ -65,13 +65,19 @@ class SyncPoint:
     @classmethod
     def from_record(cls, record: dict[str, Any]) -> SyncPoint:
         reading, true = record["reading_alt_az"], record["true_alt_az"]
-        return cls(
+        point = cls(
             datetime.fromisoformat(record["at"]),
             float(record["ra_j2000_hours"]),
             float(record["dec_j2000_deg"]),
             (float(reading[0]), float(reading[1])),
             (float(true[0]), float(true[1])),
         )
+        values = (point.ra_j2000_hours, point.dec_j2000_deg, *point.reading, *point.true)
+        if not all(math.isfinite(v) for v in values) or not all(
+            -90.0 <= alt <= 90.0 for alt in (point.reading[0], point.true[0])
+        ):
+            raise ValueError(f"a sync of {point.at.isoformat()} holds impossible angles")
+        return point
 
 
 def _position(state: MountState) -> tuple[float | None, ...]:
@@ -88,6 +94,8 @@ class PointingCorrection:
         self._memory: DeviceMemory | None = None
         self._last_aligned: bool | None = None
         self._corrected_key: tuple[float | None, ...] | None = None
+        self._latitude_deg: float | None = None
+        """The site's latitude when the syncs were taken (alt/az pairs belong to one site)."""
         self.raw_state: MountState | None = None
         """The last reading as the device gave it (before correction)."""
 
@@ -103,10 +111,24 @@ class PointingCorrection:
         return bool(self._syncs)
 
     def set_frame(self, frame: ModelFrame) -> None:
-        """The mount's kind and latitude (the model is refitted when they change)."""
-        if frame != self._frame:
-            self._frame = frame
-            self._refit()
+        """The mount's kind and latitude (the model is refitted when they change). Syncs taken
+        at another latitude are dropped from use (their record is left alone: a command run with
+        another configured site must not wipe the model of the observatory's)."""
+        if frame == self._frame:
+            return
+        self._frame = frame
+        known = self._latitude_deg
+        if self._syncs and known is not None and abs(known - frame.latitude_deg) > 0.01:
+            self.drop(f"they were taken at latitude {known:+.4f}°, the site is now elsewhere")
+        self._refit()
+
+    def drop(self, why: str) -> None:
+        """Stop using the syncs for this run (their record is kept), saying why in the log."""
+        if self._syncs:
+            _logger.warning("the %d syncs kept on the PC are not used: %s", len(self._syncs), why)
+        self._syncs = []
+        self._memory = None  # the record stays as it is
+        self._refit()
 
     @property
     def model(self) -> FittedModel | None:
@@ -138,6 +160,8 @@ class PointingCorrection:
         return fit(self._frame, [s.reading for s in syncs], [s.true for s in syncs])
 
     def add(self, point: SyncPoint) -> None:
+        if self._frame is not None:
+            self._latitude_deg = self._frame.latitude_deg
         self._syncs = self._with(point)
         self._refit()
         self._save()
@@ -220,7 +244,7 @@ class PointingCorrection:
         move the frame the limits are judged in further than a device sync could."""
         zero = FittedModel(model.frame, (0.0,) * 5, ())
         worst = 0.0
-        for alt in range(0, 90, 5):
+        for alt in (*range(0, 90, 5), 89.9):
             for az in range(0, 360, 15):
                 true = (float(alt), float(az))
                 worst = max(worst, zero.residual_arcmin(model.reading_of(*true), true))
@@ -267,7 +291,11 @@ class PointingCorrection:
             _logger.warning("pointing model in %s not restored: %s", memory.directory, error)
             self._syncs = []
         self._last_aligned = record.get("aligned")
-        self._refit()
+        latitude = record.get("latitude_deg")
+        self._latitude_deg = float(latitude) if isinstance(latitude, int | float) else None
+        frame, self._frame = self._frame, None
+        if frame is not None:
+            self.set_frame(frame)  # checks the latitude, and fits
 
     def _save(self) -> None:
         if self._memory is None:
@@ -278,6 +306,7 @@ class PointingCorrection:
         record = {
             "version": _RECORD_VERSION,
             "aligned": self._last_aligned,
+            "latitude_deg": self._latitude_deg,
             "syncs": [s.record() for s in self._syncs],
         }
         try:

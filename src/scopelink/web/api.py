@@ -150,7 +150,10 @@ class _Api:
         """POST ``{"remove": N}`` (1-based, as listed) or ``{"clear": true}``."""
         body = await read_body(request)
         if body.has("remove"):
-            self.mount.pointing.remove(int(body.number("remove", 1.0, 10_000.0)))
+            number = body.number("remove", 1.0, 10_000.0)
+            if not number.is_integer():
+                raise BadRequestError(f"'remove' is a sync's number as listed, not {number:g}")
+            self.mount.pointing.remove(int(number))
         elif body.has("clear"):
             self.mount.pointing.clear()
         else:
