@@ -27,6 +27,7 @@ minimum norm), which moves no position farther than the sync.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -198,25 +199,40 @@ def _rodrigues(omega: Vector) -> Vector:
 
 def _smallest_turn(readings: list[tuple[float, float]], trues: list[tuple[float, float]]) -> Vector:
     """The rotation of least angle that best carries each true position onto its reading."""
-    measured = np.concatenate([_unit(*r) for r in readings])
     true_vectors = [_unit(*t) for t in trues]
 
     def predicted(omega: Vector) -> Vector:
         turn = _rodrigues(omega)
         return np.concatenate([turn @ t for t in true_vectors])
 
-    omega = np.zeros(3)
+    omega = _least_squares(predicted, np.concatenate([_unit(*r) for r in readings]), 3, None)
+    assert omega is not None  # no condition limit asked
+    return _rodrigues(omega)
+
+
+def _least_squares(
+    predicted: Callable[[Vector], Vector],
+    measured: Vector,
+    count: int,
+    max_condition: float | None,
+) -> Vector | None:
+    """Gauss-Newton from zero: the ``count`` parameters whose ``predicted`` best matches
+    ``measured`` (minimum-norm steps; numerical derivatives). None if the normal matrix is worse
+    conditioned than ``max_condition``."""
+    p = np.zeros(count)
     step = 1.0e-7
     for _ in range(12):
-        base = predicted(omega)
+        base = predicted(p)
         jacobian = np.column_stack(
-            [(predicted(omega + step * np.eye(3)[k]) - base) / step for k in range(3)]
+            [(predicted(p + step * np.eye(count)[k]) - base) / step for k in range(count)]
         )
+        if max_condition is not None and np.linalg.cond(jacobian.T @ jacobian) > max_condition:
+            return None
         delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=1.0e-6)
-        omega = omega + delta
+        p = p + delta
         if float(np.max(np.abs(delta))) < 1.0e-12:
             break
-    return _rodrigues(omega)
+    return p
 
 
 ROTATION_TERMS = (0, 3, 4)
@@ -232,7 +248,6 @@ def _gauss_newton(
     trues: list[tuple[float, float]],
     indices: tuple[int, ...],
 ) -> FittedModel | None:
-    measured = np.concatenate([_unit(*r) for r in readings])
     true_vectors = [_unit(*t) for t in trues]
     names = tuple(frame.terms[i] for i in indices)
     count = len(indices)
@@ -247,17 +262,6 @@ def _gauss_newton(
         m = model_of(p)
         return np.concatenate([m._reading_vector(t) for t in true_vectors])
 
-    p = np.zeros(count)
-    step = 1.0e-7
-    for _ in range(12):
-        base = predicted(p)
-        jacobian = np.column_stack(
-            [(predicted(p + step * np.eye(count)[k]) - base) / step for k in range(count)]
-        )
-        if count > 3 and np.linalg.cond(jacobian.T @ jacobian) > _MAX_CONDITION:
-            return None
-        delta, *_ = np.linalg.lstsq(jacobian, measured - base, rcond=1.0e-6)
-        p = p + delta
-        if float(np.max(np.abs(delta))) < 1.0e-10:
-            break
-    return model_of(p)
+    measured = np.concatenate([_unit(*r) for r in readings])
+    p = _least_squares(predicted, measured, count, _MAX_CONDITION if count > 3 else None)
+    return None if p is None else model_of(p)
