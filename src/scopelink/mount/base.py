@@ -34,7 +34,7 @@ from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
 from scopelink.mount.limits import Limits
 from scopelink.mount.memory import DeviceMemory
-from scopelink.mount.pointing import PointingCorrection, SyncPoint
+from scopelink.mount.pointing import PointingCorrection
 from scopelink.mount.pointing_model import ModelFrame
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
@@ -196,14 +196,7 @@ class Mount(StateCache):
     def keep_pointing_in(self, memory: DeviceMemory) -> None:
         """Keep the PC-side syncs in ``memory`` (restored now, saved on every change)."""
         self._pointing.attach(memory, aligned=self.state.aligned if self.state.connected else None)
-        model = self._pointing.model
-        if model is not None:  # the limits may have been lowered since it was fitted
-            try:
-                self._pointing.check_reach(
-                    model, self._sync_frame.reach_deg, self._limits.max_sync_deg
-                )
-            except LimitError as error:
-                self._pointing.drop(str(error))
+        self._pointing.recheck(self._sync_frame.reach_deg, self._limits.max_sync_deg)
         self.pointing_changed()
 
     def pointing_changed(self) -> None:
@@ -346,17 +339,8 @@ class Mount(StateCache):
         """Keep a sync in :attr:`pointing`: a reading taken now (not one a poll may have started
         before the observer centred the star) and the true position at its time."""
         await self.refresh()
-        raw = self._pointing.raw_state
-        if raw is None or raw.alt_deg is None or raw.az_deg is None:
-            raise LimitError("the mount has not reported where it points: no sync was kept")
-        true = j2000_to_observed(ra_j2000_hours, dec_j2000_deg, raw.read_at, self._site)
-        point = SyncPoint(
-            raw.read_at, ra_j2000_hours, dec_j2000_deg, (raw.alt_deg, raw.az_deg), true
-        )
-        self._pointing.check_reach(
-            self._pointing.trial(point), self._sync_frame.reach_deg, self._limits.max_sync_deg
-        )
-        self._pointing.add(point)
+        reach = self._sync_frame.reach_deg
+        self._pointing.keep(ra_j2000_hours, dec_j2000_deg, self._site, reach, self._limits)
         self.pointing_changed()
 
     def _check_sync_now(self, state: MountState) -> None:

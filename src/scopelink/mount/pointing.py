@@ -20,8 +20,15 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from scopelink.astro import Site, angular_separation_deg, j2000_to_apparent, observed_to_j2000
+from scopelink.astro import (
+    Site,
+    angular_separation_deg,
+    j2000_to_apparent,
+    j2000_to_observed,
+    observed_to_j2000,
+)
 from scopelink.mount.errors import InvalidValueError, LimitError
+from scopelink.mount.limits import Limits
 from scopelink.mount.memory import DeviceMemory, RecordError
 from scopelink.mount.pointing_model import FittedModel, ModelFrame, fit
 from scopelink.mount.types import Identity, MountState
@@ -158,6 +165,29 @@ class PointingCorrection:
         assert self._frame is not None
         syncs = self._with(point)
         return fit(self._frame, [s.reading for s in syncs], [s.true for s in syncs])
+
+    def keep(
+        self, ra_j2000_hours: float, dec_j2000_deg: float, site: Site, reach: float, limits: Limits
+    ) -> None:
+        """Keep a sync on the last raw reading (:attr:`raw_state`), unless the model with it
+        would move the sky too far (:meth:`check_reach`: ``LimitError``, nothing kept)."""
+        raw = self.raw_state
+        if raw is None or raw.alt_deg is None or raw.az_deg is None:
+            raise LimitError("the mount has not reported where it points: no sync was kept")
+        true = j2000_to_observed(ra_j2000_hours, dec_j2000_deg, raw.read_at, site)
+        point = SyncPoint(
+            raw.read_at, ra_j2000_hours, dec_j2000_deg, (raw.alt_deg, raw.az_deg), true
+        )
+        self.check_reach(self.trial(point), reach, limits.max_sync_deg)
+        self.add(point)
+
+    def recheck(self, reach: float, limit_deg: float) -> None:
+        """Stop using a (restored) model that moves the sky farther than ``limit_deg`` now."""
+        if self._model is not None:
+            try:
+                self.check_reach(self._model, reach, limit_deg)
+            except LimitError as error:
+                self.drop(str(error))
 
     def add(self, point: SyncPoint) -> None:
         if self._frame is not None:
