@@ -115,3 +115,13 @@ async def test_a_record_with_impossible_angles_is_not_used(tmp_path: Path) -> No
     mount = await pc_synced_mount(tmp_path, sync=False)
     assert not mount.pointing.active
     assert (await mount.refresh()).alt_deg == pytest.approx(40.0, abs=1e-3)
+
+
+async def test_a_change_while_disconnected_claims_no_connection(tmp_path: Path) -> None:
+    mount = await pc_synced_mount(tmp_path)
+    await mount.disconnect()
+    mount.pointing.clear()
+    mount.pointing_changed()  # what the dashboard's clear does
+    assert not mount.state.connected
+    await mount.connect()
+    assert mount.state.alt_deg == pytest.approx(40.0, abs=1e-3)

@@ -200,9 +200,11 @@ class Mount(StateCache):
         self.pointing_changed()
 
     def pointing_changed(self) -> None:
-        """Publish the last reading again, corrected by the changed :attr:`pointing`."""
-        if self._pointing.raw_state is not None:
-            self._publish(self._pointing.raw_state)
+        """Publish the current state again, its position corrected by the changed
+        :attr:`pointing` (nothing while not connected: the last reading would claim it is)."""
+        again = self._pointing.recorrected(self.state, self._site)
+        if again is not None:
+            self._publish(again)
 
     def _corrected(self, state: MountState) -> MountState:
         equatorial = self.capabilities.alignment_mode is not AlignmentMode.ALT_AZ

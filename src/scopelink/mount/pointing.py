@@ -268,6 +268,24 @@ class PointingCorrection:
         self._corrected_key = _position(corrected)
         return corrected
 
+    def recorrected(self, current: MountState, site: Site) -> MountState | None:
+        """``current`` (the published state) with the last raw reading's position corrected
+        afresh, after the model changed; None while not connected or before any reading."""
+        raw = self.raw_state
+        if raw is None or not current.connected:
+            return None
+        fresh = self.correct(raw, site)  # what the next publish then recognises as corrected
+        return dataclasses.replace(
+            current,
+            read_at=fresh.read_at,
+            ra_j2000_hours=fresh.ra_j2000_hours,
+            dec_j2000_deg=fresh.dec_j2000_deg,
+            ra_of_date_hours=fresh.ra_of_date_hours,
+            dec_of_date_deg=fresh.dec_of_date_deg,
+            alt_deg=fresh.alt_deg,
+            az_deg=fresh.az_deg,
+        )
+
     def check_reach(self, model: FittedModel, reach_deg: float, limit_deg: float) -> None:
         """Raise :class:`LimitError` if ``model`` moves any position above the horizon farther
         than ``limit_deg`` less the device's own sync ``reach_deg``: a PC-side model may not
