@@ -87,6 +87,17 @@ class SyncPoint:
         return point
 
 
+_PLACE_FIELDS = (
+    "ra_j2000_hours",
+    "dec_j2000_deg",
+    "ra_of_date_hours",
+    "dec_of_date_deg",
+    "alt_deg",
+    "az_deg",
+)
+"""The fields of a state that say where the mount points (what the correction moves)."""
+
+
 def _position(state: MountState) -> tuple[float | None, ...]:
     return (state.ra_j2000_hours, state.dec_j2000_deg, state.alt_deg, state.az_deg)
 
@@ -255,16 +266,9 @@ class PointingCorrection:
             return state
         alt, az = model.true_of(state.alt_deg, state.az_deg)
         ra, dec = observed_to_j2000(alt, az, state.read_at, site)
-        ra_of_date, dec_of_date = j2000_to_apparent(ra, dec, state.read_at)
-        corrected = dataclasses.replace(
-            state,
-            ra_j2000_hours=ra,
-            dec_j2000_deg=dec,
-            ra_of_date_hours=ra_of_date,
-            dec_of_date_deg=dec_of_date,
-            alt_deg=alt,
-            az_deg=az,
-        )
+        values = (ra, dec, *j2000_to_apparent(ra, dec, state.read_at), alt, az)
+        place: dict[str, Any] = dict(zip(_PLACE_FIELDS, values, strict=True))
+        corrected = dataclasses.replace(state, **place)
         self._corrected_key = _position(corrected)
         return corrected
 
@@ -275,16 +279,8 @@ class PointingCorrection:
         if raw is None or not current.connected:
             return None
         fresh = self.correct(raw, site)  # what the next publish then recognises as corrected
-        return dataclasses.replace(
-            current,
-            read_at=fresh.read_at,
-            ra_j2000_hours=fresh.ra_j2000_hours,
-            dec_j2000_deg=fresh.dec_j2000_deg,
-            ra_of_date_hours=fresh.ra_of_date_hours,
-            dec_of_date_deg=fresh.dec_of_date_deg,
-            alt_deg=fresh.alt_deg,
-            az_deg=fresh.az_deg,
-        )
+        place: dict[str, Any] = {n: getattr(fresh, n) for n in ("read_at", *_PLACE_FIELDS)}
+        return dataclasses.replace(current, **place)
 
     def check_reach(self, model: FittedModel, reach_deg: float, limit_deg: float) -> None:
         """Raise :class:`LimitError` if ``model`` moves any position above the horizon farther
