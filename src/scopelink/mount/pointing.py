@@ -320,14 +320,14 @@ class PointingCorrection:
         self._refit()
         try:
             record = memory.load(POINTING_RECORD)
-        except RecordError as error:  # left as it is for the user to see; not written over
+        except (RecordError, OSError) as error:  # left as it is; not written over
             _logger.warning("pointing model not restored, nor saved this run: %s", error)
             self._memory = None
             return
         if record is None or record.get("version") != _RECORD_VERSION:
             return
         if aligned and record.get("aligned") is False:
-            memory.forget(POINTING_RECORD)
+            self._save()  # forgets the record: a new alignment since it was made
             return
         try:
             self._syncs = [SyncPoint.from_record(r) for r in record.get("syncs", [])]
@@ -344,9 +344,6 @@ class PointingCorrection:
     def _save(self) -> None:
         if self._memory is None:
             return
-        if not self._syncs:
-            self._memory.forget(POINTING_RECORD)
-            return
         record = {
             "version": _RECORD_VERSION,
             "aligned": self._last_aligned,
@@ -354,6 +351,9 @@ class PointingCorrection:
             "syncs": [s.record() for s in self._syncs],
         }
         try:
-            self._memory.save(POINTING_RECORD, record)
+            if self._syncs:
+                self._memory.save(POINTING_RECORD, record)
+            else:
+                self._memory.forget(POINTING_RECORD)
         except OSError as error:
             _logger.warning("pointing model not saved in %s: %s", self._memory.directory, error)
