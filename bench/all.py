@@ -63,6 +63,7 @@ PLAN = (
     Step("reconnect", "reconnect"),
     Step("astro", "astro"),
     Step("persistence", "persistence"),
+    Step("pointing", "pointing"),
     Step("security_flood", "security_flood"),
     Step("safety_guard", "safety_guard"),
     Step("safety_guard_noisy", "safety_guard", ("--noisy",)),

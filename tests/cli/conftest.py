@@ -11,3 +11,12 @@ import pytest
 def config(tmp_path: Path) -> Path:
     """A settings file that does not exist: every default."""
     return tmp_path / "absent.toml"
+
+
+@pytest.fixture(autouse=True)
+def state_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A scratch state directory: the syncs a command keeps on the PC for a device
+    (docs/pointing.md) never reach the user's, nor another test's."""
+    directory = tmp_path / "state"
+    monkeypatch.setenv("XDG_STATE_HOME", str(directory))
+    return directory

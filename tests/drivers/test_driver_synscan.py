@@ -114,19 +114,34 @@ async def test_wait_for_slew_with_the_background_poller(transport: str) -> None:
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)
-async def test_sync_is_verified_by_reading_back(transport: str) -> None:
+async def test_a_sync_is_kept_on_the_pc_and_corrects_the_reading(transport: str) -> None:
     async with rig(transport) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         r.sim.step(120.0)
-        await r.mount.sync_equatorial(7.55, 35.3)
+        await r.mount.sync_equatorial(7.55, 35.3)  # docs/pointing.md: the hand control is not told
         state = r.mount.state
         assert state.ra_j2000_hours == pytest.approx(7.55, abs=1e-5)
+        assert state.dec_j2000_deg == pytest.approx(35.3, abs=1e-5)
+        assert r.mount.pointing.raw_state is not None
+        assert_position_matches(r.mount.pointing.raw_state, r.sim.snapshot())
+        assert len(r.mount.pointing.syncs) == 1
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+async def test_a_sync_the_hand_control_ignores_is_kept_on_the_pc(transport: str) -> None:
+    async with rig(transport) as r:
+        r.mount.syncs_on_device = True  # as a driver that tries the device first
+        await r.mount.goto_equatorial(7.5, 35.0)
+        r.sim.step(120.0)
+        await r.mount.sync_equatorial(7.55, 35.3)  # within ~7°: the hand control takes it
+        assert not r.mount.pointing.active
+        assert r.mount.state.ra_j2000_hours == pytest.approx(7.55, abs=1e-5)
         # Past limits.max_sync_deg only to see the hand control's own silent refusal.
         r.mount.limits = Limits(max_sync_deg=180.0)
-        with pytest.raises(DeviceError, match=r"sync ignored by the hand control \(more than ~7°"):
-            await r.mount.sync_equatorial(12.0, 0.0)
-        assert_position_matches(await r.mount.refresh(), r.sim.snapshot())
-        assert r.mount.state.ra_j2000_hours == pytest.approx(7.55, abs=1e-5)
+        await r.mount.sync_equatorial(12.0, 0.0)
+        assert len(r.mount.pointing.syncs) == 1  # refused ("sync ignored"): kept on the PC
+        assert r.mount.state.ra_j2000_hours == pytest.approx(12.0, abs=1e-5)
+        assert r.sim.snapshot().ra_j2000_hours == pytest.approx(7.55, abs=1e-5)
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)
@@ -237,17 +252,18 @@ async def test_an_unaligned_hand_control_refuses_gotos_but_tracks_and_slews(
         assert not r.mount.state.aligned
         with pytest.raises(NotAlignedError, match="not aligned"):
             await r.mount.goto_equatorial(7.5, 35.0)
-        here = await r.mount.refresh()  # within limits.max_sync_deg: the alignment refuses it
+        here = await r.mount.refresh()  # the hand control would ignore it: kept on the PC
         assert here.ra_j2000_hours is not None
         assert here.dec_j2000_deg is not None
-        with pytest.raises(NotAlignedError):
-            await r.mount.sync_equatorial(here.ra_j2000_hours, here.dec_j2000_deg)
+        await r.mount.sync_equatorial(here.ra_j2000_hours + 0.01, here.dec_j2000_deg)
+        assert r.mount.state.ra_j2000_hours == pytest.approx(here.ra_j2000_hours + 0.01, abs=1e-4)
         await r.mount.set_tracking(TrackingMode.SIDEREAL)
         await r.mount.move_axis(MountAxis.PRIMARY, 1.0)
         await r.mount.move_axis(MountAxis.PRIMARY, 0.0)
         assert (await r.mount.refresh()).tracking is TrackingMode.SIDEREAL
         r.emulator.hand_control.aligned = True  # aligned on the keypad meanwhile
         assert (await r.mount.refresh()).aligned
+        assert not r.mount.pointing.active  # a new alignment: the PC-side syncs are forgotten
         await r.mount.goto_equatorial(7.5, 35.0)
 
 

@@ -255,6 +255,7 @@ async def verify_goto_horizontal(r: Rig, _result: object) -> None:
 
 
 async def sync_near(r: Rig) -> None:
+    r.mount.syncs_on_device = True  # the driver's own 's' exchange, not a sync kept on the PC
     state = r.mount.state
     assert state.ra_j2000_hours is not None
     assert state.dec_j2000_deg is not None

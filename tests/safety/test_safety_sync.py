@@ -128,9 +128,10 @@ async def test_repeated_syncs_cannot_walk_the_frame_past_max_sync_deg() -> None:
     assert (await mount.refresh()).alt_deg == pytest.approx(39.0, abs=0.01)
 
 
-async def test_a_driver_counts_the_syncs_it_sent_against_max_sync_deg() -> None:
-    """The SynScan driver cannot read the hand control's frame: it adds up the steps it sent.
-    (The emulated mount behind would itself allow any sync, to test the driver alone.)"""
+async def test_a_driver_counts_its_pc_side_syncs_against_max_sync_deg() -> None:
+    """The SynScan driver keeps syncs on the PC (docs/pointing.md): the pointing model they fit
+    may not move any position farther than limits.max_sync_deg. A sync near an earlier one
+    replaces it. (The emulated mount behind would itself allow any sync, to test the driver.)"""
     sim = SimulatedMount(
         EQ6, site=SITE, clock=SimClock.stepped(), limits=Limits(max_sync_deg=180.0)
     )
@@ -143,11 +144,12 @@ async def test_a_driver_counts_the_syncs_it_sent_against_max_sync_deg() -> None:
             sim.step(200.0)
             await mount.refresh()
             await mount.sync_equatorial(*at(sim, 35.0, 200.0))
-            with pytest.raises(LimitError, match=r"earlier syncs"):
-                await mount.sync_equatorial(*at(sim, 30.0, 200.0))
+            with pytest.raises(LimitError, match=r"limits\.max_sync_deg"):
+                await mount.sync_equatorial(*at(sim, 29.0, 200.0))
             assert (await mount.refresh()).alt_deg == pytest.approx(35.0, abs=0.01)
             await mount.sync_equatorial(*at(sim, 40.0, 200.0))
-            assert mount.sync_frame.reach_deg == pytest.approx(0.0, abs=0.05)
+            assert len(mount.pointing.syncs) == 1  # replaced the one at the same place
+            assert (await mount.refresh()).alt_deg == pytest.approx(40.0, abs=0.01)
         finally:
             await mount.disconnect()
 

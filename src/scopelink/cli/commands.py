@@ -58,6 +58,11 @@ COMMANDS: Final = (
     ),
     Command("sync", "tell the mount it points at a named object or at coordinates", "goto_command"),
     Command(
+        "pointing",
+        "list the syncs a running serve keeps on the PC, with residuals; remove one; clear",
+        "pointing_command",
+    ),
+    Command(
         "move",
         "turn one axis at a rate until Ctrl-C (or for --for seconds), then stop it",
         "motion_commands",

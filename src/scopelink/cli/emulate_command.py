@@ -32,6 +32,7 @@ from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
 from scopelink.servers.skytracker import SkyCommanderEmulator, SkyTrackerEmulator
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount, geometry_for
+from scopelink.sim.misalignment import Misalignment, parse_misalignment
 
 __all__ = ["EMULATORS", "EmulatedDevice", "EmulatorOptions", "register", "run"]
 
@@ -109,6 +110,21 @@ def _add_synscan_arguments(parser: argparse.ArgumentParser) -> None:
         help="unanswerable passthroughs answer '#' instead of the failed form",
     )
     parser.add_argument("--swapped-model", action="store_true", help="'m' answers '#' first")
+    parser.add_argument(
+        "--misalign",
+        type=_misalignment,
+        default=None,
+        metavar="ZP1,ZP2,PAZ,PALT",
+        help="misalign the simulated sky (degrees): axis zero points, polar axis (or base) "
+        "error in azimuth and altitude (docs/pointing.md)",
+    )
+
+
+def _misalignment(text: str) -> Misalignment:
+    try:
+        return parse_misalignment(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _az_alt(text: str) -> tuple[float, float]:
@@ -158,7 +174,12 @@ async def _create_synscan(args: argparse.Namespace, options: EmulatorOptions) ->
         geometry = geometry_for(preset.alignment_mode, options.site.latitude_deg)
         home = geometry.to_axes(alt, az, PierSide.UNKNOWN)
     mount = SimulatedMount(
-        preset, site=options.site, clock=options.clock, limits=_DEVICE_LIMITS, home=home
+        preset,
+        site=options.site,
+        clock=options.clock,
+        limits=_DEVICE_LIMITS,
+        home=home,
+        misalignment=args.misalign,
     )
     return SynScanEmulator(
         mount, config, faults=options.faults, wire=options.wire, cold_start=home is not None

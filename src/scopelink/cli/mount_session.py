@@ -33,6 +33,8 @@ from scopelink.mount import (
     ParkedError,
     SunAvoidanceError,
 )
+from scopelink.mount.memory import DeviceMemory
+from scopelink.mount.pointing import device_key
 
 __all__ = [
     "DeviceCommand",
@@ -160,6 +162,9 @@ def warn_if_sun_unguarded(limits: Limits) -> None:
 
 async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
     mount = await open_device(command)
+    # The syncs kept on the PC for this device (docs/pointing.md): 'scopelink sync' adds one,
+    # and every other command reads and moves through them.
+    mount.keep_pointing_in(DeviceMemory(device_key(mount.identity)))
     try:
         return await body(mount)
     except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:

@@ -37,6 +37,8 @@ from scopelink.decode import Protocol
 from scopelink.links import LinkError
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
+from scopelink.mount.memory import DeviceMemory
+from scopelink.mount.pointing import device_key
 from scopelink.protocol.lx200 import SKYFI_PORT
 from scopelink.servers.access import DEFAULT_POLICY, AccessPolicy, IPNetwork, parse_network
 from scopelink.servers.alpaca import DISCOVERY_PORT, AlpacaServer
@@ -44,7 +46,7 @@ from scopelink.servers.alpaca.server import StateDirError
 from scopelink.servers.hosts import bound_beyond_loopback, local_networks
 from scopelink.servers.lx200 import LX200Server
 from scopelink.servers.stellarium import Equinox, StellariumServer
-from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
+from scopelink.servers.synscan import Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimulatedMount
 from scopelink.web import Dashboard, protocol_by_port
 
@@ -398,6 +400,8 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
                 f"{site.latitude_deg:+.4f}°, {site.longitude_deg:+.4f}°",
                 flush=True,
             )
+            # The PC-side syncs of this device, kept between runs (docs/pointing.md).
+            mount.keep_pointing_in(DeviceMemory(device_key(mount.identity), args.state_dir))
             # One poller for every front end: reads come from the state cache.
             await stack.enter_async_context(mount.watching())
             for line in await _start_servers(stack, mount, plan, args):
@@ -461,7 +465,9 @@ async def _start_servers(
         lines.append(f"Stellarium  tcp {host}:{stellarium.port}  ({frame.value})")
     decoded: dict[int, Protocol] = {}
     if plan.synscan is not None or plan.synscan_pty is not None:
-        config = SynScanConfig(model=synscan_model_code(mount))
+        # A bridge, not a hand control: no ~7° sync limit of its own; the Mount judges every
+        # sync (limits.max_sync_deg) and keeps it on the PC if need be (docs/pointing.md).
+        config = SynScanConfig(model=synscan_model_code(mount), quirks=Quirks(sync_limit_deg=None))
         # A network client is not a serial line: no 9600-baud pacing on the server side.
         # dead_man: a phone app that drops must not leave the mount slewing. No motor
         # passthrough positioning: it would move an axis past every limit check.

@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import logging
 import math
 from collections.abc import Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
-from scopelink.astro import PierSide, Site, j2000_to_observed
+from scopelink.astro import PierSide, Site, observed_to_j2000
 from scopelink.astro.catalog import CatalogObject, lookup
-from scopelink.mount.cache import StateCache
 from scopelink.mount.deadman import DeadMan, MotionClient
 from scopelink.mount.errors import (
     InvalidValueError,
@@ -26,6 +26,7 @@ from scopelink.mount.errors import (
     NotConnectedError,
     NotSupportedError,
     ParkedError,
+    SyncRefusedError,
 )
 from scopelink.mount.guard import HorizonGuard
 from scopelink.mount.guarded import GuardSettings
@@ -38,6 +39,7 @@ from scopelink.mount.meridian import (
 )
 from scopelink.mount.meridian_watch import MeridianWatch
 from scopelink.mount.parking import ParkKeeper, Resume
+from scopelink.mount.pointed import PointedMount
 from scopelink.mount.progress import ProgressTracker
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
@@ -48,7 +50,6 @@ from scopelink.mount.syncs import (
     sync_distance_deg,
 )
 from scopelink.mount.types import (
-    AlignmentMode,
     GuideDirection,
     MountAxis,
     MountState,
@@ -59,6 +60,8 @@ from scopelink.mount.types import (
 )
 
 __all__ = ["MAX_PULSE_GUIDE_MS", "Mount", "utc_now"]
+
+_log = logging.getLogger(__name__)
 
 MAX_PULSE_GUIDE_MS = 60_000
 """Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
@@ -83,7 +86,7 @@ def _check_alt_az(alt_deg: float, az_deg: float) -> None:
         raise InvalidValueError(f"azimuth {az_deg}° must lie in [0, 360)")
 
 
-class Mount(StateCache):
+class Mount(PointedMount):
     """A telescope mount, whatever protocol (or simulation) is behind it.
 
     Reads come from a state cache (:attr:`state`) that a background poller keeps fresh while
@@ -105,16 +108,13 @@ class Mount(StateCache):
         clock: Callable[[], datetime] = utc_now,
         park_position: ParkPosition | None = None,
     ) -> None:
-        self._site = site
-        self._limits = limits or Limits()
-        super().__init__(clock=clock)
+        super().__init__(site=site, limits=limits, clock=clock)
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
         self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
         self._meridian = MeridianWatch(self, GuardSettings(), show_notice=self._publish_again)
         self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
-        self._sync_frame = SyncFrame()
         self._sync_lock = asyncio.Lock()
         """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
@@ -123,18 +123,6 @@ class Mount(StateCache):
         """Records the park and restores it at unpark (:mod:`scopelink.mount.parking`)."""
 
     # --- who, what, where -------------------------------------------------------------------------
-
-    @property
-    def site(self) -> Site:
-        return self._site
-
-    @property
-    def limits(self) -> Limits:
-        return self._limits
-
-    @limits.setter
-    def limits(self, limits: Limits) -> None:
-        self._limits = limits
 
     @property
     def park_position(self) -> ParkPosition:
@@ -180,6 +168,7 @@ class Mount(StateCache):
         return self._dead_man.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
+        state = self._corrected(state)
         if state.parked and state.slewing:  # parked only once arrived and stopped
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
@@ -239,10 +228,6 @@ class Mount(StateCache):
 
     # --- checked motion: validate, check limits, then delegate ---------------------------------
 
-    def observed_altaz(self, ra_j2000_hours: float, dec_j2000_deg: float) -> tuple[float, float]:
-        """Observed (refracted) altitude and azimuth of a J2000 position now, at this site."""
-        return j2000_to_observed(ra_j2000_hours, dec_j2000_deg, self.now(), self._site)
-
     async def goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         """Start a slew to a J2000 position; returns once the slew has started."""
         _check_ra_dec(ra_j2000_hours, dec_j2000_deg)
@@ -253,10 +238,14 @@ class Mount(StateCache):
         ha, dec = hour_angle_of_j2000(self, ra_j2000_hours, dec_j2000_deg)
         side = self._meridian_side(ha, dec, tracking=True)
         self._motion_commanded()
-        if side is None:
-            await self._goto_equatorial(ra_j2000_hours, dec_j2000_deg)
+        if self._pointing.active:  # checked above where the tube will point; sent in device terms
+            ra, dec = observed_to_j2000(*self._pointing.reading_of(alt, az), self.now(), self._site)
         else:
-            await self._goto_equatorial_on(ra_j2000_hours, dec_j2000_deg, side)
+            ra, dec = ra_j2000_hours, dec_j2000_deg
+        if side is None:
+            await self._goto_equatorial(ra, dec)
+        else:
+            await self._goto_equatorial_on(ra, dec, side)
         self._guard.goto_started()
         self._meridian.goto_started()
         self._target = SlewTarget(ra_j2000_hours=ra_j2000_hours, dec_j2000_deg=dec_j2000_deg)
@@ -279,10 +268,11 @@ class Mount(StateCache):
         await self._check_sun(alt_deg, az_deg)
         side = self._meridian_side(*hour_angle_of_altaz(self, alt_deg, az_deg), tracking=False)
         self._motion_commanded()
+        device_alt, device_az = self._pointing.reading_of(alt_deg, az_deg)
         if side is None:
-            await self._goto_horizontal(alt_deg, az_deg)
+            await self._goto_horizontal(device_alt, device_az)
         else:
-            await self._goto_horizontal_on(alt_deg, az_deg, side)
+            await self._goto_horizontal_on(device_alt, device_az, side)
         self._guard.goto_started()
         self._meridian.goto_started()
         self._target = SlewTarget(alt_deg=alt_deg, az_deg=az_deg)
@@ -326,28 +316,29 @@ class Mount(StateCache):
             await self._check_sun(alt, az, what="sync position", slew=False)
             distance = sync_distance_deg(state, ra_j2000_hours, dec_j2000_deg)
             frame = self._sync_frame_after(ra_j2000_hours, dec_j2000_deg, state)
-            check_sync(self._limits, distance, frame.reach_deg)
-            await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
-            self._sync_frame = frame
+            on_device = self.syncs_on_device and not self._pointing.active
+            # A sync kept on the PC leaves the device's frame; its model is checked instead.
+            check_sync(self._limits, distance, (frame if on_device else self._sync_frame).reach_deg)
+            if on_device:
+                try:
+                    await self._sync_equatorial(ra_j2000_hours, dec_j2000_deg)
+                    self._sync_frame = frame
+                    return
+                except (NotSupportedError, SyncRefusedError) as refusal:
+                    _log.info("sync kept on the PC: %s", refusal)
+            await self._keep_sync(ra_j2000_hours, dec_j2000_deg)
+
+    async def _keep_sync(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
+        """Keep a sync in :attr:`pointing`: a reading taken now (not one a poll may have started
+        before the observer centred the star) and the true position at its time."""
+        await self.refresh()
+        reach = self._sync_frame.reach_deg
+        self._pointing.keep(ra_j2000_hours, dec_j2000_deg, self._site, reach, self._limits)
+        self.pointing_changed()
 
     def _check_sync_now(self, state: MountState) -> None:
         """Refuse a sync while the mount slews (a driver may refuse in its own words first)."""
         refuse_sync_while_slewing(state)
-
-    @property
-    def sync_frame(self) -> SyncFrame:
-        """The net correction syncs through this object have made (axis degrees)."""
-        return self._sync_frame
-
-    def _sync_frame_after(
-        self, ra_j2000_hours: float, dec_j2000_deg: float, state: MountState
-    ) -> SyncFrame:
-        """The net correction after a sync to this position from ``state`` (the simulator,
-        which knows its counters, says exactly)."""
-        altaz = None
-        if self.capabilities.alignment_mode is AlignmentMode.ALT_AZ:
-            altaz = self.observed_altaz(ra_j2000_hours, dec_j2000_deg)
-        return self._sync_frame.after_sync(ra_j2000_hours, dec_j2000_deg, state, altaz)
 
     def sun_zone(self) -> SunZone | None:
         """The Sun avoidance zone now (None when ``limits.sun_avoidance_deg`` is 0)."""

@@ -37,3 +37,8 @@ class DeviceError(MountError):
 class StaleReadingError(DeviceError):
     """The last reading is older than the mount's ``stale_after_s``: it is not served as current
     (the message names its age and why no newer one came)."""
+
+
+class SyncRefusedError(DeviceError):
+    """The device did not take a sync (e.g. a hand control beyond its ~7°): ``Mount`` then keeps
+    the sync on the PC (docs/pointing.md)."""

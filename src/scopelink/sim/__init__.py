@@ -14,6 +14,7 @@ from scopelink.sim.geometry import (
     geometry_for,
 )
 from scopelink.sim.limit_search import LimitStop
+from scopelink.sim.misalignment import Misalignment
 from scopelink.sim.models import (
     AZ_GTI,
     DOB_GOTO,
@@ -45,6 +46,7 @@ __all__ = [
     "Geometry",
     "GermanEquatorialGeometry",
     "LimitStop",
+    "Misalignment",
     "MountModel",
     "Phase",
     "Segment",

@@ -11,9 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from datetime import datetime
 
+from scopelink.astro import Site
 from scopelink.mount import Limits
-from scopelink.mount.sun import SunZone
+from scopelink.mount.errors import SunAvoidanceError
+from scopelink.mount.sun import SunZone, sun_zone
+from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis, AxisPlan
 from scopelink.sim.geometry import Geometry
 
@@ -148,3 +152,15 @@ class LimitSearch:
         if rates:
             return settled + min(_TRACKING_LOOKAHEAD_S, 400.0 / min(rates))
         return settled
+
+
+def sun_zone_or_none(
+    limits: Limits, site: Site, when: datetime, mode: AlignmentMode
+) -> SunZone | None:
+    """The Sun avoidance zone the physics stops at, at ``when`` (None when it is off, or when the
+    clock is outside the ephemeris: the Mount API then refuses every goto until the time is set,
+    and the physics must not fail every command meanwhile)."""
+    try:
+        return sun_zone(limits.sun_avoidance_deg, site, when, mode)
+    except SunAvoidanceError:
+        return None

@@ -33,14 +33,13 @@ from scopelink.mount import (
     MountState,
     TrackingMode,
 )
-from scopelink.mount.errors import SunAvoidanceError
-from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import SyncFrame
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis
 from scopelink.sim.clock import SimClock
 from scopelink.sim.geometry import Geometry, geometry_for
-from scopelink.sim.limit_search import LimitSearch, LimitStop
+from scopelink.sim.limit_search import LimitSearch, LimitStop, sun_zone_or_none
+from scopelink.sim.misalignment import Misalignment
 from scopelink.sim.models import EQ6, MountModel
 from scopelink.sim.motion import FOREVER, MotionPlan
 from scopelink.sim.tracking import (
@@ -82,6 +81,7 @@ class SimulatedMount(Mount):
         park_counters: tuple[float, float] | None = None,
         meridian_tolerance_deg: float = 7.5,
         guide_rate_deg_s: float | None = None,
+        misalignment: Misalignment | None = None,
     ) -> None:
         self.clock = clock if clock is not None else SimClock()
         super().__init__(site=site, limits=limits, clock=self.clock.now)
@@ -105,6 +105,8 @@ class SimulatedMount(Mount):
         self._tracking = TrackingMode.OFF
         self._plan = MotionPlan(self.axes)
         self._capabilities = _capabilities_of(model)
+        self.misalignment = misalignment or Misalignment()
+        """How the real sky differs from the mount's frame (:mod:`scopelink.sim.misalignment`)."""
 
     # --- identity -------------------------------------------------------------------------------
 
@@ -202,6 +204,13 @@ class SimulatedMount(Mount):
         """Advance the clock by ``seconds`` and return the state then (deterministic)."""
         self.clock.advance(seconds)
         return self.snapshot()
+
+    def true_pointing(self) -> tuple[float, float]:
+        """The true observed (alt, az) the tube points at now: the reading, moved by
+        :attr:`misalignment` (what a camera on the tube would plate-solve)."""
+        alt, az = self.observed_at(self.elapsed())
+        equatorial = self.model.alignment_mode is not AlignmentMode.ALT_AZ
+        return self.misalignment.true_of(alt, az, self._site.latitude_deg, equatorial=equatorial)
 
     def sync_distance_deg(self, ra_j2000_hours: float, dec_j2000_deg: float) -> float:
         """How far (degrees) a J2000 position is from where the mount believes it points."""
@@ -371,20 +380,6 @@ class SimulatedMount(Mount):
 
     # --- internals ------------------------------------------------------------------------------
 
-    def sun_zone_at(self, t: float) -> SunZone | None:
-        """The Sun avoidance zone at elapsed time ``t`` (None when it is off, or when the clock
-        is outside the ephemeris: the Mount API then refuses every goto until the time is set,
-        and the physics must not fail every command meanwhile)."""
-        try:
-            return sun_zone(
-                self._limits.sun_avoidance_deg,
-                self._site,
-                self.clock.datetime_at(t),
-                self.model.alignment_mode,
-            )
-        except SunAvoidanceError:
-            return None
-
     def _make_geometry(self, site: Site) -> Geometry:
         return geometry_for(
             self.model.alignment_mode,
@@ -430,7 +425,8 @@ class SimulatedMount(Mount):
     def _finish(self, *, limits_from: float) -> None:
         """End a command: settle tracking, stop at the first limit, publish the state."""
         self._plan.resolve_retargets(self._tracking_path_at)
-        zone = self.sun_zone_at(limits_from)
+        when = self.clock.datetime_at(limits_from)
+        zone = sun_zone_or_none(self._limits, self._site, when, self.model.alignment_mode)
         self._plan.stop_at_first_limit(
             LimitSearch(self.axes, self.geometry, self._limits, zone, limits_from)
         )

@@ -142,6 +142,25 @@ class _Api:
             )
         return self._ok()
 
+    async def pointing(self, request: web.Request) -> web.Response:
+        """GET: the PC-side syncs, their residuals and the model (docs/pointing.md)."""
+        return web.json_response(self.mount.pointing.summary())
+
+    async def pointing_change(self, request: web.Request) -> web.Response:
+        """POST ``{"remove": N}`` (1-based, as listed) or ``{"clear": true}``."""
+        body = await read_body(request)
+        if body.has("remove"):
+            number = body.number("remove", 1.0, 10_000.0)
+            if not number.is_integer():
+                raise BadRequestError(f"'remove' is a sync's number as listed, not {number:g}")
+            self.mount.pointing.remove(int(number))
+        elif body.has("clear"):
+            self.mount.pointing.clear()
+        else:
+            raise BadRequestError("give 'remove' (a sync's number) or 'clear'")
+        self.mount.pointing_changed()
+        return web.json_response(self.mount.pointing.summary())
+
     async def abort(self, request: web.Request) -> web.Response:
         await read_body(request)
         await self.mount.abort()
@@ -222,6 +241,8 @@ def add_api_routes(app: web.Application, mount: Mount) -> None:
     app.router.add_get("/api/search", api.search)
     app.router.add_post("/api/goto", api.goto)
     app.router.add_post("/api/sync", api.sync)
+    app.router.add_get("/api/pointing", api.pointing)
+    app.router.add_post("/api/pointing", api.pointing_change)
     app.router.add_post("/api/abort", api.abort)
     app.router.add_post("/api/move", api.move)
     app.router.add_post("/api/tracking", api.tracking)

@@ -65,6 +65,10 @@ def rate_zero(axis: MountAxis) -> FixedRateSlew:
 class SynScanBase(Mount):
     """The SynScan driver's construction, identity and exchanges (see :class:`SynScanMount`)."""
 
+    syncs_on_device = False
+    """A hand control's sync is one local offset, refused beyond ~7° and before an alignment:
+    scopelink keeps every sync itself and fits a pointing model (docs/pointing.md)."""
+
     def __init__(
         self,
         link: str | LinkFactory,

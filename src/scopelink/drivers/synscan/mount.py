@@ -38,6 +38,7 @@ from scopelink.mount import (
     Priority,
     TrackingMode,
 )
+from scopelink.mount.errors import SyncRefusedError
 from scopelink.protocol.synscan import (
     Ack,
     Aligned,
@@ -222,7 +223,7 @@ class SynScanMount(SynScanParking):
             state.ra_j2000_hours, state.dec_j2000_deg, ra_j2000_hours, dec_j2000_deg
         )
         if error > SYNC_TOLERANCE_DEG:
-            raise DeviceError(
+            raise SyncRefusedError(
                 f"sync ignored by the hand control (more than ~7° away?): it still reports a "
                 f"position {error:.2f}° from the sync target"
             )

@@ -473,6 +473,43 @@ async function applyAccess() {
   for (const control of controls) control.disabled = true;
 }
 
+// ---------------------------------------------------------------- pointing (docs/pointing.md)
+
+function renderPointing(model) {
+  if (!model) return;
+  const syncs = model.syncs || [];
+  const terms = (model.fitted || []).map((name) => `${name} ${model.terms_arcmin[name].toFixed(2)}′`);
+  setText("pointing-summary", syncs.length
+    ? `${syncs.length} sync(s) kept on the PC, RMS ${model.rms_arcmin.toFixed(2)}′; ${terms.join(", ")}`
+    : "no syncs kept on the PC");
+  const rows = syncs.map((sync) => {
+    const row = document.createElement("tr");
+    for (const text of [sync.number, sync.ra_j2000_hours.toFixed(4), sync.dec_j2000_deg.toFixed(3),
+      `${sync.residual_arcmin.toFixed(2)}′`]) {
+      const cell = document.createElement("td");
+      cell.textContent = String(text);
+      row.append(cell);
+    }
+    const remove = document.createElement("button");
+    remove.type = "button";
+    remove.textContent = "✕";
+    remove.setAttribute("aria-label", `Remove sync ${sync.number}`);
+    remove.disabled = document.body.dataset.readOnly === "true";
+    remove.addEventListener("click", async () => renderPointing(await api("/api/pointing", { remove: sync.number })));
+    const cell = document.createElement("td");
+    cell.append(remove);
+    row.append(cell);
+    return row;
+  });
+  $("pointing-syncs").querySelector("tbody").replaceChildren(...rows);
+  $("pointing-syncs").hidden = !syncs.length;
+  $("pointing-clear").hidden = !syncs.length || document.body.dataset.readOnly === "true";
+}
+
+async function refreshPointing() {
+  try { renderPointing(await (await fetch("/api/pointing")).json()); } catch (_) { /* shown next time */ }
+}
+
 function debounce(fn, ms) {
   let timer = null;
   return (...args) => { clearTimeout(timer); timer = setTimeout(() => fn(...args), ms); };
@@ -615,6 +652,7 @@ function setup() {
     const sel = view.selected;
     if (sel && sel.name && (await api("/api/sync", { name: sel.name }))) {
       showMessage(`synced on ${sel.name}`, "info");
+      refreshPointing();
     }
   });
   $("clear-selected").addEventListener("click", () => select(null));
@@ -661,6 +699,10 @@ function setup() {
     if (await api("/api/time", { utc: new Date().toISOString() })) showMessage("time sent", "info");
   });
   $("traffic-pause").addEventListener("change", (event) => { traffic.paused = event.target.checked; });
+
+  $("pointing-clear").addEventListener("click", async () => renderPointing(await api("/api/pointing", { clear: true })));
+  refreshPointing();
+  setInterval(refreshPointing, 10000);  // syncs from other front ends show within 10 s
 
   setupPad();
   applyAccess();
