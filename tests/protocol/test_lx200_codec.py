@@ -38,6 +38,7 @@ from scopelink.protocol.lx200 import (
     SyncTarget,
     TogglePrecision,
     UnknownCommand,
+    degree_sign_of,
     encode_command,
     format_altitude,
     format_azimuth,
@@ -70,14 +71,33 @@ def test_coordinates_in_both_precisions() -> None:
     assert format_ra(12.5, high_precision=False) == "12:30.0"
     assert format_ra(23.99999) == "00:00:00"  # rounds to 24 h, which is 0 h
     assert format_ra(5 + 59 / 60 + 59.6 / 3600) == "06:00:00"
-    assert format_dec(-45.5) == "-45*30:00"
-    assert format_dec(45.5, high_precision=False) == "+45*30"
-    assert format_dec(-0.0001) == "+00*00:00"  # no negative zero
-    assert format_dec(-0.3) == "-00*18:00"
-    assert format_dec(91.0) == "+90*00:00"
-    assert format_altitude(-1.25) == "-01*15'00"
-    assert format_azimuth(359.99999) == "000*00'00"
-    assert format_azimuth(180.5, high_precision=False) == "180*30"
+    assert format_dec(-45.5) == "-45\xdf30:00"  # Meade's degree byte unless asked for '*'
+    assert format_dec(45.5, high_precision=False, degree_sign="*") == "+45*30"
+    assert format_dec(-0.0001, degree_sign="*") == "+00*00:00"  # no negative zero
+    assert format_dec(-0.3, degree_sign="*") == "-00*18:00"
+    assert format_dec(91.0, degree_sign="*") == "+90*00:00"
+    assert format_altitude(-1.25, degree_sign="*") == "-01*15'00"
+    assert format_azimuth(359.99999) == "000\xdf00'00"
+    assert format_azimuth(180.5, high_precision=False, degree_sign="*") == "180*30"
+
+
+@pytest.mark.parametrize(
+    ("text", "sign"),
+    [
+        ("+45\xdf22:52", "\xdf"),  # Stellarium
+        ("+37*17", "*"),  # SkySafari
+        ("+45:22:52", None),  # INDI
+        (" -045 * 30", "*"),
+        ("45", None),
+        ("*45", None),
+    ],
+)
+def test_the_degree_sign_a_client_wrote(text: str, sign: str | None) -> None:
+    assert degree_sign_of(text) == sign
+    if sign is not None:
+        command = parse_command("Sd" + text)
+        assert isinstance(command, SetTargetDec)
+        assert command.degree_sign == sign
 
 
 @pytest.mark.parametrize(
@@ -267,7 +287,9 @@ def same(a: object, b: object) -> bool:
     if type(a) is not type(b):
         return False
     fields = getattr(a, "__dataclass_fields__", {})
-    for name in fields:
+    for name, spec in fields.items():
+        if not spec.compare:  # the degree sign a client wrote: how, not what
+            continue
         x, y = getattr(a, name), getattr(b, name)
         if isinstance(x, float):
             if not math.isclose(x, y, abs_tol=1e-9):

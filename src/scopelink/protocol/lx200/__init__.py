@@ -9,6 +9,10 @@
 """
 
 from scopelink.protocol.lx200.angles import (
+    ASTERISK_DEGREE_SIGN,
+    DEGREE_SIGN,
+    MEADE_DEGREE_SIGN,
+    degree_sign_of,
     format_altitude,
     format_azimuth,
     format_dec,
@@ -67,9 +71,12 @@ from scopelink.protocol.lx200.skyfi import SKYFI_PORT, SkyFiQuery, parse_skyfi_q
 
 __all__ = [
     "ACK_BYTE",
+    "ASTERISK_DEGREE_SIGN",
     "DATE_SET_REPLY",
+    "DEGREE_SIGN",
     "MAX_COMMAND_LENGTH",
     "MAX_REPLY_LENGTH",
+    "MEADE_DEGREE_SIGN",
     "NEED_DATA",
     "SKYFI_PORT",
     "Ack",
@@ -105,6 +112,7 @@ __all__ = [
     "UnexpectedReply",
     "UnknownCommand",
     "boolean_reply",
+    "degree_sign_of",
     "encode_command",
     "format_altitude",
     "format_azimuth",

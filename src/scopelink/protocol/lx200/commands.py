@@ -13,10 +13,12 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from scopelink.protocol.base import Event
 from scopelink.protocol.lx200.angles import (
+    DEGREE_SIGN,
+    degree_sign_of,
     format_dec,
     format_ra,
     format_signed_degrees_minutes,
@@ -127,9 +129,13 @@ class SetTargetRA:
 
 @dataclass(frozen=True, slots=True)
 class SetTargetDec:
-    """``:Sd sDD*MM:SS#`` (or ``sDD*MM``): the target's declination (of date)."""
+    """``:Sd sDD*MM:SS#`` (or ``sDD*MM``): the target's declination (of date).
+
+    ``degree_sign``: the one the client wrote (0xDF or ``*``), None for another separator; not
+    part of the command's meaning (two ``:Sd`` that differ only in it are equal)."""
 
     dec_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,9 +179,13 @@ class SetRate:
 
 @dataclass(frozen=True, slots=True)
 class SetLatitude:
-    """``:St sDD*MM#`` (or with seconds): the site latitude, north positive."""
+    """``:St sDD*MM#`` (or with seconds): the site latitude, north positive.
+
+    ``degree_sign``: the one the client wrote (0xDF or ``*``), None for another separator; not
+    part of the command's meaning (two ``:Sd`` that differ only in it are equal)."""
 
     latitude_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -183,6 +193,8 @@ class SetLongitude:
     """``:Sg DDD*MM#``: the site longitude as Meade counts it, **west** positive, 0..360."""
 
     west_longitude_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
+    """The one the client wrote (0xDF or ``*``), None for another separator."""
 
     @property
     def east_longitude_deg(self) -> float:
@@ -349,15 +361,17 @@ def _set_ra(argument: str) -> SetTargetRA:
 
 
 def _set_dec(argument: str) -> SetTargetDec:
-    return SetTargetDec(_angle(argument, "declination", -90.0, 90.0))
+    value = _angle(argument, "declination", -90.0, 90.0)
+    return SetTargetDec(value, degree_sign_of(argument))
 
 
 def _set_latitude(argument: str) -> SetLatitude:
-    return SetLatitude(_angle(argument, "latitude", -90.0, 90.0))
+    return SetLatitude(_angle(argument, "latitude", -90.0, 90.0), degree_sign_of(argument))
 
 
 def _set_longitude(argument: str) -> SetLongitude:
-    return SetLongitude(_angle(argument, "longitude", -360.0, 360.0))
+    value = _angle(argument, "longitude", -360.0, 360.0)
+    return SetLongitude(value, degree_sign_of(argument))
 
 
 def _set_utc_offset(argument: str) -> SetUtcOffset:
@@ -413,7 +427,7 @@ def encode_command(command: AnyCommand, *, high_precision: bool = True) -> bytes
     """The bytes a client sends for ``command``."""
     if isinstance(command, Ack):
         return bytes([ACK_BYTE])
-    return f":{_command_text(command, high_precision)}#".encode("ascii")
+    return f":{_command_text(command, high_precision)}#".encode("latin-1")
 
 
 def _command_text(command: AnyCommand, high_precision: bool) -> str:
@@ -424,8 +438,10 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
             return "U"
         case SetTargetRA(ra):
             return "Sr" + format_ra(ra, high_precision=high_precision)
-        case SetTargetDec(dec):
-            return "Sd" + format_dec(dec, high_precision=high_precision)
+        case SetTargetDec(dec, sign):
+            return "Sd" + format_dec(
+                dec, high_precision=high_precision, degree_sign=sign or DEGREE_SIGN
+            )
         case GotoTarget():
             return "MS"
         case SyncTarget(code):
@@ -438,12 +454,12 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
             return f"Mg{direction.value}{duration:04d}"
         case SetRate(rate):
             return "R" + rate.value
-        case SetLatitude(latitude):
-            return "St" + format_signed_degrees_minutes(latitude)
-        case SetLongitude(west):
+        case SetLatitude(latitude, sign):
+            return "St" + format_signed_degrees_minutes(latitude, degree_sign=sign or DEGREE_SIGN)
+        case SetLongitude(west, degree):
             total = round(abs(west) * 60.0)
             sign = "-" if west < 0 and total else ""
-            return f"Sg{sign}{total // 60:03d}*{total % 60:02d}"
+            return f"Sg{sign}{total // 60:03d}{degree or DEGREE_SIGN}{total % 60:02d}"
         case SetUtcOffset(hours):
             return f"SG{hours:+05.1f}"
         case SetLocalTime(hour, minute, second):
