@@ -78,6 +78,7 @@ def parse_device(text: str) -> DeviceSpec:
     if text == "sim":
         return DeviceSpec("sim", DEFAULT_SIM_PRESET)
     kind, colon, rest = text.partition(":")
+    _refuse_a_mistyped_kind(text, kind if colon and not rest.startswith("//") else None, rest)
     if colon and kind.lower() in KINDS and not rest.startswith("//"):
         kind = kind.lower()
         if not rest.strip():
@@ -94,6 +95,30 @@ def parse_device(text: str) -> DeviceSpec:
             return DeviceSpec("sim", preset)
         return DeviceSpec(kind, rest.strip())
     return DeviceSpec(None, text)
+
+
+def _refuse_a_mistyped_kind(text: str, kind: str | None, rest: str) -> None:
+    """``simm`` or ``synscn:/dev/ttyUSB0`` is a kind mistyped, not a port to open: say which
+    kind was probably meant (a bare word with no path separator that is close to a kind, or a
+    prefix before ``:`` that is close to one). A port really named like that is still reached
+    as ``./simm`` or with its kind, ``synscan:simm``."""
+    import difflib  # noqa: PLC0415 - only when a device is parsed
+
+    if kind is not None:
+        word, meant = kind.lower(), "{}:" + rest
+    elif not any(c in text for c in "/\\:"):
+        word, meant = text.lower(), "{}"
+    else:
+        return
+    if not word or word in KINDS:
+        return
+    close = difflib.get_close_matches(word, KINDS, n=1, cutoff=0.6)
+    if close:
+        suggestion = meant.format(close[0])
+        raise DeviceOpenError(
+            f"unknown device kind {kind or text!r}: did you mean {suggestion}?",
+            f"device kinds: {', '.join(KINDS)}; for example {EXAMPLES}",
+        )
 
 
 def create_mount(
