@@ -327,8 +327,8 @@ class _Reader:
                 max_sync_deg=max_sync if max_sync is not None else DEFAULT_MAX_SYNC_DEG,
             )
         except InvalidValueError as error:
-            horizon = "horizon.profile" if "profile" in str(error) else "horizon.altitude"
-            key = "limits.max_altitude" if "maximum" in str(error) else horizon
+            table = "horizon.profile" if "profile" in str(error) else "horizon.altitude"
+            key = "limits.max_altitude" if "maximum" in str(error) else table
             key = "limits.sun_avoidance_deg" if "Sun" in str(error) else key
             key = "limits.max_sync_deg" if "max_sync_deg" in str(error) else key
             for name in _MERIDIAN_KEYS:

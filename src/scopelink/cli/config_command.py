@@ -86,7 +86,7 @@ _EXAMPLES = f"""\
 examples:
   scopelink config path                        where the settings file is read from
   scopelink config show                        the settings in force (defaults filled in)
-  scopelink config init                        write the example, all commented out (never overwrites)
+  scopelink config init                        write the example, commented out (no overwrite)
   scopelink config set device sim:az-gti       change one value, keeping comments and layout
   scopelink config set site.latitude 40.4 site.longitude -3.7   several at once
   scopelink config set horizon.profile "[[0, 15], [90, 25]]"    any TOML value
