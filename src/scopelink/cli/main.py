@@ -8,13 +8,13 @@ aiohttp) is imported when that subcommand is used (docs/cli.md, "Start-up").
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from collections.abc import Callable, Sequence
 
 from scopelink import __version__
 from scopelink.cli.commands import SuggestingParser, add_commands
 from scopelink.cli.errors import CommandError
+from scopelink.cli.log_lines import configure_logging
 
 EXIT_USAGE = 2
 
@@ -43,10 +43,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         command = getattr(args, "command", None)
         owner = parser.commands.get(command, parser) if command else parser
         owner.refuse_unknown_options(extras)
-    logging.basicConfig(
-        level=logging.DEBUG if args.verbose else logging.WARNING,
-        format="%(asctime)s %(name)s %(message)s",
-    )
+    configure_logging(args.verbose)
     run: Callable[[argparse.Namespace], int] | None = getattr(args, "run", None)
     if run is None:
         parser.print_help()
