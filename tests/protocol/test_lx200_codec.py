@@ -47,6 +47,7 @@ from scopelink.protocol.lx200 import (
     parse_command,
     parse_sexagesimal,
     parse_skyfi_query,
+    precision_of,
     reply_kind,
     skyfi_reply,
     slew_reply,
@@ -397,3 +398,14 @@ def test_garbage_never_raises_and_commands_after_it_still_parse(garbage: bytes) 
 def test_parse_command_never_raises(text: str) -> None:
     event = parse_command(text)
     assert event is not None
+
+
+@pytest.mark.parametrize(
+    ("text", "high"),
+    [("05:35:17", True), ("05:35.3", False), ("+45\xdf22:52", True), ("+45*22", False)],
+)
+def test_the_precision_a_client_wrote(text: str, high: bool) -> None:
+    assert precision_of(text) is high
+    command = parse_command(("Sd" if text[0] in "+-" else "Sr") + text)
+    assert isinstance(command, SetTargetDec | SetTargetRA)
+    assert command.high_precision is high

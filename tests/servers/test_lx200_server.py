@@ -482,3 +482,24 @@ async def test_each_client_is_answered_with_the_degree_sign_it_writes() -> None:
             for client in (stellarium, skysafari, indi):
                 client.writer.close()
                 await client.writer.wait_closed()
+
+
+async def test_each_client_is_answered_in_the_precision_it_writes() -> None:
+    """A client writing minutes only (INDI in its short format: `:Sd +45*22#`) is answered in low
+    precision; writing seconds again switches back; `:U#` still toggles in between."""
+    mount = simulated_mount(rate=1.0)
+    async with serving(mount) as (_, client):
+        assert len(await client.text(b":GR#")) == len(b"HH:MM:SS#")
+        assert await client.char(b":Sr 05:35.3#") == b"1"
+        low_ra = await client.text(b":GR#")
+        assert low_ra[5:6] == b".", low_ra
+        assert len(low_ra) == len(b"HH:MM.T#"), low_ra
+        assert await client.char(b":Sd +45*22#") == b"1"
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM#")
+        assert (await client.text(b":Gd#"))[:-1] == b"+45*22"
+        await client.send(b":U#")
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM:SS#")
+        await client.send(b":U#")
+        assert await client.char(b":Sd +45:22:52#") == b"1"  # INDI's long form: high again
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM:SS#")
+        assert len(await client.text(b":GR#")) == len(b"HH:MM:SS#")

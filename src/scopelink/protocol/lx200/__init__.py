@@ -18,6 +18,7 @@ from scopelink.protocol.lx200.angles import (
     format_dec,
     format_ra,
     parse_sexagesimal,
+    precision_of,
 )
 from scopelink.protocol.lx200.commands import (
     ACK_BYTE,
@@ -121,6 +122,7 @@ __all__ = [
     "parse_command",
     "parse_sexagesimal",
     "parse_skyfi_query",
+    "precision_of",
     "reply_kind",
     "skyfi_reply",
     "slew_reply",

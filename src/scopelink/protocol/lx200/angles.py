@@ -29,6 +29,7 @@ __all__ = [
     "format_ra",
     "format_signed_degrees_minutes",
     "parse_sexagesimal",
+    "precision_of",
 ]
 
 MEADE_DEGREE_SIGN: Final = "\xdf"
@@ -52,6 +53,15 @@ def degree_sign_of(text: str) -> str | None:
     ``*``; None when it wrote another separator (INDI's ``:``) or none."""
     match = re.match(r"\s*[+-]?\s*\d{1,3}\s*([*\xdf])", text)
     return None if match is None else match[1]
+
+
+def precision_of(text: str) -> bool | None:
+    """True when ``text`` has seconds (high precision: ``HH:MM:SS``, ``sDD*MM:SS``), False when
+    it stops at minutes (low: ``HH:MM.T``, ``sDD*MM``), None when it is not sexagesimal."""
+    match = _FIELDS.match(text)
+    if match is None or match["b"] is None:
+        return None
+    return match["c"] is not None
 
 
 def parse_sexagesimal(text: str) -> float | None:

@@ -23,6 +23,7 @@ from scopelink.protocol.lx200.angles import (
     format_ra,
     format_signed_degrees_minutes,
     parse_sexagesimal,
+    precision_of,
 )
 
 __all__ = [
@@ -122,9 +123,13 @@ class TogglePrecision:
 
 @dataclass(frozen=True, slots=True)
 class SetTargetRA:
-    """``:Sr HH:MM:SS#`` (or ``HH:MM.T``): the target's right ascension (of date)."""
+    """``:Sr HH:MM:SS#`` (or ``HH:MM.T``): the target's right ascension (of date).
+
+    ``high_precision``: the form the client wrote (True with seconds, False without), not part
+    of the command's meaning."""
 
     ra_hours: float
+    high_precision: bool | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,6 +141,8 @@ class SetTargetDec:
 
     dec_deg: float
     degree_sign: str | None = field(default=None, compare=False)
+    high_precision: bool | None = field(default=None, compare=False)
+    """The form the client wrote: True with seconds, False without."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -357,12 +364,12 @@ def _set_ra(argument: str) -> SetTargetRA:
     value = _angle(argument, "right ascension", 0.0, 24.0)
     if value >= 24.0:
         raise ValueError(f"right ascension {argument!r} must lie below 24 h")
-    return SetTargetRA(value)
+    return SetTargetRA(value, precision_of(argument))
 
 
 def _set_dec(argument: str) -> SetTargetDec:
     value = _angle(argument, "declination", -90.0, 90.0)
-    return SetTargetDec(value, degree_sign_of(argument))
+    return SetTargetDec(value, degree_sign_of(argument), precision_of(argument))
 
 
 def _set_latitude(argument: str) -> SetLatitude:

@@ -179,16 +179,20 @@ class LX200Session:
     def mount(self) -> Mount:
         return self.handset.mount
 
-    def _follow_degree_sign(self, command: AnyCommand) -> None:
+    def _follow_the_client(self, command: AnyCommand) -> None:
+        """Answer in the form the client writes: its degree sign (``:Sd``/``:St``/``:Sg``) and
+        its precision (``:Sr``/``:Sd`` with or without seconds)."""
         if isinstance(command, SetTargetDec | SetLatitude | SetLongitude) and command.degree_sign:
             self.degree_sign = command.degree_sign
+        if isinstance(command, SetTargetRA | SetTargetDec) and command.high_precision is not None:
+            self.high_precision = command.high_precision
 
     async def answer(self, command: AnyCommand | MalformedCommand) -> bytes:
         """Carry out ``command`` and return its reply (``b""`` when it has none)."""
         if isinstance(command, MalformedCommand):
             logger.info("%s", command.describe())
             return boolean_reply(False) if reply_kind(command) is ReplyKind.CHAR else b""
-        self._follow_degree_sign(command)
+        self._follow_the_client(command)
         if self.handset.read_only and isinstance(command, _CHANGES_THE_MOUNT):
             return self._refuse_read_only(command)
         match command:
@@ -201,10 +205,10 @@ class LX200Session:
             case TogglePrecision():
                 self.high_precision = not self.high_precision
                 return b""
-            case SetTargetRA(ra):
+            case SetTargetRA(ra, _):
                 self.target_ra_hours = ra
                 return boolean_reply(True)
-            case SetTargetDec(dec, _):
+            case SetTargetDec(dec, _, _):
                 self.target_dec_deg = dec
                 return boolean_reply(True)
             case GotoTarget():
