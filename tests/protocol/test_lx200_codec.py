@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from scopelink.protocol.lx200 import (
+    ASTERISK_DEGREE_SIGN,
     DATE_SET_REPLY,
+    DEGREE_SIGN,
     MAX_COMMAND_LENGTH,
+    MEADE_DEGREE_SIGN,
     NEED_DATA,
     Ack,
     AnyCommand,
@@ -409,3 +413,15 @@ def test_the_precision_a_client_wrote(text: str, high: bool) -> None:
     command = parse_command(("Sd" if text[0] in "+-" else "Sr") + text)
     assert isinstance(command, SetTargetDec | SetTargetRA)
     assert command.high_precision is high
+
+
+def test_the_documented_degree_sign_is_the_code_s() -> None:
+    """docs/lx200.md: Meade's byte 0xDF before a client writes its own, and '*' kept for those
+    that write it."""
+    text = (Path(__file__).parents[2] / "docs" / "lx200.md").read_text(encoding="utf-8")
+    row = next(line for line in text.splitlines() if line.startswith("| Degree sign |"))
+    assert "before that (and after a client's `:`, INDI's choice) Meade's byte 0xDF" in row
+    assert "0xDF or `*`" in row
+    assert DEGREE_SIGN == MEADE_DEGREE_SIGN == "\xdf"
+    assert ASTERISK_DEGREE_SIGN == "*"
+    assert format_dec(1.0)[3] == DEGREE_SIGN

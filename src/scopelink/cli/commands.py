@@ -102,7 +102,7 @@ _INVALID_CHOICE: Final = re.compile(r"invalid choice: '([^']*)' \(choose from (.
 
 def did_you_mean(word: str, candidates: Iterable[str]) -> str:
     """``"; did you mean X?"`` for the candidate closest to a mistyped ``word``, else ``""``."""
-    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    close = difflib.get_close_matches(word, list(candidates), n=1)  # default cutoff, 0.6
     return f"; did you mean {close[0]}?" if close else ""
 
 

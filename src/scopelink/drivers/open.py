@@ -112,7 +112,7 @@ def _refuse_a_mistyped_kind(text: str, kind: str | None, rest: str) -> None:
         return
     if not word or word in KINDS:
         return
-    close = difflib.get_close_matches(word, KINDS, n=1, cutoff=0.6)
+    close = difflib.get_close_matches(word, KINDS, n=1)  # default cutoff, 0.6
     if close:
         suggestion = meant.format(close[0])
         raise DeviceOpenError(
