@@ -130,3 +130,24 @@ def test_warnings_are_sentences_not_logger_lines(tmp_path: Path) -> None:
         assert "scopelink.cli" not in line
         assert "WARNING" not in line
     assert_no_traceback(result.stderr)
+
+
+@pytest.mark.parametrize(
+    ("device", "hint"),
+    [
+        ("synscan:{tmp}/ttyUSB9", "hint: 'scopelink ports' lists the serial ports"),
+        ("{tmp}/ttyUSB9", "hint: 'scopelink ports' lists the serial ports"),  # autodetect
+        ("tcp://127.0.0.1:1", "hint: check the address and port"),
+    ],
+)
+def test_a_port_that_will_not_open_is_said_once(tmp_path: Path, device: str, hint: str) -> None:
+    """Each layer's "cannot open" is not repeated, and autodetect does not try a second kind on
+    a port that did not open: one line, one hint for that kind of link."""
+    result = scopelink(tmp_path / "absent.toml", "status", "--device", device.format(tmp=tmp_path))
+    assert result.returncode == 1
+    lines = result.stderr.splitlines()
+    assert len(lines) == 2, result.stderr
+    assert lines[0].startswith("scopelink status: cannot open "), lines[0]
+    assert lines[0].count("cannot open") == 1, lines[0]
+    assert "skytracker" not in lines[0]
+    assert lines[1].startswith("  " + hint), lines[1]

@@ -53,9 +53,11 @@ EXAMPLES: Final = (
 class DeviceOpenError(Exception):
     """The DEVICE string is malformed, or nothing usable answered on it."""
 
-    def __init__(self, message: str, hint: str = "") -> None:
+    def __init__(self, message: str, hint: str = "", *, unopenable: bool = False) -> None:
         super().__init__(message)
         self.hint = hint
+        self.unopenable = unopenable
+        """The port or address itself would not open (nothing was asked of a device)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -193,8 +195,10 @@ async def open_mount(
             await _connect(mount, candidate)
         except DeviceOpenError as error:
             _log.debug("autodetect: not %s: %s", kind, error)
-            failures.append(f"{kind}: {error}")
             await _close_quietly(mount)  # the next kind needs the port to itself
+            if error.unopenable:
+                raise  # no other kind would open it either: say so once
+            failures.append(f"{kind}: {error}")
             continue
         return mount
     raise DeviceOpenError(
@@ -208,6 +212,20 @@ _PORT_HINT: Final = (
     "'scopelink ports' lists the serial ports; check the path and your permissions "
     "(the dialout group on Linux)"
 )
+
+
+_ADDRESS_HINT: Final = (
+    "check the address and port, and that the device (or 'scopelink emulate') listens there"
+)
+
+
+def _unopenable(spec: DeviceSpec, message: str) -> DeviceOpenError:
+    """One line for a port that would not open: the innermost "cannot open ..." of the link's
+    and the driver's messages (each layer adds its own), and the hint for that kind of link."""
+    start = message.rfind("cannot open ")
+    text = message[start:] if start >= 0 else f"cannot open {spec.target}: {message}"
+    hint = _ADDRESS_HINT if "://" in spec.target else _PORT_HINT
+    return DeviceOpenError(text, hint, unopenable=True)
 
 
 async def _close_quietly(mount: Mount) -> None:
@@ -226,10 +244,11 @@ async def _connect(mount: Mount, spec: DeviceSpec) -> None:
     try:
         await mount.connect()
     except LinkError as error:
-        raise DeviceOpenError(f"cannot open {spec.target}: {error}", _PORT_HINT) from None
+        raise _unopenable(spec, str(error)) from None
     except MountError as error:
         # Drivers report a port that would not open as a MountError saying "cannot open".
-        hint = _PORT_HINT if "cannot open" in str(error) else ""
-        raise DeviceOpenError(f"{spec}: {error}", hint) from None
+        if "cannot open" in str(error):
+            raise _unopenable(spec, str(error)) from None
+        raise DeviceOpenError(f"{spec}: {error}") from None
     except TimeoutError:
         raise DeviceOpenError(f"{spec}: no reply") from None
