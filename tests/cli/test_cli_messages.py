@@ -151,3 +151,10 @@ def test_a_port_that_will_not_open_is_said_once(tmp_path: Path, device: str, hin
     assert lines[0].count("cannot open") == 1, lines[0]
     assert "skytracker" not in lines[0]
     assert lines[1].startswith("  " + hint), lines[1]
+
+
+def test_a_path_given_to_decode_as_bytes_gets_the_file_option(config: Path) -> None:
+    result = scopelink(config, "decode", "/var/log/trace.txt")
+    assert result.returncode == 1
+    assert result.stderr.splitlines()[-1] == "  hint: to decode a file, give --file PATH"
+    assert_no_traceback(result.stderr)
