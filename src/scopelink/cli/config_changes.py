@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["change_lines", "read_settings"]
+__all__ = ["change_lines", "read_settings", "toml_value"]
 
 _MISSING = object()
 
@@ -31,14 +31,19 @@ def _at(settings: dict[str, Any], key: str) -> object:
     return value
 
 
-def _shown(value: object) -> str:
-    if value is _MISSING:
-        return "(default)"
+def toml_value(value: object) -> str:
+    """``value`` as TOML writes it (None, a server turned off, as ``false``)."""
+    if value is None:
+        return "false"
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
-        return f'"{value}"'
-    return str(value)
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(value)
+
+
+def _shown(value: object) -> str:
+    return "(default)" if value is _MISSING else toml_value(value)
 
 
 def change_lines(keys: Sequence[str], before: dict[str, Any], after: dict[str, Any]) -> list[str]:

@@ -8,7 +8,7 @@ from typing import Final
 
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path
-from scopelink.cli.config_changes import change_lines, read_settings
+from scopelink.cli.config_changes import change_lines, read_settings, toml_value
 from scopelink.cli.config_edit import create_config, set_values, unset_keys
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import read_config
@@ -178,23 +178,13 @@ def _confirm(keys: list[str], before: dict[str, object], path: Path) -> None:
     print(f"(in {path})")
 
 
-def _toml_value(value: object) -> str:
-    if value is None:
-        return "false"
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return repr(value)
-
-
 def show(config: Config) -> str:
     """The settings in force as TOML, with where they came from."""
     source = str(config.path) if config.path else f"{config_path()} (missing: all defaults)"
     site, limits, servers = config.site, config.limits, config.servers
     lines = [f"# from {source}"]
     if config.device:
-        lines.append(f"device = {_toml_value(config.device)}")
+        lines.append(f"device = {toml_value(config.device)}")
     else:
         lines.append("# device: none (give --device)")
     lines += [
@@ -215,17 +205,17 @@ def show(config: Config) -> str:
         f"meridian_east_deg = {limits.meridian_east_deg}",
         f"meridian_west_deg = {limits.meridian_west_deg}",
         f"min_track_minutes = {limits.min_track_minutes}",
-        f"auto_flip = {_toml_value(limits.auto_flip)}",
+        f"auto_flip = {toml_value(limits.auto_flip)}",
         "",
         "[servers]",
-        f"host = {_toml_value(servers.host)}",
+        f"host = {toml_value(servers.host)}",
     ]
     lines += [
-        f"{name} = {_toml_value(getattr(servers, name))}"
+        f"{name} = {toml_value(getattr(servers, name))}"
         for name in ("alpaca", "lx200", "stellarium", "synscan")
     ]
     lines += [
-        f"read_only = {_toml_value(servers.read_only)}",
+        f"read_only = {toml_value(servers.read_only)}",
         f"allow = {[str(network) for network in servers.allow]}",
         f"max_connections = {servers.max_connections}",
         f"max_connections_per_client = {servers.max_connections_per_client}",

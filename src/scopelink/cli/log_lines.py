@@ -16,9 +16,16 @@ VERBOSE_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
 
 class PlainLines(logging.Formatter):
-    """``scopelink: warning: MESSAGE`` (or ``error:``), one line, nothing for programmers."""
+    """``scopelink: warning: MESSAGE`` (or ``error:``), one line, nothing for programmers. A
+    record below warning reaches it only from a logger turned up on purpose (a device command's
+    ``-v`` turns up the byte trace alone): it keeps the full form, logger name included."""
+
+    def __init__(self) -> None:
+        super().__init__(VERBOSE_FORMAT)
 
     def format(self, record: logging.LogRecord) -> str:
+        if record.levelno < logging.WARNING:
+            return super().format(record)
         label = "error" if record.levelno >= logging.ERROR else "warning"
         message = " ".join(record.getMessage().split())  # one line, whatever it was given
         return f"scopelink: {label}: {message}"
