@@ -425,3 +425,11 @@ def test_the_documented_degree_sign_is_the_code_s() -> None:
     assert DEGREE_SIGN == MEADE_DEGREE_SIGN == "\xdf"
     assert ASTERISK_DEGREE_SIGN == "*"
     assert format_dec(1.0)[3] == DEGREE_SIGN
+
+
+def test_the_client_side_writes_the_degree_sign_a_command_carries() -> None:
+    """SkySafari's ASCII '*' unless the command says otherwise (Stellarium's 0xDF)."""
+    assert encode_command(SetTargetDec(45.5)) == b":Sd+45*30:00#"
+    assert encode_command(SetTargetDec(45.5, "\xdf")) == b":Sd+45\xdf30:00#"
+    assert encode_command(SetLatitude(37.25)) == b":St+37*15#"
+    assert encode_command(SetLongitude(3.5, "\xdf")) == b":Sg003\xdf30#"

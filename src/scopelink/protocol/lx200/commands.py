@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from scopelink.protocol.base import Event
 from scopelink.protocol.lx200.angles import (
-    DEGREE_SIGN,
+    ASTERISK_DEGREE_SIGN,
     degree_sign_of,
     format_dec,
     format_ra,
@@ -431,7 +431,8 @@ _SETTERS: dict[str, Callable[[str], AnyCommand]] = {
 
 
 def encode_command(command: AnyCommand, *, high_precision: bool = True) -> bytes:
-    """The bytes a client sends for ``command``."""
+    """The bytes a client sends for ``command``: the degree sign the command carries, else
+    ``*`` as SkySafari writes it (ASCII; the handset's replies use Meade's 0xDF)."""
     if isinstance(command, Ack):
         return bytes([ACK_BYTE])
     return f":{_command_text(command, high_precision)}#".encode("latin-1")
@@ -447,7 +448,7 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
             return "Sr" + format_ra(ra, high_precision=high_precision)
         case SetTargetDec(dec, sign):
             return "Sd" + format_dec(
-                dec, high_precision=high_precision, degree_sign=sign or DEGREE_SIGN
+                dec, high_precision=high_precision, degree_sign=sign or ASTERISK_DEGREE_SIGN
             )
         case GotoTarget():
             return "MS"
@@ -462,11 +463,12 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
         case SetRate(rate):
             return "R" + rate.value
         case SetLatitude(latitude, sign):
-            return "St" + format_signed_degrees_minutes(latitude, degree_sign=sign or DEGREE_SIGN)
+            degree = sign or ASTERISK_DEGREE_SIGN
+            return "St" + format_signed_degrees_minutes(latitude, degree_sign=degree)
         case SetLongitude(west, degree):
             total = round(abs(west) * 60.0)
             sign = "-" if west < 0 and total else ""
-            return f"Sg{sign}{total // 60:03d}{degree or DEGREE_SIGN}{total % 60:02d}"
+            return f"Sg{sign}{total // 60:03d}{degree or ASTERISK_DEGREE_SIGN}{total % 60:02d}"
         case SetUtcOffset(hours):
             return f"SG{hours:+05.1f}"
         case SetLocalTime(hour, minute, second):
