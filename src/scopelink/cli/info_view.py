@@ -95,14 +95,21 @@ def info_lines(report: dict[str, Any]) -> list[tuple[str, str]]:
     return lines
 
 
+_SHOWN_ABOVE: Final = frozenset({"version.major", "version.minor", "version.patch"})
+"""SynScan's firmware version in parts: the ``firmware`` line already says it."""
+_NESTED_LABELS: Final = {"version.dialect": "reply format"}
+
+
 def _entries(values: dict[str, Any], prefix: str = "") -> list[tuple[str, str]]:
     lines: list[tuple[str, str]] = []
     for key, value in values.items():
+        dotted = prefix + key
         if isinstance(value, dict):
-            lines.extend(_entries(value, f"{prefix}{key.replace('_', ' ')} "))
-        else:
+            lines.extend(_entries(value, dotted + "."))
+        elif dotted not in _SHOWN_ABOVE:
             label, text = _line(key, value)
-            lines.append((prefix + label, text))
+            label = _NESTED_LABELS.get(dotted, prefix.replace(".", " ").replace("_", " ") + label)
+            lines.append((label, text))
     return lines
 
 
