@@ -10,7 +10,6 @@ through :meth:`CommandParsers.parser` and sets ``run`` (namespace -> exit status
 from __future__ import annotations
 
 import argparse
-import difflib
 import importlib
 import re
 from collections.abc import Iterable, Mapping, Sequence
@@ -102,6 +101,8 @@ _INVALID_CHOICE: Final = re.compile(r"invalid choice: '([^']*)' \(choose from (.
 
 def did_you_mean(word: str, candidates: Iterable[str]) -> str:
     """``"; did you mean X?"`` for the candidate closest to a mistyped ``word``, else ``""``."""
+    import difflib  # noqa: PLC0415 - only on a mistake: start-up stays light (docs/cli.md)
+
     close = difflib.get_close_matches(word, list(candidates), n=1)  # default cutoff, 0.6
     return f"; did you mean {close[0]}?" if close else ""
 
