@@ -48,6 +48,9 @@ def test_info_without_a_kind_detects_synscan(config: Path, device: str) -> None:
     assert result.returncode == 0, result.stderr
     assert "synscan" in result.stdout
     assert "04.39.05" in result.stdout
+    lines = [" ".join(line.split()) for line in result.stdout.splitlines()]
+    assert "motor controllers 3.39, 3.39" in lines  # for people: not [[3, 39], [3, 39]]
+    assert not any(line.startswith("version major") for line in lines)  # the firmware line says it
 
 
 def test_verbose_shows_the_byte_trace(config: Path, device: str) -> None:

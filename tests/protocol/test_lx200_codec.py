@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from scopelink.protocol.lx200 import (
+    ASTERISK_DEGREE_SIGN,
     DATE_SET_REPLY,
+    DEGREE_SIGN,
     MAX_COMMAND_LENGTH,
+    MEADE_DEGREE_SIGN,
     NEED_DATA,
     Ack,
     AnyCommand,
@@ -38,6 +42,7 @@ from scopelink.protocol.lx200 import (
     SyncTarget,
     TogglePrecision,
     UnknownCommand,
+    degree_sign_of,
     encode_command,
     format_altitude,
     format_azimuth,
@@ -46,6 +51,7 @@ from scopelink.protocol.lx200 import (
     parse_command,
     parse_sexagesimal,
     parse_skyfi_query,
+    precision_of,
     reply_kind,
     skyfi_reply,
     slew_reply,
@@ -70,14 +76,33 @@ def test_coordinates_in_both_precisions() -> None:
     assert format_ra(12.5, high_precision=False) == "12:30.0"
     assert format_ra(23.99999) == "00:00:00"  # rounds to 24 h, which is 0 h
     assert format_ra(5 + 59 / 60 + 59.6 / 3600) == "06:00:00"
-    assert format_dec(-45.5) == "-45*30:00"
-    assert format_dec(45.5, high_precision=False) == "+45*30"
-    assert format_dec(-0.0001) == "+00*00:00"  # no negative zero
-    assert format_dec(-0.3) == "-00*18:00"
-    assert format_dec(91.0) == "+90*00:00"
-    assert format_altitude(-1.25) == "-01*15'00"
-    assert format_azimuth(359.99999) == "000*00'00"
-    assert format_azimuth(180.5, high_precision=False) == "180*30"
+    assert format_dec(-45.5) == "-45\xdf30:00"  # Meade's degree byte unless asked for '*'
+    assert format_dec(45.5, high_precision=False, degree_sign="*") == "+45*30"
+    assert format_dec(-0.0001, degree_sign="*") == "+00*00:00"  # no negative zero
+    assert format_dec(-0.3, degree_sign="*") == "-00*18:00"
+    assert format_dec(91.0, degree_sign="*") == "+90*00:00"
+    assert format_altitude(-1.25, degree_sign="*") == "-01*15'00"
+    assert format_azimuth(359.99999) == "000\xdf00'00"
+    assert format_azimuth(180.5, high_precision=False, degree_sign="*") == "180*30"
+
+
+@pytest.mark.parametrize(
+    ("text", "sign"),
+    [
+        ("+45\xdf22:52", "\xdf"),  # Stellarium
+        ("+37*17", "*"),  # SkySafari
+        ("+45:22:52", None),  # INDI
+        (" -045 * 30", "*"),
+        ("45", None),
+        ("*45", None),
+    ],
+)
+def test_the_degree_sign_a_client_wrote(text: str, sign: str | None) -> None:
+    assert degree_sign_of(text) == sign
+    if sign is not None:
+        command = parse_command("Sd" + text)
+        assert isinstance(command, SetTargetDec)
+        assert command.degree_sign == sign
 
 
 @pytest.mark.parametrize(
@@ -267,7 +292,9 @@ def same(a: object, b: object) -> bool:
     if type(a) is not type(b):
         return False
     fields = getattr(a, "__dataclass_fields__", {})
-    for name in fields:
+    for name, spec in fields.items():
+        if not spec.compare:  # the degree sign a client wrote: how, not what
+            continue
         x, y = getattr(a, name), getattr(b, name)
         if isinstance(x, float):
             if not math.isclose(x, y, abs_tol=1e-9):
@@ -375,3 +402,34 @@ def test_garbage_never_raises_and_commands_after_it_still_parse(garbage: bytes) 
 def test_parse_command_never_raises(text: str) -> None:
     event = parse_command(text)
     assert event is not None
+
+
+@pytest.mark.parametrize(
+    ("text", "high"),
+    [("05:35:17", True), ("05:35.3", False), ("+45\xdf22:52", True), ("+45*22", False)],
+)
+def test_the_precision_a_client_wrote(text: str, high: bool) -> None:
+    assert precision_of(text) is high
+    command = parse_command(("Sd" if text[0] in "+-" else "Sr") + text)
+    assert isinstance(command, SetTargetDec | SetTargetRA)
+    assert command.high_precision is high
+
+
+def test_the_documented_degree_sign_is_the_code_s() -> None:
+    """docs/lx200.md: Meade's byte 0xDF before a client writes its own, and '*' kept for those
+    that write it."""
+    text = (Path(__file__).parents[2] / "docs" / "lx200.md").read_text(encoding="utf-8")
+    row = next(line for line in text.splitlines() if line.startswith("| Degree sign |"))
+    assert "before that (and after a client's `:`, INDI's choice) Meade's byte 0xDF" in row
+    assert "0xDF or `*`" in row
+    assert DEGREE_SIGN == MEADE_DEGREE_SIGN == "\xdf"
+    assert ASTERISK_DEGREE_SIGN == "*"
+    assert format_dec(1.0)[3] == DEGREE_SIGN
+
+
+def test_the_client_side_writes_the_degree_sign_a_command_carries() -> None:
+    """SkySafari's ASCII '*' unless the command says otherwise (Stellarium's 0xDF)."""
+    assert encode_command(SetTargetDec(45.5)) == b":Sd+45*30:00#"
+    assert encode_command(SetTargetDec(45.5, "\xdf")) == b":Sd+45\xdf30:00#"
+    assert encode_command(SetLatitude(37.25)) == b":St+37*15#"
+    assert encode_command(SetLongitude(3.5, "\xdf")) == b":Sg003\xdf30#"

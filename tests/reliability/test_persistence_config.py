@@ -3,6 +3,7 @@ writes, and the storage helpers under them (docs/reliability-persistence.md)."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import stat
 import subprocess
@@ -15,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from scopelink.cli.config import ConfigError, load_config
-from scopelink.cli.config_command import EXAMPLE_CONFIG
+from scopelink.cli.config_command import EXAMPLE_CONFIG, commented_out
 from scopelink.cli.config_edit import parse_value, set_values, unset_keys
 from scopelink.links.storage import (
     create_atomically,
@@ -37,7 +38,12 @@ def test_set_changes_only_the_value_and_keeps_every_comment(tmp_path: Path) -> N
     status, out, err = scopelink_here(
         path, "config", "set", "site.latitude", "-33.9", "device", "sim:az-gti"
     )
-    assert (status, out, err) == (0, "", "")
+    assert (status, err) == (0, "")
+    assert out.splitlines() == [  # what changed, as the user named it
+        "site.latitude: 40.4 -> -33.9",
+        'device: "synscan:/dev/ttyUSB0" -> "sim:az-gti"',
+        f"(in {path})",
+    ]
     text = path.read_text(encoding="utf-8")
     before, after = EXAMPLE_CONFIG.splitlines(), text.splitlines()
     changed = [(old, new) for old, new in zip(before, after, strict=True) if old != new]
@@ -132,8 +138,11 @@ def test_init_writes_the_example_once_and_never_overwrites(tmp_path: Path) -> No
     path = tmp_path / "config.toml"
     status, out, err = scopelink_here(path, "config", "init")
     assert status == 0, err
-    assert out == f"wrote {path}\n"
-    assert path.read_text(encoding="utf-8") == EXAMPLE_CONFIG
+    assert out.startswith(f"wrote {path}: every setting commented out")
+    # issue #18: the example's Madrid site and 10° horizon are not made active settings
+    assert path.read_text(encoding="utf-8") == commented_out(EXAMPLE_CONFIG)
+    defaults = dataclasses.replace(load_config(tmp_path / "absent.toml"), path=None)
+    assert dataclasses.replace(load_config(path), path=None) == defaults
     set_values(path, [("device", "sim")])
     mine = path.read_bytes()
     status, _, err = scopelink_here(path, "config", "init")

@@ -70,19 +70,20 @@ class Client:
         return False
 
     async def jnow(self) -> tuple[float, float]:
-        ra = parse_sexagesimal((await self.text(b":GR#"))[:-1].decode())
-        dec = parse_sexagesimal((await self.text(b":GD#"))[:-1].decode())
+        ra = parse_sexagesimal((await self.text(b":GR#"))[:-1].decode("latin-1"))
+        dec = parse_sexagesimal((await self.text(b":GD#"))[:-1].decode("latin-1"))
         assert ra is not None
         assert dec is not None
         return ra, dec
 
-    async def set_target(self, ra_hours: float, dec_deg: float) -> None:
+    async def set_target(self, ra_hours: float, dec_deg: float, degree: bytes = b"*") -> None:
         ra = f"{int(ra_hours):02d}:{int(ra_hours * 60) % 60:02d}:{int(ra_hours * 3600) % 60:02d}"
         sign = "-" if dec_deg < 0 else "+"
         d = abs(dec_deg)
-        dec = f"{sign}{int(d):02d}*{int(d * 60) % 60:02d}:{int(d * 3600) % 60:02d}"
+        dec = f"{sign}{int(d):02d}{degree.decode('latin-1')}"
+        dec += f"{int(d * 60) % 60:02d}:{int(d * 3600) % 60:02d}"
         assert await self.char(f":Sr {ra}#".encode()) == b"1"
-        assert await self.char(f":Sd {dec}#".encode()) == b"1"
+        assert await self.char(f":Sd {dec}#".encode("latin-1")) == b"1"
 
 
 @asynccontextmanager
@@ -123,8 +124,8 @@ async def test_ack_and_stacked_reads_give_the_mounts_jnow_position() -> None:
         dec_text = await client.reader.readuntil(b"#")
         assert len(ra_text) == 9  # HH:MM:SS#
         assert len(dec_text) == 10  # sDD*MM:SS#
-        ra = parse_sexagesimal(ra_text[:-1].decode())
-        dec = parse_sexagesimal(dec_text[:-1].decode())
+        ra = parse_sexagesimal(ra_text[:-1].decode("latin-1"))
+        dec = parse_sexagesimal(dec_text[:-1].decode("latin-1"))
         assert ra is not None
         assert dec is not None
         assert separation((ra, dec), jnow_of(mount)) < TOLERANCE_DEG
@@ -384,12 +385,13 @@ def stellarium_reads_ra(buffer: bytes) -> tuple[float, bytes]:
 
 
 def stellarium_reads_dec(buffer: bytes) -> tuple[float, bytes]:
-    """Stellarium's Lx200CommandGetDec: sign, DD, '*', MM, ':', SS, '#'."""
+    """Stellarium's Lx200CommandGetDec: sign, DD, 0xDF, MM, ':', SS, '#' (anything but 0xDF
+    after the degrees makes it log "error: degree sign expected" on every poll)."""
     if buffer[:1] == b"#":
         buffer = buffer[1:]
     text, rest = buffer[:10], buffer[10:]
     assert text[:1] in (b"+", b"-")
-    assert text[3:4] == b"*"
+    assert text[3:4] == b"\xdf"
     assert text[6:7] == b":"
     assert text[9:10] == b"#"
     value = int(text[1:3]) + int(text[4:6]) / 60 + int(text[7:9]) / 3600
@@ -408,9 +410,9 @@ async def test_a_stellarium_shaped_session() -> None:
         dec, buffer = stellarium_reads_dec(buffer)
         assert buffer == b""
         assert separation((ra, dec), jnow_of(mount)) < TOLERANCE_DEG
-        # goto: no space after the code, Stellarium's own digits
+        # goto: Stellarium's own bytes, ":Sr HH:MM:SS#" and ":Sd sDD<0xDF>MM:SS#"
         target = jnow_up_in_the_south(mount, 50.0)
-        await client.set_target(*target)
+        await client.set_target(*target, degree=b"\xdf")
         assert await client.char(b":MS#") == b"0"
         await mount.wait_for(lambda s: not s.slewing, timeout_s=15)
         # sync: Stellarium takes the first byte as the status, the '#' is skipped later
@@ -422,5 +424,82 @@ async def test_a_stellarium_shaped_session() -> None:
         ra, buffer = stellarium_reads_ra(buffer)
         assert buffer == b""
         assert abs(ra - target[0]) < 0.001
+        await client.send(b"#:GD#")
+        async with asyncio.timeout(5):
+            buffer = await client.reader.readuntil(b"#")
+        dec, buffer = stellarium_reads_dec(buffer)
+        assert buffer == b""
+        assert abs(dec - target[1]) < 0.001
         await client.send(b"#:Q#")
         assert await client.nothing_more()
+
+
+def degree_byte(reply: bytes, digits: int = 2) -> bytes:
+    """The byte after the sign and the degrees of ``sDD?MM...#`` (or ``DDD?MM...#``)."""
+    start = 1 if reply[:1] in (b"+", b"-") else 0
+    return reply[start + digits : start + digits + 1]
+
+
+async def test_each_client_is_answered_with_the_degree_sign_it_writes() -> None:
+    """Meade's 0xDF until a client writes its own: SkySafari's '*' (`:St+37*17#`) gets '*' back
+    on that connection only, Stellarium's 0xDF keeps 0xDF, INDI's ':' changes nothing."""
+    mount = simulated_mount(rate=1.0)
+    async with LX200Server(mount) as server:
+        host, port = await server.on_tcp(port=0)
+        stellarium, skysafari, indi = [
+            Client(*await asyncio.open_connection(host, port)) for _ in range(3)
+        ]
+        try:
+            for client in (stellarium, skysafari, indi):  # before any set command: Meade's byte
+                assert degree_byte(await client.text(b":GD#")) == b"\xdf"
+                assert degree_byte(await client.text(b":Gt#")) == b"\xdf"
+            assert await skysafari.char(b":St+37*17#") == b"1"
+            assert await skysafari.char(b":Sd+45*22:52#") == b"1"
+            assert await stellarium.char(b":Sd +45\xdf22:52#") == b"1"
+            assert await indi.char(b":Sd +45:22:52#") == b"1"
+            assert await indi.char(b":St+37:17:00#") == b"1"
+            for command, digits in [
+                (b":GD#", 2),
+                (b":Gd#", 2),
+                (b":GA#", 2),
+                (b":GZ#", 3),
+                (b":Gt#", 2),
+                (b":Gg#", 3),
+            ]:
+                assert degree_byte(await skysafari.text(command), digits) == b"*", command
+                assert degree_byte(await stellarium.text(command), digits) == b"\xdf", command
+                assert degree_byte(await indi.text(command), digits) == b"\xdf", command
+            # what each reads back is what it set (INDI's f_scansexa takes any separator)
+            assert (await indi.text(b":Gd#"))[:-1].decode("latin-1") == "+45\xdf22:52"
+            assert (await skysafari.text(b":Gt#"))[:-1] == b"+37*17"
+            # low precision keeps the client's sign too
+            await skysafari.send(b":U#")
+            assert degree_byte(await skysafari.text(b":GD#")) == b"*"
+            # SkySafari switching to Meade's byte is followed
+            assert await skysafari.char(b":Sd+45\xdf22#") == b"1"
+            assert degree_byte(await skysafari.text(b":GD#")) == b"\xdf"
+        finally:
+            for client in (stellarium, skysafari, indi):
+                client.writer.close()
+                await client.writer.wait_closed()
+
+
+async def test_each_client_is_answered_in_the_precision_it_writes() -> None:
+    """A client writing minutes only (INDI in its short format: `:Sd +45*22#`) is answered in low
+    precision; writing seconds again switches back; `:U#` still toggles in between."""
+    mount = simulated_mount(rate=1.0)
+    async with serving(mount) as (_, client):
+        assert len(await client.text(b":GR#")) == len(b"HH:MM:SS#")
+        assert await client.char(b":Sr 05:35.3#") == b"1"
+        low_ra = await client.text(b":GR#")
+        assert low_ra[5:6] == b".", low_ra
+        assert len(low_ra) == len(b"HH:MM.T#"), low_ra
+        assert await client.char(b":Sd +45*22#") == b"1"
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM#")
+        assert (await client.text(b":Gd#"))[:-1] == b"+45*22"
+        await client.send(b":U#")
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM:SS#")
+        await client.send(b":U#")
+        assert await client.char(b":Sd +45:22:52#") == b"1"  # INDI's long form: high again
+        assert len(await client.text(b":GD#")) == len(b"sDD*MM:SS#")
+        assert len(await client.text(b":GR#")) == len(b"HH:MM:SS#")

@@ -11,11 +11,20 @@ from __future__ import annotations
 
 import argparse
 import importlib
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Any, Final, NoReturn
 
-__all__ = ["COMMANDS", "Command", "CommandParser", "CommandParsers", "add_commands"]
+__all__ = [
+    "COMMANDS",
+    "Command",
+    "CommandParser",
+    "CommandParsers",
+    "SuggestingParser",
+    "add_commands",
+    "did_you_mean",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -92,7 +101,53 @@ COMMANDS: Final = (
 """Every subcommand, in the order ``scopelink --help`` lists them."""
 
 
-class CommandParser(argparse.ArgumentParser):
+_INVALID_CHOICE: Final = re.compile(r"invalid choice: '([^']*)' \(choose from (.*)\)")
+
+
+def did_you_mean(word: str, candidates: Iterable[str]) -> str:
+    """``"; did you mean X?"`` for the candidate closest to a mistyped ``word``, else ``""``."""
+    import difflib  # noqa: PLC0415 - only on a mistake: start-up stays light (docs/cli.md)
+
+    close = difflib.get_close_matches(word, list(candidates), n=1)  # default cutoff, 0.6
+    return f"; did you mean {close[0]}?" if close else ""
+
+
+class SuggestingParser(argparse.ArgumentParser):
+    """A parser whose "invalid choice" errors (a mistyped command, action or option value) end
+    with the closest valid choice: ``scopelink stauts`` -> "did you mean status?"."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.commands: Mapping[str, SuggestingParser] = {}
+        """The subcommands' parsers, by name (the top-level parser's, from add_commands)."""
+
+    def error(self, message: str) -> NoReturn:
+        match = _INVALID_CHOICE.search(message)
+        if match is not None:
+            choices = re.findall(r"'([^']*)'", match[2])
+            message += did_you_mean(match[1], choices)
+        super().error(message)
+
+    def refuse_unknown_options(self, extras: Sequence[str]) -> NoReturn:
+        """Fail on arguments this parser does not take, naming the closest options it does."""
+        known = [option for action in _actions_within(self) for option in action.option_strings]
+        hints = "".join(
+            did_you_mean(extra.partition("=")[0], known) for extra in extras if extra[:1] == "-"
+        )
+        self.error(f"unrecognized arguments: {' '.join(extras)}{hints}")
+
+
+def _actions_within(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    """The parser's actions and those of its nested subcommands (``emulate synscan``...)."""
+    actions = list(parser._actions)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for nested in action.choices.values():
+                actions.extend(_actions_within(nested))
+    return actions
+
+
+class CommandParser(SuggestingParser):
     """A subcommand's parser, filled in by its module the first time it parses or shows help."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -150,8 +205,9 @@ class CommandParsers:
         return parser
 
 
-def add_commands(parser: argparse.ArgumentParser) -> None:
-    """Add every command of :data:`COMMANDS` to ``parser``, each to be filled in when used."""
+def add_commands(parser: argparse.ArgumentParser) -> Mapping[str, CommandParser]:
+    """Add every command of :data:`COMMANDS` to ``parser``, each to be filled in when used;
+    returns their parsers by name."""
     subparsers = parser.add_subparsers(
         dest="command", metavar="COMMAND", parser_class=CommandParser
     )
@@ -161,3 +217,4 @@ def add_commands(parser: argparse.ArgumentParser) -> None:
         parsers[command.name].module = command.module
     for each in parsers.values():
         each.siblings = parsers
+    return parsers

@@ -136,7 +136,16 @@ def parse_config(text: str, path: Path) -> Config:
 _TOP_KEYS: Final = ("device", "site", "horizon", "limits", "servers", "readings", "park")
 _PARK_KEYS: Final = ("altitude", "azimuth")
 _READINGS_KEYS: Final = ("stale_after_s", "idle_poll_s", "demand_hold_s", "max_poll_baud")
-_SITE_KEYS: Final = ("latitude", "longitude", "elevation", "pressure", "temperature", "humidity")
+_SITE_ATTRIBUTES: Final = {
+    "latitude": "latitude_deg",
+    "longitude": "longitude_deg",
+    "elevation": "elevation_m",
+    "pressure": "pressure_hpa",
+    "temperature": "temperature_c",
+    "humidity": "relative_humidity",
+}
+"""Each ``[site]`` key and the :class:`~scopelink.astro.Site` field it fills."""
+_SITE_KEYS: Final = tuple(_SITE_ATTRIBUTES)
 _HORIZON_KEYS: Final = ("altitude", "profile")
 _LIMITS_KEYS: Final = (
     "max_altitude",
@@ -276,19 +285,20 @@ class _Reader:
         assert latitude is not None  # checked just above
         assert longitude is not None
         options: dict[str, float] = {}
-        for key, argument in (
-            ("elevation", "elevation_m"),
-            ("pressure", "pressure_hpa"),
-            ("temperature", "temperature_c"),
-            ("humidity", "relative_humidity"),
-        ):
+        for key, argument in list(_SITE_ATTRIBUTES.items())[2:]:  # after latitude, longitude
             value = values[key]
             if value is not None:
                 options[argument] = value
         try:
             return Site(latitude, longitude, **options)
         except ValueError as error:
-            raise self.error("site", str(error)) from None
+            # Named as the user writes it (site.latitude), not as Site calls it (latitude_deg).
+            message = str(error)
+            for key, attribute in _SITE_ATTRIBUTES.items():
+                if message.startswith(f"Site.{attribute} "):
+                    problem = message.removeprefix(f"Site.{attribute} ")
+                    raise self.error(f"site.{key}", problem) from None
+            raise self.error("site", message) from None
 
     def limits(self, horizon: dict[str, Any], limits: dict[str, Any]) -> Limits:
         self.known(horizon, "horizon.", _HORIZON_KEYS)
@@ -317,7 +327,8 @@ class _Reader:
                 max_sync_deg=max_sync if max_sync is not None else DEFAULT_MAX_SYNC_DEG,
             )
         except InvalidValueError as error:
-            key = "limits.max_altitude" if "maximum" in str(error) else "horizon"
+            table = "horizon.profile" if "profile" in str(error) else "horizon.altitude"
+            key = "limits.max_altitude" if "maximum" in str(error) else table
             key = "limits.sun_avoidance_deg" if "Sun" in str(error) else key
             key = "limits.max_sync_deg" if "max_sync_deg" in str(error) else key
             for name in _MERIDIAN_KEYS:

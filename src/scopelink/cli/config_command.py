@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Final
 
 from scopelink.cli.commands import CommandParsers
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path
+from scopelink.cli.config_changes import change_lines, read_settings, toml_value
 from scopelink.cli.config_edit import create_config, set_values, unset_keys
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import read_config
 
-__all__ = ["EXAMPLE_CONFIG", "register", "run"]
+__all__ = ["EXAMPLE_CONFIG", "commented_out", "register", "run"]
 
 EXAMPLE_CONFIG = """\
 # scopelink settings (TOML). Command-line flags override what is here.
@@ -63,11 +65,28 @@ synscan = 11880
 # azimuth = 200
 """
 
+INIT_HEADER = """\
+# Written by 'scopelink config init'. Every setting is commented out, so the defaults apply
+# (no site, no horizon limit beyond the defaults): uncomment and edit what is true here, or use
+# 'scopelink config set KEY VALUE' (which keeps these comments).
+"""
+
+
+def commented_out(example: str) -> str:
+    """``example`` with every setting and table header behind ``#`` (comments stay as they are),
+    under :data:`INIT_HEADER`."""
+    lines = [
+        line if not line.strip() or line.lstrip().startswith("#") else f"# {line}"
+        for line in example.splitlines()
+    ]
+    return INIT_HEADER + "\n".join(lines) + "\n"
+
+
 _EXAMPLES = f"""\
 examples:
   scopelink config path                        where the settings file is read from
   scopelink config show                        the settings in force (defaults filled in)
-  scopelink config init                        write the commented example (never overwrites)
+  scopelink config init                        write the example, commented out (no overwrite)
   scopelink config set device sim:az-gti       change one value, keeping comments and layout
   scopelink config set site.latitude 40.4 site.longitude -3.7   several at once
   scopelink config set horizon.profile "[[0, 15], [90, 25]]"    any TOML value
@@ -82,7 +101,8 @@ _ACTIONS: Final = {
     "path": "print the settings file's path",
     "show": "print the settings in force (defaults filled in)",
     "example": "print a commented example file",
-    "init": "write the commented example as the settings file (refuses to overwrite one)",
+    "init": "write the example as the settings file, every setting commented out (refuses to "
+    "overwrite one)",
     "set": "set dotted KEY to VALUE (TOML value, or a bare string); several KEY VALUE pairs "
     "are written together",
     "unset": "remove dotted KEYs from the file (back to their defaults)",
@@ -128,18 +148,23 @@ def run(args: argparse.Namespace) -> int:
         hint = f"see 'scopelink config example' for every key; {path} is unchanged"
         try:
             if action == "init":
-                create_config(path, EXAMPLE_CONFIG)
-                print(f"wrote {path}")
+                create_config(path, commented_out(EXAMPLE_CONFIG))
+                print(f"wrote {path}: every setting commented out, the defaults apply")
+                print("  change one with e.g.: scopelink config set site.latitude 40.4")
             elif action == "set":
                 if not arguments or len(arguments) % 2:
                     raise CommandError(
                         "config set needs KEY VALUE pairs", "e.g. scopelink config set device sim"
                     )
+                before = read_settings(path)
                 set_values(path, list(zip(arguments[::2], arguments[1::2], strict=True)))
+                _confirm(arguments[::2], before, path)
             else:
                 if not arguments:
                     raise CommandError("config unset needs a KEY", "e.g. config unset horizon")
+                before = read_settings(path)
                 unset_keys(path, arguments)
+                _confirm(arguments, before, path)
         except ConfigError as error:
             if action == "init":
                 hint = "change it with 'scopelink config set', or move it away first"
@@ -147,14 +172,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _toml_value(value: object) -> str:
-    if value is None:
-        return "false"
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return repr(value)
+def _confirm(keys: list[str], before: dict[str, object], path: Path) -> None:
+    for line in change_lines(keys, before, read_settings(path)):
+        print(line)
+    print(f"(in {path})")
 
 
 def show(config: Config) -> str:
@@ -163,7 +184,7 @@ def show(config: Config) -> str:
     site, limits, servers = config.site, config.limits, config.servers
     lines = [f"# from {source}"]
     if config.device:
-        lines.append(f"device = {_toml_value(config.device)}")
+        lines.append(f"device = {toml_value(config.device)}")
     else:
         lines.append("# device: none (give --device)")
     lines += [
@@ -184,17 +205,17 @@ def show(config: Config) -> str:
         f"meridian_east_deg = {limits.meridian_east_deg}",
         f"meridian_west_deg = {limits.meridian_west_deg}",
         f"min_track_minutes = {limits.min_track_minutes}",
-        f"auto_flip = {_toml_value(limits.auto_flip)}",
+        f"auto_flip = {toml_value(limits.auto_flip)}",
         "",
         "[servers]",
-        f"host = {_toml_value(servers.host)}",
+        f"host = {toml_value(servers.host)}",
     ]
     lines += [
-        f"{name} = {_toml_value(getattr(servers, name))}"
+        f"{name} = {toml_value(getattr(servers, name))}"
         for name in ("alpaca", "lx200", "stellarium", "synscan")
     ]
     lines += [
-        f"read_only = {_toml_value(servers.read_only)}",
+        f"read_only = {toml_value(servers.read_only)}",
         f"allow = {[str(network) for network in servers.allow]}",
         f"max_connections = {servers.max_connections}",
         f"max_connections_per_client = {servers.max_connections_per_client}",

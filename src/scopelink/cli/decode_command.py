@@ -86,7 +86,14 @@ def run(args: argparse.Namespace) -> int:
             f"scopelink decode: {errors} error{'s' if errors > 1 else ''} in the trace",
             file=sys.stderr,
         )
+        if any(_looks_like_a_path(chunk) for chunk in args.chunks):
+            print("  hint: to decode a file, give --file PATH", file=sys.stderr)
     return 1 if errors else 0
+
+
+def _looks_like_a_path(chunk: str) -> bool:
+    """A BYTES argument that is more likely a file someone meant to decode."""
+    return chunk.startswith(("/", "./", "../", "~/")) or os.path.isfile(chunk)
 
 
 # ------------------------------------------------------------------------------------------ input

@@ -9,6 +9,7 @@ import json
 from typing import Any
 
 from scopelink.cli.commands import CommandParsers
+from scopelink.cli.info_view import info_lines
 from scopelink.cli.mount_session import run_on_mount
 from scopelink.cli.options import add_device_arguments
 from scopelink.drivers.skytracker import SkyTrackerMount
@@ -51,10 +52,10 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps(report, indent=2))
         else:
-            lines = _lines(report)
+            lines = info_lines(report)
             width = max(len(key) for key, _ in lines)
             for key, value in lines:
-                print(f"{key:<{width}}  {value}")
+                print(f"{key:<{width}}  {value}".rstrip())
         return 0
 
     return run_on_mount(args, body)
@@ -101,16 +102,3 @@ def describe(mount: Mount) -> dict[str, Any]:
         }
     report["aligned"] = mount.state.aligned
     return report
-
-
-def _lines(report: dict[str, Any], prefix: str = "") -> list[tuple[str, str]]:
-    lines: list[tuple[str, str]] = []
-    for key, value in report.items():
-        name = f"{prefix}{key}".replace("_", " ")
-        if isinstance(value, dict):
-            lines.extend(_lines(value, f"{prefix}{key}."))
-        elif isinstance(value, list):
-            lines.append((name, ", ".join(str(item) for item in value) or "-"))
-        else:
-            lines.append((name, "-" if value in ("", None) else str(value)))
-    return lines

@@ -8,19 +8,19 @@ aiohttp) is imported when that subcommand is used (docs/cli.md, "Start-up").
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from collections.abc import Callable, Sequence
 
 from scopelink import __version__
-from scopelink.cli.commands import add_commands
+from scopelink.cli.commands import SuggestingParser, add_commands
 from scopelink.cli.errors import CommandError
+from scopelink.cli.log_lines import configure_logging
 
 EXIT_USAGE = 2
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> SuggestingParser:
+    parser = SuggestingParser(
         prog="scopelink",
         description="Control, emulate and bridge SynScan and Sky Tracker telescope mounts.",
     )
@@ -32,17 +32,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="more detail; -v shows the byte trace of every link",
     )
-    add_commands(parser)
+    parser.commands = add_commands(parser)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
-    logging.basicConfig(
-        level=logging.DEBUG if args.verbose else logging.WARNING,
-        format="%(asctime)s %(name)s %(message)s",
-    )
+    args, extras = parser.parse_known_args(argv)
+    if extras:  # a mistyped option: the command's own usage, and the option meant
+        command = getattr(args, "command", None)
+        owner = parser.commands.get(command, parser) if command else parser
+        owner.refuse_unknown_options(extras)
+    configure_logging(args.verbose)
     run: Callable[[argparse.Namespace], int] | None = getattr(args, "run", None)
     if run is None:
         parser.print_help()

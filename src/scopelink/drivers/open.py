@@ -53,9 +53,11 @@ EXAMPLES: Final = (
 class DeviceOpenError(Exception):
     """The DEVICE string is malformed, or nothing usable answered on it."""
 
-    def __init__(self, message: str, hint: str = "") -> None:
+    def __init__(self, message: str, hint: str = "", *, unopenable: bool = False) -> None:
         super().__init__(message)
         self.hint = hint
+        self.unopenable = unopenable
+        """The port or address itself would not open (nothing was asked of a device)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +80,7 @@ def parse_device(text: str) -> DeviceSpec:
     if text == "sim":
         return DeviceSpec("sim", DEFAULT_SIM_PRESET)
     kind, colon, rest = text.partition(":")
+    _refuse_a_mistyped_kind(text, kind if colon and not rest.startswith("//") else None, rest)
     if colon and kind.lower() in KINDS and not rest.startswith("//"):
         kind = kind.lower()
         if not rest.strip():
@@ -94,6 +97,30 @@ def parse_device(text: str) -> DeviceSpec:
             return DeviceSpec("sim", preset)
         return DeviceSpec(kind, rest.strip())
     return DeviceSpec(None, text)
+
+
+def _refuse_a_mistyped_kind(text: str, kind: str | None, rest: str) -> None:
+    """``simm`` or ``synscn:/dev/ttyUSB0`` is a kind mistyped, not a port to open: say which
+    kind was probably meant (a bare word with no path separator that is close to a kind, or a
+    prefix before ``:`` that is close to one). A port really named like that is still reached
+    as ``./simm`` or with its kind, ``synscan:simm``."""
+    import difflib  # noqa: PLC0415 - only when a device is parsed
+
+    if kind is not None:
+        word, meant = kind.lower(), "{}:" + rest
+    elif not any(c in text for c in "/\\:"):
+        word, meant = text.lower(), "{}"
+    else:
+        return
+    if not word or word in KINDS:
+        return
+    close = difflib.get_close_matches(word, KINDS, n=1)  # default cutoff, 0.6
+    if close:
+        suggestion = meant.format(close[0])
+        raise DeviceOpenError(
+            f"unknown device kind {kind or text!r}: did you mean {suggestion}?",
+            f"device kinds: {', '.join(KINDS)}; for example {EXAMPLES}",
+        )
 
 
 def create_mount(
@@ -168,8 +195,10 @@ async def open_mount(
             await _connect(mount, candidate)
         except DeviceOpenError as error:
             _log.debug("autodetect: not %s: %s", kind, error)
-            failures.append(f"{kind}: {error}")
             await _close_quietly(mount)  # the next kind needs the port to itself
+            if error.unopenable:
+                raise  # no other kind would open it either: say so once
+            failures.append(f"{kind}: {error}")
             continue
         return mount
     raise DeviceOpenError(
@@ -183,6 +212,20 @@ _PORT_HINT: Final = (
     "'scopelink ports' lists the serial ports; check the path and your permissions "
     "(the dialout group on Linux)"
 )
+
+
+_ADDRESS_HINT: Final = (
+    "check the address and port, and that the device (or 'scopelink emulate') listens there"
+)
+
+
+def _unopenable(spec: DeviceSpec, message: str) -> DeviceOpenError:
+    """One line for a port that would not open: the innermost "cannot open ..." of the link's
+    and the driver's messages (each layer adds its own), and the hint for that kind of link."""
+    start = message.rfind("cannot open ")
+    text = message[start:] if start >= 0 else f"cannot open {spec.target}: {message}"
+    hint = _ADDRESS_HINT if "://" in spec.target else _PORT_HINT
+    return DeviceOpenError(text, hint, unopenable=True)
 
 
 async def _close_quietly(mount: Mount) -> None:
@@ -201,10 +244,11 @@ async def _connect(mount: Mount, spec: DeviceSpec) -> None:
     try:
         await mount.connect()
     except LinkError as error:
-        raise DeviceOpenError(f"cannot open {spec.target}: {error}", _PORT_HINT) from None
+        raise _unopenable(spec, str(error)) from None
     except MountError as error:
         # Drivers report a port that would not open as a MountError saying "cannot open".
-        hint = _PORT_HINT if "cannot open" in str(error) else ""
-        raise DeviceOpenError(f"{spec}: {error}", hint) from None
+        if "cannot open" in str(error):
+            raise _unopenable(spec, str(error)) from None
+        raise DeviceOpenError(f"{spec}: {error}") from None
     except TimeoutError:
         raise DeviceOpenError(f"{spec}: no reply") from None

@@ -9,11 +9,16 @@
 """
 
 from scopelink.protocol.lx200.angles import (
+    ASTERISK_DEGREE_SIGN,
+    DEGREE_SIGN,
+    MEADE_DEGREE_SIGN,
+    degree_sign_of,
     format_altitude,
     format_azimuth,
     format_dec,
     format_ra,
     parse_sexagesimal,
+    precision_of,
 )
 from scopelink.protocol.lx200.commands import (
     ACK_BYTE,
@@ -67,9 +72,12 @@ from scopelink.protocol.lx200.skyfi import SKYFI_PORT, SkyFiQuery, parse_skyfi_q
 
 __all__ = [
     "ACK_BYTE",
+    "ASTERISK_DEGREE_SIGN",
     "DATE_SET_REPLY",
+    "DEGREE_SIGN",
     "MAX_COMMAND_LENGTH",
     "MAX_REPLY_LENGTH",
+    "MEADE_DEGREE_SIGN",
     "NEED_DATA",
     "SKYFI_PORT",
     "Ack",
@@ -105,6 +113,7 @@ __all__ = [
     "UnexpectedReply",
     "UnknownCommand",
     "boolean_reply",
+    "degree_sign_of",
     "encode_command",
     "format_altitude",
     "format_azimuth",
@@ -113,6 +122,7 @@ __all__ = [
     "parse_command",
     "parse_sexagesimal",
     "parse_skyfi_query",
+    "precision_of",
     "reply_kind",
     "skyfi_reply",
     "slew_reply",

@@ -13,14 +13,17 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from scopelink.protocol.base import Event
 from scopelink.protocol.lx200.angles import (
+    ASTERISK_DEGREE_SIGN,
+    degree_sign_of,
     format_dec,
     format_ra,
     format_signed_degrees_minutes,
     parse_sexagesimal,
+    precision_of,
 )
 
 __all__ = [
@@ -120,16 +123,26 @@ class TogglePrecision:
 
 @dataclass(frozen=True, slots=True)
 class SetTargetRA:
-    """``:Sr HH:MM:SS#`` (or ``HH:MM.T``): the target's right ascension (of date)."""
+    """``:Sr HH:MM:SS#`` (or ``HH:MM.T``): the target's right ascension (of date).
+
+    ``high_precision``: the form the client wrote (True with seconds, False without), not part
+    of the command's meaning."""
 
     ra_hours: float
+    high_precision: bool | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)
 class SetTargetDec:
-    """``:Sd sDD*MM:SS#`` (or ``sDD*MM``): the target's declination (of date)."""
+    """``:Sd sDD*MM:SS#`` (or ``sDD*MM``): the target's declination (of date).
+
+    ``degree_sign``: the one the client wrote (0xDF or ``*``), None for another separator; not
+    part of the command's meaning (two ``:Sd`` that differ only in it are equal)."""
 
     dec_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
+    high_precision: bool | None = field(default=None, compare=False)
+    """The form the client wrote: True with seconds, False without."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,9 +186,13 @@ class SetRate:
 
 @dataclass(frozen=True, slots=True)
 class SetLatitude:
-    """``:St sDD*MM#`` (or with seconds): the site latitude, north positive."""
+    """``:St sDD*MM#`` (or with seconds): the site latitude, north positive.
+
+    ``degree_sign``: the one the client wrote (0xDF or ``*``), None for another separator; not
+    part of the command's meaning (two ``:Sd`` that differ only in it are equal)."""
 
     latitude_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True, slots=True)
@@ -183,6 +200,8 @@ class SetLongitude:
     """``:Sg DDD*MM#``: the site longitude as Meade counts it, **west** positive, 0..360."""
 
     west_longitude_deg: float
+    degree_sign: str | None = field(default=None, compare=False)
+    """The one the client wrote (0xDF or ``*``), None for another separator."""
 
     @property
     def east_longitude_deg(self) -> float:
@@ -345,19 +364,21 @@ def _set_ra(argument: str) -> SetTargetRA:
     value = _angle(argument, "right ascension", 0.0, 24.0)
     if value >= 24.0:
         raise ValueError(f"right ascension {argument!r} must lie below 24 h")
-    return SetTargetRA(value)
+    return SetTargetRA(value, precision_of(argument))
 
 
 def _set_dec(argument: str) -> SetTargetDec:
-    return SetTargetDec(_angle(argument, "declination", -90.0, 90.0))
+    value = _angle(argument, "declination", -90.0, 90.0)
+    return SetTargetDec(value, degree_sign_of(argument), precision_of(argument))
 
 
 def _set_latitude(argument: str) -> SetLatitude:
-    return SetLatitude(_angle(argument, "latitude", -90.0, 90.0))
+    return SetLatitude(_angle(argument, "latitude", -90.0, 90.0), degree_sign_of(argument))
 
 
 def _set_longitude(argument: str) -> SetLongitude:
-    return SetLongitude(_angle(argument, "longitude", -360.0, 360.0))
+    value = _angle(argument, "longitude", -360.0, 360.0)
+    return SetLongitude(value, degree_sign_of(argument))
 
 
 def _set_utc_offset(argument: str) -> SetUtcOffset:
@@ -410,10 +431,11 @@ _SETTERS: dict[str, Callable[[str], AnyCommand]] = {
 
 
 def encode_command(command: AnyCommand, *, high_precision: bool = True) -> bytes:
-    """The bytes a client sends for ``command``."""
+    """The bytes a client sends for ``command``: the degree sign the command carries, else
+    ``*`` as SkySafari writes it (ASCII; the handset's replies use Meade's 0xDF)."""
     if isinstance(command, Ack):
         return bytes([ACK_BYTE])
-    return f":{_command_text(command, high_precision)}#".encode("ascii")
+    return f":{_command_text(command, high_precision)}#".encode("latin-1")
 
 
 def _command_text(command: AnyCommand, high_precision: bool) -> str:
@@ -424,8 +446,10 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
             return "U"
         case SetTargetRA(ra):
             return "Sr" + format_ra(ra, high_precision=high_precision)
-        case SetTargetDec(dec):
-            return "Sd" + format_dec(dec, high_precision=high_precision)
+        case SetTargetDec(dec, sign):
+            return "Sd" + format_dec(
+                dec, high_precision=high_precision, degree_sign=sign or ASTERISK_DEGREE_SIGN
+            )
         case GotoTarget():
             return "MS"
         case SyncTarget(code):
@@ -438,12 +462,13 @@ def _command_text(command: AnyCommand, high_precision: bool) -> str:
             return f"Mg{direction.value}{duration:04d}"
         case SetRate(rate):
             return "R" + rate.value
-        case SetLatitude(latitude):
-            return "St" + format_signed_degrees_minutes(latitude)
-        case SetLongitude(west):
+        case SetLatitude(latitude, sign):
+            degree = sign or ASTERISK_DEGREE_SIGN
+            return "St" + format_signed_degrees_minutes(latitude, degree_sign=degree)
+        case SetLongitude(west, degree):
             total = round(abs(west) * 60.0)
             sign = "-" if west < 0 and total else ""
-            return f"Sg{sign}{total // 60:03d}*{total % 60:02d}"
+            return f"Sg{sign}{total // 60:03d}{degree or ASTERISK_DEGREE_SIGN}{total % 60:02d}"
         case SetUtcOffset(hours):
             return f"SG{hours:+05.1f}"
         case SetLocalTime(hour, minute, second):

@@ -6,6 +6,8 @@ from __future__ import annotations
 import enum
 from typing import Final
 
+from scopelink.protocol.lx200.angles import MEADE_DEGREE_SIGN
+
 __all__ = [
     "DATE_SET_REPLY",
     "MAX_REASON_LENGTH",
@@ -31,6 +33,9 @@ class SlewRefusal(enum.Enum):
     OTHER = "2"
 
 
+_KEPT: Final = frozenset({"\x7f", MEADE_DEGREE_SIGN})
+
+
 def boolean_reply(ok: bool) -> bytes:
     """``1`` (valid, done) or ``0`` (invalid) without a terminator."""
     return b"1" if ok else b"0"
@@ -44,8 +49,8 @@ def _clean(text: str, limit: int | None = None) -> str:
 
 def text_reply(text: str) -> bytes:
     """``text`` + ``#`` (a ``#`` or unprintable character inside becomes a space; 0x7F, the
-    distance-bar character, is kept)."""
-    cleaned = "".join(c if c == "\x7f" else _clean(c) for c in text)
+    distance-bar character, and 0xDF, Meade's degree sign, are kept)."""
+    cleaned = "".join(c if c in _KEPT else _clean(c) for c in text)
     return cleaned.encode("latin-1") + b"#"
 
 

@@ -68,7 +68,7 @@ from scopelink.protocol.lx200 import (
     slew_reply,
     text_reply,
 )
-from scopelink.protocol.lx200.angles import format_signed_degrees_minutes
+from scopelink.protocol.lx200.angles import DEGREE_SIGN, format_signed_degrees_minutes
 from scopelink.servers.lx200.config import LX200Config, SyncReply
 
 __all__ = ["LX200Handset", "LX200Session"]
@@ -111,23 +111,27 @@ _CHANGES_THE_MOUNT = (
 )
 """Refused on a read-only server. Targets, rate and precision belong to the connection."""
 _POSITION_QUERIES: dict[
-    Query, tuple[Callable[[MountState], float | None], Callable[[float, bool], str]]
+    Query, tuple[Callable[[MountState], float | None], Callable[[float, bool, str], str]]
 ] = {
     Query.RA: (
         lambda state: state.ra_of_date_hours,
-        lambda value, precise: format_ra(value, high_precision=precise),
+        lambda value, precise, _: format_ra(value, high_precision=precise),
     ),
     Query.DEC: (
         lambda state: state.dec_of_date_deg,
-        lambda value, precise: format_dec(value, high_precision=precise),
+        lambda value, precise, sign: format_dec(value, high_precision=precise, degree_sign=sign),
     ),
     Query.ALTITUDE: (
         lambda state: state.alt_deg,
-        lambda value, precise: format_altitude(value, high_precision=precise),
+        lambda value, precise, sign: format_altitude(
+            value, high_precision=precise, degree_sign=sign
+        ),
     ),
     Query.AZIMUTH: (
         lambda state: state.az_deg,
-        lambda value, precise: format_azimuth(value, high_precision=precise),
+        lambda value, precise, sign: format_azimuth(
+            value, high_precision=precise, degree_sign=sign
+        ),
     ),
 }
 """Reads of the mount's position: not answered without a current reading of it."""
@@ -167,16 +171,28 @@ class LX200Session:
         self.rate = SlewRate.SLEW
         self.target_ra_hours: float | None = None
         self.target_dec_deg: float | None = None
+        self.degree_sign = DEGREE_SIGN
+        """The degree sign in this connection's replies: the one it last wrote itself in a
+        ``:Sd``/``:St``/``:Sg`` (0xDF or ``*``), Meade's 0xDF before that."""
 
     @property
     def mount(self) -> Mount:
         return self.handset.mount
+
+    def _follow_the_client(self, command: AnyCommand) -> None:
+        """Answer in the form the client writes: its degree sign (``:Sd``/``:St``/``:Sg``) and
+        its precision (``:Sr``/``:Sd`` with or without seconds)."""
+        if isinstance(command, SetTargetDec | SetLatitude | SetLongitude) and command.degree_sign:
+            self.degree_sign = command.degree_sign
+        if isinstance(command, SetTargetRA | SetTargetDec) and command.high_precision is not None:
+            self.high_precision = command.high_precision
 
     async def answer(self, command: AnyCommand | MalformedCommand) -> bytes:
         """Carry out ``command`` and return its reply (``b""`` when it has none)."""
         if isinstance(command, MalformedCommand):
             logger.info("%s", command.describe())
             return boolean_reply(False) if reply_kind(command) is ReplyKind.CHAR else b""
+        self._follow_the_client(command)
         if self.handset.read_only and isinstance(command, _CHANGES_THE_MOUNT):
             return self._refuse_read_only(command)
         match command:
@@ -189,10 +205,10 @@ class LX200Session:
             case TogglePrecision():
                 self.high_precision = not self.high_precision
                 return b""
-            case SetTargetRA(ra):
+            case SetTargetRA(ra, _):
                 self.target_ra_hours = ra
                 return boolean_reply(True)
-            case SetTargetDec(dec):
+            case SetTargetDec(dec, _, _):
                 self.target_dec_deg = dec
                 return boolean_reply(True)
             case GotoTarget():
@@ -253,13 +269,13 @@ class LX200Session:
 
     def _read(self, what: Query) -> str | None:
         """The text of a ``:G..#`` reply; None: no reply (no current reading to give)."""
-        precise = self.high_precision
+        precise, degree = self.high_precision, self.degree_sign
         position = _POSITION_QUERIES.get(what)
         if position is not None:
             read, text = position
             current = self._current(position=True)
             value = None if current is None else read(current)
-            return None if value is None else text(value, precise)
+            return None if value is None else text(value, precise, degree)
         if what in _STATE_QUERIES and self._current(position=False) is None:
             return None
         state = self.mount.state
@@ -268,7 +284,8 @@ class LX200Session:
                 target = self.target_ra_hours or 0.0
                 return format_ra(target, high_precision=precise)
             case Query.TARGET_DEC:
-                return format_dec(self.target_dec_deg or 0.0, high_precision=precise)
+                target_dec = self.target_dec_deg or 0.0
+                return format_dec(target_dec, high_precision=precise, degree_sign=degree)
             case Query.SIDEREAL_TIME:
                 return format_ra(lst_hours(self.mount.now(), self.mount.site.longitude_deg))
             case Query.LOCAL_TIME:
@@ -278,10 +295,11 @@ class LX200Session:
             case Query.DATE:
                 return self.handset.local_now().strftime("%m/%d/%y")
             case Query.LATITUDE:
-                return format_signed_degrees_minutes(self.mount.site.latitude_deg)
+                latitude = self.mount.site.latitude_deg
+                return format_signed_degrees_minutes(latitude, degree_sign=degree)
             case Query.LONGITUDE:
                 west = -self.mount.site.longitude_deg
-                return format_signed_degrees_minutes(west, degree_digits=3)
+                return format_signed_degrees_minutes(west, degree_digits=3, degree_sign=degree)
             case Query.UTC_OFFSET:
                 return f"{self.handset.utc_offset_hours:+05.1f}"
             case Query.TIME_FORMAT:
