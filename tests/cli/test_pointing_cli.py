@@ -107,19 +107,19 @@ async def test_syncs_from_alpaca_and_lx200_are_kept_listed_removed_and_restored(
             # LX200 :CM# somewhere else, 2° north of where it now reads.
             port = listening(printed, "LX200")
             await slew_altaz(base, 50.0, 120.0)
-            ra_text, dec_text = await lx200(port, b":GR#", b":GD#")
-            ra = parse_sexagesimal(ra_text[:-1].decode())
-            dec = parse_sexagesimal(dec_text[:-1].decode())
+            ra_text, dec_text = await lx200(port, b":GR#", b":GD#")  # degree byte 0xDF
+            ra = parse_sexagesimal(ra_text[:-1].decode("latin-1"))
+            dec = parse_sexagesimal(dec_text[:-1].decode("latin-1"))
             assert ra is not None
             assert dec is not None
             target_dec = dec + 2.0
             d = abs(target_dec)
             sd = f"+{int(d):02d}*{int(d * 60) % 60:02d}:{int(d * 3600) % 60:02d}"
-            sr = ra_text[:-1].decode()
+            sr = ra_text[:-1].decode("latin-1")
             replies = await lx200(port, f":Sr {sr}#".encode(), f":Sd {sd}#".encode(), b":CM#")
             assert replies[:2] == [b"1", b"1"], replies
             (now_dec_text,) = await lx200(port, b":GD#")
-            now_dec = parse_sexagesimal(now_dec_text[:-1].decode())
+            now_dec = parse_sexagesimal(now_dec_text[:-1].decode("latin-1"))
             assert now_dec is not None
             assert abs(now_dec - target_dec) < 0.05
 
