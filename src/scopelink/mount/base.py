@@ -12,8 +12,8 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import math
-from collections.abc import Awaitable, Callable
-from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import AbstractContextManager, aclosing, asynccontextmanager
 from datetime import UTC, datetime
 
 from scopelink.astro import PierSide, Site, j2000_to_observed
@@ -39,6 +39,7 @@ from scopelink.mount.meridian import (
 from scopelink.mount.meridian_watch import MeridianWatch
 from scopelink.mount.parking import ParkKeeper, Resume
 from scopelink.mount.progress import ProgressTracker
+from scopelink.mount.rates import RateKeeper, TrackingRates, check_tracking_rates
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import (
@@ -120,6 +121,7 @@ class Mount(StateCache):
         self._parking = False
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
         self.park_keeper = ParkKeeper()
+        self._rates = RateKeeper()
         """Records the park and restores it at unpark (:mod:`scopelink.mount.parking`)."""
 
     # --- who, what, where -------------------------------------------------------------------------
@@ -169,10 +171,17 @@ class Mount(StateCache):
         (:mod:`scopelink.mount.meridian_watch`)."""
         return self._meridian
 
-    def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
+    @asynccontextmanager
+    async def motion_client(self, name: str) -> AsyncIterator[MotionClient]:
         """The dead-man for one client of a front end: inside ``async with``, rate motions are
-        owned by the client, and those still running when the block ends are stopped."""
-        return self._dead_man.client(name)
+        owned by the client, and those still running when the block ends are stopped (custom
+        tracking rates it set go back to zero)."""
+        async with self._dead_man.client(name) as client:
+            try:
+                yield client
+            finally:
+                if self._rates.owned_by(client) and self.state.connected:
+                    await asyncio.shield(self.set_tracking_rates(0.0, 0.0))
 
     def acting_for(self, token: str | None) -> AbstractContextManager[MotionClient | None]:
         """Commands inside are on behalf of the :class:`MotionClient` with ``token`` (requests
@@ -433,6 +442,23 @@ class Mount(StateCache):
         if mode is not TrackingMode.OFF:
             self._guard.command_accepted()
             self._meridian.command_accepted()
+
+    @property
+    def tracking_rates(self) -> TrackingRates:
+        """The custom tracking rates in force (docs/tracking.md; zero: the mode's own rate)."""
+        return self._rates.rates
+
+    async def set_tracking_rates(self, ra_arcsec_per_s: float, dec_arcsec_per_s: float) -> None:
+        """Track a target whose J2000 RA and Dec change at these rates (:mod:`.rates`), added
+        to the tracking mode's rate while tracking is on; (0, 0) goes back to the mode's rate."""
+        rates = check_tracking_rates(self.capabilities, ra_arcsec_per_s, dec_arcsec_per_s)
+        if rates.zero:
+            self._require_connected()
+        else:
+            self._require_unparked()
+        self._motion_commanded()
+        await self._set_tracking_rates(rates)
+        self._rates.set(rates)
 
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""

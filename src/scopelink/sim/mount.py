@@ -34,6 +34,7 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.mount.errors import SunAvoidanceError
+from scopelink.mount.rates import TrackingRates
 from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import SyncFrame
 from scopelink.mount.types import AlignmentMode
@@ -52,6 +53,9 @@ from scopelink.sim.tracking import (
 )
 
 __all__ = ["SimulatedMount"]
+
+MAX_SIM_TRACKING_OFFSET_ARCSEC_S = 3600.0
+"""The simulator's largest custom tracking rate offset (1°/s on each axis; docs/tracking.md)."""
 
 _POLE_TRACKING_DEG = 0.5
 """Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
@@ -241,7 +245,7 @@ class SimulatedMount(Mount):
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
             self._tracking = _default_tracking(self.model)
-        target = SkyTarget(ra_j2000_hours, dec_j2000_deg, t, ra_drift_hours_per_s(self._tracking))
+        target = self._sky_target(ra_j2000_hours, dec_j2000_deg, t)
         alt, az = j2000_to_observed(
             ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
         )
@@ -313,6 +317,14 @@ class SimulatedMount(Mount):
         t = self._begin()
         self._tracking = mode
         # During a goto the new mode applies from the landing on.
+        from_t = max(t, self._plan.goto_until)
+        self._plan.retarget(from_t)
+        self._finish(limits_from=from_t)
+
+    async def _set_tracking_rates(self, rates: TrackingRates) -> None:
+        """Exact: tracking follows the drifting target from now (from the landing of a goto)."""
+        t = self._begin()
+        self._rates.set(rates)  # _sky_target reads it while the plan is redone below
         from_t = max(t, self._plan.goto_until)
         self._plan.retarget(from_t)
         self._finish(limits_from=from_t)
@@ -421,8 +433,13 @@ class SimulatedMount(Mount):
             rate = self.geometry.hemisphere * tracking_rate_deg_s(self._tracking)
             return PolarAxisPath(counters, t, rate)
         ra, dec = self.j2000_at(t)
-        drift = ra_drift_hours_per_s(self._tracking)
-        return self._path(SkyTarget(ra, dec, t, drift), t, self._side_at(t))
+        return self._path(self._sky_target(ra, dec, t), t, self._side_at(t))
+
+    def _sky_target(self, ra_j2000_hours: float, dec_j2000_deg: float, t: float) -> SkyTarget:
+        """The target tracking follows from ``t``: the mode's drift plus the custom rates."""
+        custom = self.tracking_rates
+        drift = ra_drift_hours_per_s(self._tracking, custom)
+        return SkyTarget(ra_j2000_hours, dec_j2000_deg, t, drift, custom.dec_deg_per_s)
 
     def _tracking_path_at(self, t: float) -> SkyPath | PolarAxisPath | None:
         return None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
@@ -463,6 +480,7 @@ def _capabilities_of(model: MountModel) -> Capabilities:
     """What a simulated mount of ``model`` can do: everything, at the preset's top rate."""
     equatorial = model.alignment_mode is not AlignmentMode.ALT_AZ
     rates = {TrackingMode.OFF, TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR}
+    rates.add(TrackingMode.KING)
     rates.add(TrackingMode.PEC if equatorial else TrackingMode.ALT_AZ)
     return Capabilities(
         alignment_mode=model.alignment_mode,
@@ -478,6 +496,7 @@ def _capabilities_of(model: MountModel) -> Capabilities:
         can_set_site=True,
         can_set_time=True,
         can_report_pier_side=model.alignment_mode is AlignmentMode.GERMAN_POLAR,
+        max_tracking_offset_arcsec_s=MAX_SIM_TRACKING_OFFSET_ARCSEC_S,
     )
 
 

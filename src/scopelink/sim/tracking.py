@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from scopelink.astro import (
+    KING_RATE_DEG_S,
     LUNAR_RATE_DEG_S,
     SIDEREAL_RATE_DEG_S,
     SOLAR_RATE_DEG_S,
@@ -22,6 +23,7 @@ from scopelink.astro import (
     j2000_to_observed,
 )
 from scopelink.mount import TrackingMode
+from scopelink.mount.rates import TrackingRates
 from scopelink.sim.geometry import Geometry
 
 __all__ = ["PolarAxisPath", "SkyPath", "SkyTarget", "ra_drift_hours_per_s", "tracking_rate_deg_s"]
@@ -31,14 +33,19 @@ _CACHE_SIZE = 64
 
 def tracking_rate_deg_s(mode: TrackingMode) -> float:
     """How fast the polar axis turns in ``mode`` (sidereal unless lunar or solar)."""
-    return {TrackingMode.LUNAR: LUNAR_RATE_DEG_S, TrackingMode.SOLAR: SOLAR_RATE_DEG_S}.get(
-        mode, SIDEREAL_RATE_DEG_S
-    )
+    rates = {
+        TrackingMode.LUNAR: LUNAR_RATE_DEG_S,
+        TrackingMode.SOLAR: SOLAR_RATE_DEG_S,
+        TrackingMode.KING: KING_RATE_DEG_S,
+    }
+    return rates.get(mode, SIDEREAL_RATE_DEG_S)
 
 
-def ra_drift_hours_per_s(mode: TrackingMode) -> float:
-    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate."""
-    return (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) / 15.0
+def ra_drift_hours_per_s(mode: TrackingMode, custom: TrackingRates | None = None) -> float:
+    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate (plus a
+    custom RA rate, :mod:`scopelink.mount.rates`)."""
+    extra = 0.0 if custom is None else custom.ra_hours_per_s
+    return (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) / 15.0 + extra
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,9 +56,15 @@ class SkyTarget:
     dec_j2000_deg: float
     at_s: float
     ra_drift_hours_per_s: float = 0.0
+    dec_drift_deg_per_s: float = 0.0
 
     def ra_at(self, t: float) -> float:
         return (self.ra_j2000_hours + self.ra_drift_hours_per_s * (t - self.at_s)) % 24.0
+
+    def dec_at(self, t: float) -> float:
+        """The declination at ``t``, held at the pole (a custom Dec rate stops there)."""
+        dec = self.dec_j2000_deg + self.dec_drift_deg_per_s * (t - self.at_s)
+        return max(-90.0, min(90.0, dec))
 
 
 def _unwrap(value: float, reference: float) -> float:
@@ -92,7 +105,7 @@ class SkyPath:
     def observed_at(self, t: float) -> tuple[float, float]:
         """Observed (altitude, azimuth) of the target at elapsed ``t``."""
         when = self.epoch + timedelta(seconds=t)
-        return j2000_to_observed(self.target.ra_at(t), self.target.dec_j2000_deg, when, self.site)
+        return j2000_to_observed(self.target.ra_at(t), self.target.dec_at(t), when, self.site)
 
     def _raw_axes_at(self, t: float) -> tuple[float, float]:
         alt, az = self.observed_at(t)
