@@ -12,8 +12,8 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import math
-from collections.abc import AsyncIterator, Awaitable, Callable
-from contextlib import AbstractContextManager, aclosing, asynccontextmanager
+from collections.abc import Awaitable, Callable
+from contextlib import AbstractAsyncContextManager, AbstractContextManager, aclosing
 from datetime import UTC, datetime
 
 from scopelink.astro import PierSide, Site, j2000_to_observed
@@ -112,16 +112,17 @@ class Mount(StateCache):
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
+        self._rates = RateKeeper(self)
         self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
         self._meridian = MeridianWatch(self, GuardSettings(), show_notice=self._publish_again)
         self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
+        self._dead_man.left = self._rates.left  # a client's custom tracking rates end with it
         self._sync_frame = SyncFrame()
         self._sync_lock = asyncio.Lock()
         """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
         self.park_keeper = ParkKeeper()
-        self._rates = RateKeeper()
         """Records the park and restores it at unpark (:mod:`scopelink.mount.parking`)."""
 
     # --- who, what, where -------------------------------------------------------------------------
@@ -171,17 +172,10 @@ class Mount(StateCache):
         (:mod:`scopelink.mount.meridian_watch`)."""
         return self._meridian
 
-    @asynccontextmanager
-    async def motion_client(self, name: str) -> AsyncIterator[MotionClient]:
+    def motion_client(self, name: str) -> AbstractAsyncContextManager[MotionClient]:
         """The dead-man for one client of a front end: inside ``async with``, rate motions are
-        owned by the client, and those still running when the block ends are stopped (custom
-        tracking rates it set go back to zero)."""
-        async with self._dead_man.client(name) as client:
-            try:
-                yield client
-            finally:
-                if self._rates.owned_by(client) and self.state.connected:
-                    await asyncio.shield(self.set_tracking_rates(0.0, 0.0))
+        owned by the client, and those still running when the block ends are stopped."""
+        return self._dead_man.client(name)
 
     def acting_for(self, token: str | None) -> AbstractContextManager[MotionClient | None]:
         """Commands inside are on behalf of the :class:`MotionClient` with ``token`` (requests
@@ -444,19 +438,13 @@ class Mount(StateCache):
             self._meridian.command_accepted()
 
     @property
-    def tracking_rates(self) -> TrackingRates:
-        """The custom tracking rates in force (docs/tracking.md; zero: the mode's own rate)."""
+    def tracking_rates(self) -> TrackingRates:  # zero: the tracking mode's own rate
         return self._rates.rates
 
     async def set_tracking_rates(self, ra_arcsec_per_s: float, dec_arcsec_per_s: float) -> None:
-        """Track a target whose J2000 RA and Dec change at these rates (:mod:`.rates`), added
-        to the tracking mode's rate while tracking is on; (0, 0) goes back to the mode's rate."""
+        """Add these J2000 RA/Dec rates to tracking (docs/tracking.md; 0, 0: the mode's own)."""
         rates = check_tracking_rates(self.capabilities, ra_arcsec_per_s, dec_arcsec_per_s)
-        if rates.zero:
-            self._require_connected()
-        else:
-            self._require_unparked()
-        self._motion_commanded()
+        (self._require_connected if rates.zero else self._require_unparked)()
         await self._set_tracking_rates(rates)
         self._rates.set(rates)
 

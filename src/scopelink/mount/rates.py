@@ -15,22 +15,27 @@ in arcseconds per SI second: :func:`ra_rate_from_ascom` and :func:`ra_rate_to_as
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 from scopelink.astro import SIDEREAL_DAY_S
 from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.errors import InvalidValueError, NotSupportedError
-from scopelink.mount.types import Capabilities, TrackingMode
+from scopelink.mount.types import Capabilities, MountState, TrackingMode
 
 __all__ = [
     "SI_SECONDS_PER_SIDEREAL_SECOND",
     "RateKeeper",
+    "RatesSetter",
     "TrackingRates",
     "check_tracking_rates",
     "ra_rate_from_ascom",
     "ra_rate_to_ascom",
 ]
+
+logger = logging.getLogger(__name__)
 
 SI_SECONDS_PER_SIDEREAL_SECOND = SIDEREAL_DAY_S / 86400.0
 """0.99726957: ASCOM's "number of UTC seconds in a sidereal second"."""
@@ -96,11 +101,21 @@ def check_tracking_rates(
     return rates
 
 
-class RateKeeper:
-    """The custom rates in force on one mount, and who set them (the dead-man resets them to
-    zero when that client leaves, so a custom rate never outlives its client)."""
+class RatesSetter(Protocol):
+    """What :class:`RateKeeper` needs of the mount: its state and the checked setter."""
 
-    def __init__(self) -> None:
+    @property
+    def state(self) -> MountState: ...
+
+    async def set_tracking_rates(self, ra_arcsec_per_s: float, dec_arcsec_per_s: float) -> None: ...
+
+
+class RateKeeper:
+    """The custom rates in force on one mount, and who set them (the dead-man calls
+    :meth:`left`, which resets them to zero: a custom rate never outlives its client)."""
+
+    def __init__(self, mount: RatesSetter) -> None:
+        self._mount = mount
         self.rates = TrackingRates()
         self.owner: MotionClient | None = None
 
@@ -108,5 +123,8 @@ class RateKeeper:
         self.rates = rates
         self.owner = None if rates.zero else current_client()
 
-    def owned_by(self, client: MotionClient) -> bool:
-        return self.owner is client and not self.rates.zero
+    async def left(self, client: MotionClient) -> None:
+        """``client`` has gone: its custom rates go back to zero (the mode's own rate)."""
+        if self.owner is client and not self.rates.zero and self._mount.state.connected:
+            logger.warning("%s went away with custom tracking rates: back to zero", client.name)
+            await self._mount.set_tracking_rates(0.0, 0.0)

@@ -47,18 +47,14 @@ from scopelink.sim.motion import FOREVER, MotionPlan
 from scopelink.sim.tracking import (
     PolarAxisPath,
     SkyPath,
-    SkyTarget,
-    ra_drift_hours_per_s,
-    tracking_rate_deg_s,
+    sky_target,
+    tracking_path,
 )
 
 __all__ = ["SimulatedMount"]
 
 MAX_SIM_TRACKING_OFFSET_ARCSEC_S = 3600.0
 """The simulator's largest custom tracking rate offset (1°/s on each axis; docs/tracking.md)."""
-
-_POLE_TRACKING_DEG = 0.5
-"""Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
 
 
 class SimulatedMount(Mount):
@@ -245,13 +241,12 @@ class SimulatedMount(Mount):
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
             self._tracking = _default_tracking(self.model)
-        target = self._sky_target(ra_j2000_hours, dec_j2000_deg, t)
         alt, az = j2000_to_observed(
             ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
         )
         if side is None:
             side = self.geometry.choose_side(alt, az, self._side_at(t))
-        path = self._path(target, t, side)
+        path = self._path(ra_j2000_hours, dec_j2000_deg, t, side)
         self._plan.land_both_on((path.primary, path.secondary), t)
         self._finish(limits_from=self._plan.goto_until)
 
@@ -322,12 +317,8 @@ class SimulatedMount(Mount):
         self._finish(limits_from=from_t)
 
     async def _set_tracking_rates(self, rates: TrackingRates) -> None:
-        """Exact: tracking follows the drifting target from now (from the landing of a goto)."""
-        t = self._begin()
-        self._rates.set(rates)  # _sky_target reads it while the plan is redone below
-        from_t = max(t, self._plan.goto_until)
-        self._plan.retarget(from_t)
-        self._finish(limits_from=from_t)
+        self._rates.set(rates)  # read by sky_target when tracking is planned anew
+        await self._set_tracking(self.tracking)
 
     async def _park(self) -> None:
         t = self._begin(replan=True)
@@ -417,9 +408,9 @@ class SimulatedMount(Mount):
     def _side_at(self, t: float) -> PierSide:
         return self.geometry.pier_side(*self.counters_at(t))
 
-    def _path(self, target: SkyTarget, t: float, side: PierSide) -> SkyPath:
+    def _path(self, ra_j2000: float, dec_j2000: float, t: float, side: PierSide) -> SkyPath:
         return SkyPath(
-            target,
+            sky_target(ra_j2000, dec_j2000, t, self._tracking, self.tracking_rates),
             geometry=self.geometry,
             site=self._site,
             epoch=self.clock.epoch,
@@ -428,18 +419,10 @@ class SimulatedMount(Mount):
         )
 
     def _path_from_here(self, t: float) -> SkyPath | PolarAxisPath:
-        counters = self.counters_at(t)
-        if self.geometry.pole_distance_deg(*counters) < _POLE_TRACKING_DEG:
-            rate = self.geometry.hemisphere * tracking_rate_deg_s(self._tracking)
-            return PolarAxisPath(counters, t, rate)
-        ra, dec = self.j2000_at(t)
-        return self._path(self._sky_target(ra, dec, t), t, self._side_at(t))
+        def sky_path() -> SkyPath:
+            return self._path(*self.j2000_at(t), t, self._side_at(t))
 
-    def _sky_target(self, ra_j2000_hours: float, dec_j2000_deg: float, t: float) -> SkyTarget:
-        """The target tracking follows from ``t``: the mode's drift plus the custom rates."""
-        custom = self.tracking_rates
-        drift = ra_drift_hours_per_s(self._tracking, custom)
-        return SkyTarget(ra_j2000_hours, dec_j2000_deg, t, drift, custom.dec_deg_per_s)
+        return tracking_path(self.counters_at(t), t, self._tracking, self.geometry, sky_path)
 
     def _tracking_path_at(self, t: float) -> SkyPath | PolarAxisPath | None:
         return None if self._tracking is TrackingMode.OFF else self._path_from_here(t)

@@ -10,6 +10,7 @@ estimates) ask for the same instants.
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
@@ -26,9 +27,21 @@ from scopelink.mount import TrackingMode
 from scopelink.mount.rates import TrackingRates
 from scopelink.sim.geometry import Geometry
 
-__all__ = ["PolarAxisPath", "SkyPath", "SkyTarget", "ra_drift_hours_per_s", "tracking_rate_deg_s"]
+__all__ = [
+    "POLE_TRACKING_DEG",
+    "PolarAxisPath",
+    "SkyPath",
+    "SkyTarget",
+    "ra_drift_hours_per_s",
+    "sky_target",
+    "tracking_path",
+    "tracking_rate_deg_s",
+]
 
 _CACHE_SIZE = 64
+
+POLE_TRACKING_DEG = 0.5
+"""Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
 
 
 def tracking_rate_deg_s(mode: TrackingMode) -> float:
@@ -65,6 +78,18 @@ class SkyTarget:
         """The declination at ``t``, held at the pole (a custom Dec rate stops there)."""
         dec = self.dec_j2000_deg + self.dec_drift_deg_per_s * (t - self.at_s)
         return max(-90.0, min(90.0, dec))
+
+
+def sky_target(
+    ra_j2000_hours: float,
+    dec_j2000_deg: float,
+    at_s: float,
+    mode: TrackingMode,
+    custom: TrackingRates,
+) -> SkyTarget:
+    """What tracking in ``mode`` at the ``custom`` rates follows from ``at_s``."""
+    drift = ra_drift_hours_per_s(mode, custom)
+    return SkyTarget(ra_j2000_hours, dec_j2000_deg, at_s, drift, custom.dec_deg_per_s)
 
 
 def _unwrap(value: float, reference: float) -> float:
@@ -149,3 +174,17 @@ class PolarAxisPath:
 
     def secondary(self, t: float) -> float:
         return self.counters[1]
+
+
+def tracking_path(
+    counters: tuple[float, float],
+    t: float,
+    mode: TrackingMode,
+    geometry: Geometry,
+    sky_path: Callable[[], SkyPath],
+) -> SkyPath | PolarAxisPath:
+    """Tracking in ``mode`` from ``counters`` at ``t``: uniformly about the polar axis near the
+    pole (custom rates do not apply there), else the :class:`SkyPath` ``sky_path`` makes."""
+    if geometry.pole_distance_deg(*counters) < POLE_TRACKING_DEG:
+        return PolarAxisPath(counters, t, geometry.hemisphere * tracking_rate_deg_s(mode))
+    return sky_path()
