@@ -20,7 +20,13 @@ import math
 from dataclasses import dataclass
 from typing import Protocol
 
-from scopelink.astro import SIDEREAL_DAY_S
+from scopelink.astro import (
+    KING_RATE_DEG_S,
+    LUNAR_RATE_DEG_S,
+    SIDEREAL_DAY_S,
+    SIDEREAL_RATE_DEG_S,
+    SOLAR_RATE_DEG_S,
+)
 from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.errors import InvalidValueError, NotSupportedError
 from scopelink.mount.types import Capabilities, MountState, TrackingMode
@@ -33,6 +39,7 @@ __all__ = [
     "check_tracking_rates",
     "ra_rate_from_ascom",
     "ra_rate_to_ascom",
+    "tracking_rate_deg_s",
 ]
 
 logger = logging.getLogger(__name__)
@@ -47,6 +54,16 @@ OFFSET_MODES = frozenset(
 alt-az or PEC modes of a hand control, which follow the sky their own way)."""
 
 
+def tracking_rate_deg_s(mode: TrackingMode) -> float:
+    """How fast the polar axis turns in ``mode`` (sidereal unless lunar, solar or King)."""
+    rates = {
+        TrackingMode.LUNAR: LUNAR_RATE_DEG_S,
+        TrackingMode.SOLAR: SOLAR_RATE_DEG_S,
+        TrackingMode.KING: KING_RATE_DEG_S,
+    }
+    return rates.get(mode, SIDEREAL_RATE_DEG_S)
+
+
 @dataclass(frozen=True, slots=True)
 class TrackingRates:
     """Offsets of the tracked J2000 position, in arcsec per SI second (module docstring)."""
@@ -57,6 +74,11 @@ class TrackingRates:
     @property
     def zero(self) -> bool:
         return self.ra_arcsec_per_s == 0.0 and self.dec_arcsec_per_s == 0.0
+
+    def plus_mode(self, mode: TrackingMode) -> TrackingRates:
+        """These rates plus the RA drift of ``mode`` against the stars (lunar: 0.356″/s)."""
+        drift = (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) * 3600.0
+        return TrackingRates(self.ra_arcsec_per_s + drift, self.dec_arcsec_per_s)
 
     @property
     def ra_hours_per_s(self) -> float:

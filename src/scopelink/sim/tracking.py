@@ -15,16 +15,13 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from scopelink.astro import (
-    KING_RATE_DEG_S,
-    LUNAR_RATE_DEG_S,
     SIDEREAL_RATE_DEG_S,
-    SOLAR_RATE_DEG_S,
     PierSide,
     Site,
     j2000_to_observed,
 )
 from scopelink.mount import TrackingMode
-from scopelink.mount.rates import TrackingRates
+from scopelink.mount.rates import TrackingRates, tracking_rate_deg_s
 from scopelink.sim.geometry import Geometry
 
 __all__ = [
@@ -42,16 +39,6 @@ _CACHE_SIZE = 64
 
 POLE_TRACKING_DEG = 0.5
 """Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
-
-
-def tracking_rate_deg_s(mode: TrackingMode) -> float:
-    """How fast the polar axis turns in ``mode`` (sidereal unless lunar or solar)."""
-    rates = {
-        TrackingMode.LUNAR: LUNAR_RATE_DEG_S,
-        TrackingMode.SOLAR: SOLAR_RATE_DEG_S,
-        TrackingMode.KING: KING_RATE_DEG_S,
-    }
-    return rates.get(mode, SIDEREAL_RATE_DEG_S)
 
 
 def ra_drift_hours_per_s(mode: TrackingMode, custom: TrackingRates | None = None) -> float:

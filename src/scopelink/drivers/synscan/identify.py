@@ -40,8 +40,9 @@ _MOUNT_TRACKING: dict[int, TrackingMode] = {code: mode for mode, code in _TRACKI
 
 
 def synscan_tracking(mode: TrackingMode) -> Tracking:
-    """The ``T`` code of a tracking mode (KeyError for modes SynScan has not)."""
-    return _TRACKING_CODES[mode]
+    """The ``T`` code of a tracking mode; lunar, solar and King are the hand control's sidereal
+    (the driver's loop adds their offsets: rates.py)."""
+    return _TRACKING_CODES.get(mode, Tracking.EQUATORIAL)
 
 
 def mount_tracking(code: int) -> TrackingMode | None:
@@ -87,6 +88,8 @@ def capabilities_for(info: HandControlInfo) -> Capabilities:
     modes = {TrackingMode.OFF, sky_tracking}
     if equatorial:
         modes.add(TrackingMode.PEC)
+        # Lunar, solar and King: sidereal plus an RA offset, by the PC loop (rates.py).
+        modes |= {TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING}
     return Capabilities(
         alignment_mode=AlignmentMode.GERMAN_POLAR if equatorial else AlignmentMode.ALT_AZ,
         can_goto=True,

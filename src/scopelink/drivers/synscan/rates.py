@@ -53,8 +53,20 @@ POSITION_REPLY_BYTES = 18
 """The precise ``e`` reply (``34AB0500,12CE0500#``): the hand control reads its position when
 the command arrives, the reading is stamped when the reply has arrived."""
 
-LOOP_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
-"""The hand control's modes the loop replaces (sidereal motion plus the offsets)."""
+LOOP_MODES = frozenset(
+    {
+        TrackingMode.SIDEREAL,
+        TrackingMode.PEC,
+        TrackingMode.LUNAR,
+        TrackingMode.SOLAR,
+        TrackingMode.KING,
+    }
+)
+"""The modes the loop runs in: sidereal and PEC with custom rates; lunar, solar and King always
+(the hand control has none of them: sidereal plus their RA offset)."""
+
+HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
+"""The equatorial modes the hand control tracks in by itself."""
 
 
 @dataclass
@@ -112,8 +124,9 @@ class SynScanRates(SynScanParking):
         """Start the loop if rates are set and the mode is one it replaces."""
         rates = self.tracking_rates if rates is None else rates
         mode = self._tracking
-        if rates.zero or mode not in LOOP_MODES:
+        if mode not in LOOP_MODES or (rates.zero and mode in HAND_CONTROL_MODES):
             return
+        rates = rates.plus_mode(mode)
         state = await self._read_state(Priority.COMMAND)
         if state.ra_j2000_hours is None or state.dec_j2000_deg is None:
             return
@@ -259,7 +272,7 @@ class SynScanRates(SynScanParking):
                     self._axis_rates.pop(axis, None)
                     self._guard.motion_commanded(axis, 0.0)
                 await self._ask(SetTrackingMode(synscan_tracking(mode)), Ack)
-                self._hc_tracking = mode
+                self._hc_tracking = mode if mode in HAND_CONTROL_MODES else TrackingMode.SIDEREAL
 
 
 def _sky_error_arcsec(ra_error_deg: float, dec_error_deg: float, state: MountState) -> float:
