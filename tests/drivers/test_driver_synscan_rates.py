@@ -111,3 +111,21 @@ async def test_an_alt_az_hand_control_refuses_custom_rates() -> None:
         assert r.mount.capabilities.max_tracking_offset_arcsec_s == 0.0
         with pytest.raises(NotSupportedError, match="custom rates"):
             await r.mount.set_tracking_rates(1.0, 0.0)
+
+
+async def test_a_goto_ends_the_loop_and_is_never_overridden() -> None:
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        async with r.mount.watching():
+            await r.mount.set_tracking_rates(20.0, 5.0)
+            assert _running(r.mount)
+            await r.mount.goto_equatorial(8.0, 30.0)  # the loop gives way to the goto
+            await r.mount.set_tracking_rates(20.0, 5.0)  # during the goto: not started
+            await r.mount.wait_for_slew(timeout_s=15.0)
+            assert not _running(r.mount)
+            state = await r.mount.refresh()
+        assert state.ra_j2000_hours == pytest.approx(8.0, abs=0.01)  # the goto landed
+        assert state.dec_j2000_deg == pytest.approx(30.0, abs=0.05)
+        assert r.sim.tracking is TrackingMode.SIDEREAL
+        assert not r.mount.guard.rate_motions

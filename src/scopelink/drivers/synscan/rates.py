@@ -99,17 +99,33 @@ class SynScanRates(SynScanParking):
     _loop_mode: TrackingMode | None = None
     _loop_rates: dict[MountAxis, float] | None = None
     _hc_tracking: TrackingMode = TrackingMode.OFF
+    _loop_taken = False
+    """Another motion command is on its way: no correction may follow it onto the wire."""
+    _loop_starting = False
     rate_loop_statistics: RateLoopStatistics | None = None
     """The running (or last) loop's errors: None before the first."""
 
     # While the loop runs, the hand control reads 't' = off, but the mount tracks (ours).
+    # After the loop gave way to another command, tracking resumes in its mode even if a poll
+    # that read 't' = off before the hand-back finishes after it (until 't' reads it back).
+    _resume_mode: TrackingMode | None = None
+
     @property
     def _tracking(self) -> TrackingMode:
-        return self._loop_mode or self._hc_tracking
+        return self._loop_mode or self._resume_mode or self._hc_tracking
 
     @_tracking.setter
     def _tracking(self, mode: TrackingMode) -> None:
         self._hc_tracking = mode
+        if mode is not TrackingMode.OFF:
+            self._resume_mode = None
+
+    def _motion_commanded(self) -> None:
+        """Called before any motion command is sent (goto, move, pulse, abort, park): from now
+        on the loop sends no correction that could land after it."""
+        super()._motion_commanded()
+        if self._loop_mode is not None and not self._loop_starting:
+            self._loop_taken = True
 
     @property
     def custom_rates_running(self) -> bool:
@@ -120,11 +136,15 @@ class SynScanRates(SynScanParking):
         await self._end_custom_rates()
         await self._start_custom_rates(rates)
 
-    async def _start_custom_rates(self, rates: TrackingRates | None = None) -> None:
-        """Start the loop if rates are set and the mode is one it replaces."""
+    async def _start_custom_rates(
+        self, rates: TrackingRates | None = None, mode: TrackingMode | None = None
+    ) -> None:
+        """Start the loop if rates are set, the mode is one it replaces, and no goto runs."""
         rates = self.tracking_rates if rates is None else rates
-        mode = self._tracking
+        mode = self._tracking if mode is None else mode
         if mode not in LOOP_MODES or (rates.zero and mode in HAND_CONTROL_MODES):
+            return
+        if self._goto_running:  # never a rate slew over a goto: set them again once it landed
             return
         rates = rates.plus_mode(mode)
         state = await self._read_state(Priority.COMMAND)
@@ -133,16 +153,20 @@ class SynScanRates(SynScanParking):
         await self._ask(SetTrackingMode(synscan_tracking(TrackingMode.OFF)), Ack)
         self._loop_mode = mode
         self._loop_rates = {}
+        self._loop_taken = False
         anchor = (state, state.ra_j2000_hours, state.dec_j2000_deg)
         statistics = RateLoopStatistics(
             started_at=state.read_at, anchor=(state.ra_j2000_hours, state.dec_j2000_deg)
         )
         self.rate_loop_statistics = statistics
+        self._loop_starting = True
         try:
             await self._drive(self._axis_rates_for(rates, 0.0, 0.0), statistics, first=True)
         except BaseException:
             await self._end_custom_rates(force=True)
             raise
+        finally:
+            self._loop_starting = False
         self._rate_loop = asyncio.create_task(
             self._run(rates, anchor, statistics), name="synscan custom tracking rates"
         )
@@ -183,11 +207,17 @@ class SynScanRates(SynScanParking):
                 async def start(
                     axis: MountAxis = axis, rate: float = rate, command: VariableRateSlew = command
                 ) -> None:
+                    if self._loop_rates is None:  # ended before its first command
+                        return
+                    # Recorded first: a hand-back queued behind this command stops the axis.
+                    self._loop_rates[axis] = rate
+                    self._axis_rates[axis] = rate
                     with self._stops_owed_on_failure(axes={axis}):
                         await self._ask_passthrough(command)
-                    self._axis_rates[axis] = rate
 
                 await self._guarded_rate_motion(axis, rate, start)
+                if self._loop_ended():  # meanwhile: its hand-back stopped the axis
+                    return
             else:
                 async with self.wire.exclusive():
                     if not self._loop_still_ours():
@@ -209,9 +239,12 @@ class SynScanRates(SynScanParking):
         ratio = dt / elapsed_real if elapsed_real > 0.5 and dt > 0.0 else 1.0
         return real_s * ratio
 
+    def _loop_ended(self) -> bool:
+        return self._loop_rates is None
+
     def _loop_still_ours(self) -> bool:
         """False once anything else took the axes over (goto, abort, move, the guard's stop)."""
-        if self._loop_rates is None or not self._connected:
+        if self._loop_rates is None or self._loop_taken or not self._connected:
             return False
         return all(self._axis_rates.get(axis) == rate for axis, rate in self._loop_rates.items())
 
@@ -243,13 +276,18 @@ class SynScanRates(SynScanParking):
             self._report_problem(f"custom tracking rates stopped: {error}")
         finally:
             if self._rate_loop is asyncio.current_task():
-                await asyncio.shield(self._hand_back())
+                mode = self._loop_mode
+                self._resume_mode = mode if mode in HAND_CONTROL_MODES else TrackingMode.SIDEREAL
+                # After the command that took over, which has the wire before the hand-back.
+                with contextlib.suppress(MountError):  # a failed stop is owed, sent later
+                    await asyncio.shield(self._hand_back())
 
     async def _end_custom_rates(self, *, force: bool = False) -> None:
         """Stop the loop (rates zeroed, a tracking change, a disconnect): both axes stopped and
         the hand control's tracking given back."""
+        self._resume_mode = None  # a command of the user's: its mode stands
         task, self._rate_loop = self._rate_loop, None
-        if task is not None:
+        if task is not None and task is not asyncio.current_task():
             task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await task
@@ -264,13 +302,19 @@ class SynScanRates(SynScanParking):
         self._rate_loop = None
         if mode is None or not self._connected:
             return
-        ours = [axis for axis, rate in rates.items() if self._axis_rates.get(axis) == rate]
-        with self._stops_owed_on_failure(axes=set(ours)):
-            async with self.wire.exclusive():
+        async with self.wire.exclusive():
+            # The command that took over (a goto, a move) had the wire just before: let it
+            # record what it did before telling which axes are still the loop's.
+            for _ in range(3):
+                await asyncio.sleep(0)
+            ours = [axis for axis, rate in rates.items() if self._axis_rates.get(axis) == rate]
+            with self._stops_owed_on_failure(axes=set(ours)):
                 for axis in ours:
                     await self._send_rate_zero(axis)
                     self._axis_rates.pop(axis, None)
                     self._guard.motion_commanded(axis, 0.0)
+                if self._goto_running:  # the goto decides the tracking (an RA/Dec one starts it)
+                    return
                 await self._ask(SetTrackingMode(synscan_tracking(mode)), Ack)
                 self._hc_tracking = mode if mode in HAND_CONTROL_MODES else TrackingMode.SIDEREAL
 
