@@ -33,3 +33,24 @@ def test_the_docs_state_the_rates_the_code_has() -> None:
     assert f"{SIDEREAL_DAY_S} s" in astronomy
     assert f"{SOLAR_RATE_DEG_S * 3600:.1f}″/s" in astronomy
     assert f"{LUNAR_RATE_DEG_S * 3600:.3f}″/s" in astronomy
+
+
+def test_the_tracking_page_states_the_rates_and_loop_settings_the_code_has() -> None:
+    from scopelink.astro import KING_RATE_DEG_S
+    from scopelink.drivers.synscan.identify import MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S
+    from scopelink.drivers.synscan.rates import (
+        LOOP_GAIN_PER_S,
+        MAX_CORRECTION_ARCSEC_S,
+        POSITION_REPLY_BYTES,
+    )
+    from scopelink.sim.mount import MAX_SIM_TRACKING_OFFSET_ARCSEC_S
+    from scopelink.sim.tracking import POLE_TRACKING_DEG
+
+    tracking = (ROOT / "docs" / "tracking.md").read_text(encoding="utf-8")
+    assert f"King {KING_RATE_DEG_S * 3600:.4f}″/s" in tracking
+    assert f"`LOOP_GAIN_PER_S` = {LOOP_GAIN_PER_S:g} /s" in tracking
+    assert f"`MAX_CORRECTION_ARCSEC_S` ({MAX_CORRECTION_ARCSEC_S:g}″/s)" in tracking
+    assert f"its {POSITION_REPLY_BYTES}-byte reply" in tracking
+    assert f"`POLE_TRACKING_DEG`, {POLE_TRACKING_DEG:g}°" in tracking
+    assert MAX_SIM_TRACKING_OFFSET_ARCSEC_S == MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S == 3600.0
+    assert "3600″/s (1°/s) on each axis" in tracking

@@ -52,7 +52,12 @@ async def test_connect_identifies_the_hand_control_and_reads_the_position(transp
             TrackingMode.OFF,
             TrackingMode.SIDEREAL,
             TrackingMode.PEC,
+            # By the driver's PC loop (docs/tracking.md): not the hand control's own modes.
+            TrackingMode.LUNAR,
+            TrackingMode.SOLAR,
+            TrackingMode.KING,
         }
+        assert capabilities.max_tracking_offset_arcsec_s == 3600.0
         assert capabilities.can_pulse_guide
         assert capabilities.can_report_pier_side
         assert r.mount.info is not None

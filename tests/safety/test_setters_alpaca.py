@@ -45,7 +45,7 @@ BAD_VALUES: list[tuple[str, str, str]] = [
     ("sitelongitude", "SiteLongitude", "inf"),
     ("siteelevation", "SiteElevation", "10001"),
     ("siteelevation", "SiteElevation", "-301"),
-    ("trackingrate", "TrackingRate", "3"),
+    ("trackingrate", "TrackingRate", "4"),
     ("trackingrate", "TrackingRate", "17"),
     ("slewsettletime", "SlewSettleTime", "-1"),
     ("slewsettletime", "SlewSettleTime", "32767"),
@@ -55,6 +55,7 @@ BAD_VALUES: list[tuple[str, str, str]] = [
     ("guideratedeclination", "GuideRateDeclination", "-1"),
     ("rightascensionrate", "RightAscensionRate", "1e9"),
     ("declinationrate", "DeclinationRate", "nan"),
+    ("declinationrate", "DeclinationRate", "-1e9"),
 ]
 EDGE_VALUES: list[tuple[str, str, str]] = [
     ("utcdate", "UTCDate", "2099-12-31T23:59:59Z"),

@@ -100,7 +100,7 @@ async def test_connect_and_read_every_property(tmp_path: Path) -> None:
         assert values["CanSetPierSide"] is False
         assert values["AtHome"] is False
         assert values["SideOfPier"] in (PierSide.pierEast, PierSide.pierWest)
-        assert values["TrackingRates"] == [0, 1, 2]
+        assert values["TrackingRates"] == [0, 1, 2, 3]
         assert values["GuideRateRightAscension"] == pytest.approx(mount.guide_rate_deg_s)
         assert values["Connecting"] is False
         utc = values["UTCDate"]
@@ -351,8 +351,9 @@ async def test_tracking_and_tracking_rates(tmp_path: Path) -> None:
         await blocking(lambda: setattr(telescope, "TrackingRate", DriveRates.driveLunar))
         assert _tracking(mount) is TrackingMode.LUNAR
         assert await blocking(lambda: telescope.TrackingRate) == DriveRates.driveLunar
-        with pytest.raises(InvalidValueException):
-            await blocking(lambda: setattr(telescope, "TrackingRate", DriveRates.driveKing))
+        await blocking(lambda: setattr(telescope, "TrackingRate", DriveRates.driveKing))
+        assert _tracking(mount) is TrackingMode.KING
+        await blocking(lambda: setattr(telescope, "TrackingRate", DriveRates.driveLunar))
         await blocking(lambda: setattr(telescope, "Tracking", False))
         assert _tracking(mount) is TrackingMode.OFF
         assert await blocking(lambda: telescope.TrackingRate) == DriveRates.driveLunar

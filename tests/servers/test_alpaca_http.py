@@ -176,7 +176,6 @@ async def test_unsupported_members_are_not_implemented(tmp_path: Path) -> None:
         puts = {
             "findhome": {},
             "sideofpier": {"SideOfPier": "0"},
-            "rightascensionrate": {"RightAscensionRate": "0"},
             "guideratedeclination": {"GuideRateDeclination": "0.004"},
             "commandstring": {"Command": "x", "Raw": "True"},
         }

@@ -37,6 +37,7 @@ from scopelink.astro.pier import (
     hour_angle_hours,
 )
 from scopelink.astro.rates import (
+    KING_RATE_DEG_S,
     LUNAR_RATE_DEG_S,
     SIDEREAL_DAY_S,
     SIDEREAL_RATE_DEG_S,
@@ -62,6 +63,7 @@ from scopelink.astro.timescales import (
 )
 
 __all__ = [
+    "KING_RATE_DEG_S",
     "LUNAR_RATE_DEG_S",
     "SIDEREAL_DAY_S",
     "SIDEREAL_RATE_DEG_S",

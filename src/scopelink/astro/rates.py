@@ -9,7 +9,13 @@ from __future__ import annotations
 
 from typing import Final
 
-__all__ = ["LUNAR_RATE_DEG_S", "SIDEREAL_DAY_S", "SIDEREAL_RATE_DEG_S", "SOLAR_RATE_DEG_S"]
+__all__ = [
+    "KING_RATE_DEG_S",
+    "LUNAR_RATE_DEG_S",
+    "SIDEREAL_DAY_S",
+    "SIDEREAL_RATE_DEG_S",
+    "SOLAR_RATE_DEG_S",
+]
 
 SIDEREAL_DAY_S: Final = 86164.0905
 """The mean sidereal day in SI seconds: one turn of the Earth relative to the equinox."""
@@ -25,3 +31,7 @@ Sun's hour angle grows; 0.3 % slower than the stars, which is the Sun's 1° a da
 LUNAR_RATE_DEG_S: Final = 14.685 / 3600.0
 """ASCOM's ``DriveRates`` lunar rate (14.685 arcsec/s): the Moon's mean motion taken off the
 sidereal rate."""
+
+KING_RATE_DEG_S: Final = 15.0369 / 3600.0
+"""ASCOM's ``DriveRates`` King rate (15.0369 arcsec/s): the sidereal rate slowed by the mean
+effect of refraction on a star's hour-angle motion (King, 1931), for long unguided exposures."""

@@ -41,6 +41,7 @@ from scopelink.mount.meridian_watch import MeridianWatch
 from scopelink.mount.parking import ParkKeeper, Resume
 from scopelink.mount.pointed import PointedMount
 from scopelink.mount.progress import ProgressTracker
+from scopelink.mount.rates import RateKeeper, TrackingRates, check_tracking_rates
 from scopelink.mount.setters import check_park_position, check_time
 from scopelink.mount.sun import SunZone, sun_zone
 from scopelink.mount.syncs import (
@@ -112,9 +113,11 @@ class Mount(PointedMount):
         self._target: SlewTarget | None = None
         self._park_position = park_position or ParkPosition.pole(site.latitude_deg)
         self._park_position_chosen = park_position is not None
+        self._rates = RateKeeper(self)
         self._guard = HorizonGuard(self, GuardSettings(), show_notice=self._publish_again)
         self._meridian = MeridianWatch(self, GuardSettings(), show_notice=self._publish_again)
         self._dead_man = DeadMan(self._guard.axes_of, lambda axis: self.move_axis(axis, 0.0))
+        self._dead_man.left = self._rates.left  # a client's custom tracking rates end with it
         self._sync_lock = asyncio.Lock()
         """One sync at a time, so the recorded frame follows the order the device got them in."""
         self._parking = False
@@ -424,6 +427,17 @@ class Mount(PointedMount):
         if mode is not TrackingMode.OFF:
             self._guard.command_accepted()
             self._meridian.command_accepted()
+
+    @property
+    def tracking_rates(self) -> TrackingRates:  # zero: the tracking mode's own rate
+        return self._rates.rates
+
+    async def set_tracking_rates(self, ra_arcsec_per_s: float, dec_arcsec_per_s: float) -> None:
+        """Add these J2000 RA/Dec rates to tracking (docs/tracking.md; 0, 0: the mode's own)."""
+        rates = check_tracking_rates(self.capabilities, ra_arcsec_per_s, dec_arcsec_per_s)
+        (self._require_connected if rates.zero else self._require_unparked)()
+        await self._set_tracking_rates(rates)
+        self._rates.set(rates)
 
     async def park(self) -> None:
         """Move to the park position, stop tracking and refuse motion until unparked."""

@@ -58,6 +58,9 @@ class DeadMan:
     ) -> None:
         self._axes_of = axes_of
         self._stop_axis = stop_axis
+        self.left: Callable[[MotionClient], Awaitable[None]] | None = None
+        """Told of every client that leaves, after its motions are stopped (the mount's
+        custom tracking rates go back to zero: :class:`scopelink.mount.rates.RateKeeper`)."""
         self._clients: dict[str, MotionClient] = {}
 
     @asynccontextmanager
@@ -96,3 +99,8 @@ class DeadMan:
                 await asyncio.shield(self._stop_axis(axis))
             except MountError as error:
                 logger.warning("stopping the %s axis failed: %s", axis.name.lower(), error)
+        if self.left is not None:
+            try:
+                await asyncio.shield(self.left(client))
+            except MountError as error:
+                logger.warning("after %s went away: %s", client.name, error)

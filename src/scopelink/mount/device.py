@@ -15,6 +15,7 @@ from datetime import datetime
 
 from scopelink.astro import PierSide, Site, destination_side_of_pier
 from scopelink.mount.errors import NotSupportedError
+from scopelink.mount.rates import TrackingRates
 from scopelink.mount.types import (
     Capabilities,
     GuideDirection,
@@ -72,6 +73,9 @@ class MountDevice(ABC):
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
         raise NotSupportedError("this mount cannot change tracking")
+
+    async def _set_tracking_rates(self, rates: TrackingRates) -> None:
+        raise NotSupportedError("this mount cannot track at custom rates")
 
     async def _park(self) -> None:
         raise NotSupportedError("this mount cannot park")

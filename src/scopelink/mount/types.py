@@ -40,6 +40,7 @@ class TrackingMode(enum.Enum):
     SIDEREAL = "sidereal"
     LUNAR = "lunar"
     SOLAR = "solar"
+    KING = "king"  # sidereal less the mean refraction drift (ASCOM driveKing)
     ALT_AZ = "altaz"  # sidereal motion followed on both axes of an alt-az mount
     PEC = "pec"  # sidereal with periodic error correction played back
 
@@ -83,6 +84,9 @@ class Capabilities:
     can_set_site: bool = False
     can_set_time: bool = False
     can_report_pier_side: bool = False
+    max_tracking_offset_arcsec_s: float = 0.0
+    """Largest custom tracking rate offset (RA and Dec, arcsec per SI second) the mount takes
+    in :meth:`Mount.set_tracking_rates`; 0: it cannot set custom rates (docs/tracking.md)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -33,6 +33,7 @@ from scopelink.mount import (
     MountState,
     TrackingMode,
 )
+from scopelink.mount.rates import TrackingRates
 from scopelink.mount.syncs import SyncFrame
 from scopelink.mount.types import AlignmentMode
 from scopelink.sim.axis import Axis
@@ -45,15 +46,14 @@ from scopelink.sim.motion import FOREVER, MotionPlan
 from scopelink.sim.tracking import (
     PolarAxisPath,
     SkyPath,
-    SkyTarget,
-    ra_drift_hours_per_s,
-    tracking_rate_deg_s,
+    sky_target,
+    tracking_path,
 )
 
 __all__ = ["SimulatedMount"]
 
-_POLE_TRACKING_DEG = 0.5
-"""Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
+MAX_SIM_TRACKING_OFFSET_ARCSEC_S = 3600.0
+"""The simulator's largest custom tracking rate offset (1°/s on each axis; docs/tracking.md)."""
 
 
 class SimulatedMount(Mount):
@@ -250,13 +250,12 @@ class SimulatedMount(Mount):
         if self._tracking is TrackingMode.OFF:
             # SynScan: a goto RA/Dec enables tracking if it is stopped.
             self._tracking = _default_tracking(self.model)
-        target = SkyTarget(ra_j2000_hours, dec_j2000_deg, t, ra_drift_hours_per_s(self._tracking))
         alt, az = j2000_to_observed(
             ra_j2000_hours, dec_j2000_deg, self.clock.datetime_at(t), self._site
         )
         if side is None:
             side = self.geometry.choose_side(alt, az, self._side_at(t))
-        path = self._path(target, t, side)
+        path = self._path(ra_j2000_hours, dec_j2000_deg, t, side)
         self._plan.land_both_on((path.primary, path.secondary), t)
         self._finish(limits_from=self._plan.goto_until)
 
@@ -325,6 +324,10 @@ class SimulatedMount(Mount):
         from_t = max(t, self._plan.goto_until)
         self._plan.retarget(from_t)
         self._finish(limits_from=from_t)
+
+    async def _set_tracking_rates(self, rates: TrackingRates) -> None:
+        self._rates.set(rates)  # read by sky_target when tracking is planned anew
+        await self._set_tracking(self.tracking)
 
     async def _park(self) -> None:
         t = self._begin(replan=True)
@@ -400,9 +403,9 @@ class SimulatedMount(Mount):
     def _side_at(self, t: float) -> PierSide:
         return self.geometry.pier_side(*self.counters_at(t))
 
-    def _path(self, target: SkyTarget, t: float, side: PierSide) -> SkyPath:
+    def _path(self, ra_j2000: float, dec_j2000: float, t: float, side: PierSide) -> SkyPath:
         return SkyPath(
-            target,
+            sky_target(ra_j2000, dec_j2000, t, self._tracking, self.tracking_rates),
             geometry=self.geometry,
             site=self._site,
             epoch=self.clock.epoch,
@@ -411,13 +414,10 @@ class SimulatedMount(Mount):
         )
 
     def _path_from_here(self, t: float) -> SkyPath | PolarAxisPath:
-        counters = self.counters_at(t)
-        if self.geometry.pole_distance_deg(*counters) < _POLE_TRACKING_DEG:
-            rate = self.geometry.hemisphere * tracking_rate_deg_s(self._tracking)
-            return PolarAxisPath(counters, t, rate)
-        ra, dec = self.j2000_at(t)
-        drift = ra_drift_hours_per_s(self._tracking)
-        return self._path(SkyTarget(ra, dec, t, drift), t, self._side_at(t))
+        def sky_path() -> SkyPath:
+            return self._path(*self.j2000_at(t), t, self._side_at(t))
+
+        return tracking_path(self.counters_at(t), t, self._tracking, self.geometry, sky_path)
 
     def _tracking_path_at(self, t: float) -> SkyPath | PolarAxisPath | None:
         return None if self._tracking is TrackingMode.OFF else self._path_from_here(t)
@@ -459,6 +459,7 @@ def _capabilities_of(model: MountModel) -> Capabilities:
     """What a simulated mount of ``model`` can do: everything, at the preset's top rate."""
     equatorial = model.alignment_mode is not AlignmentMode.ALT_AZ
     rates = {TrackingMode.OFF, TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR}
+    rates.add(TrackingMode.KING)
     rates.add(TrackingMode.PEC if equatorial else TrackingMode.ALT_AZ)
     return Capabilities(
         alignment_mode=model.alignment_mode,
@@ -474,6 +475,7 @@ def _capabilities_of(model: MountModel) -> Capabilities:
         can_set_site=True,
         can_set_time=True,
         can_report_pier_side=model.alignment_mode is AlignmentMode.GERMAN_POLAR,
+        max_tracking_offset_arcsec_s=MAX_SIM_TRACKING_OFFSET_ARCSEC_S,
     )
 
 

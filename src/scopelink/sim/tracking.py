@@ -10,35 +10,42 @@ estimates) ask for the same instants.
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from scopelink.astro import (
-    LUNAR_RATE_DEG_S,
     SIDEREAL_RATE_DEG_S,
-    SOLAR_RATE_DEG_S,
     PierSide,
     Site,
     j2000_to_observed,
 )
 from scopelink.mount import TrackingMode
+from scopelink.mount.rates import TrackingRates, tracking_rate_deg_s
 from scopelink.sim.geometry import Geometry
 
-__all__ = ["PolarAxisPath", "SkyPath", "SkyTarget", "ra_drift_hours_per_s", "tracking_rate_deg_s"]
+__all__ = [
+    "POLE_TRACKING_DEG",
+    "PolarAxisPath",
+    "SkyPath",
+    "SkyTarget",
+    "ra_drift_hours_per_s",
+    "sky_target",
+    "tracking_path",
+    "tracking_rate_deg_s",
+]
 
 _CACHE_SIZE = 64
 
-
-def tracking_rate_deg_s(mode: TrackingMode) -> float:
-    """How fast the polar axis turns in ``mode`` (sidereal unless lunar or solar)."""
-    return {TrackingMode.LUNAR: LUNAR_RATE_DEG_S, TrackingMode.SOLAR: SOLAR_RATE_DEG_S}.get(
-        mode, SIDEREAL_RATE_DEG_S
-    )
+POLE_TRACKING_DEG = 0.5
+"""Within this of the celestial pole, tracking turns the polar axis uniformly (PolarAxisPath)."""
 
 
-def ra_drift_hours_per_s(mode: TrackingMode) -> float:
-    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate."""
-    return (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) / 15.0
+def ra_drift_hours_per_s(mode: TrackingMode, custom: TrackingRates | None = None) -> float:
+    """How fast the tracked RA moves eastwards, so the axis turns at the mode's rate (plus a
+    custom RA rate, :mod:`scopelink.mount.rates`)."""
+    extra = 0.0 if custom is None else custom.ra_hours_per_s
+    return (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) / 15.0 + extra
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,9 +56,27 @@ class SkyTarget:
     dec_j2000_deg: float
     at_s: float
     ra_drift_hours_per_s: float = 0.0
+    dec_drift_deg_per_s: float = 0.0
 
     def ra_at(self, t: float) -> float:
         return (self.ra_j2000_hours + self.ra_drift_hours_per_s * (t - self.at_s)) % 24.0
+
+    def dec_at(self, t: float) -> float:
+        """The declination at ``t``, held at the pole (a custom Dec rate stops there)."""
+        dec = self.dec_j2000_deg + self.dec_drift_deg_per_s * (t - self.at_s)
+        return max(-90.0, min(90.0, dec))
+
+
+def sky_target(
+    ra_j2000_hours: float,
+    dec_j2000_deg: float,
+    at_s: float,
+    mode: TrackingMode,
+    custom: TrackingRates,
+) -> SkyTarget:
+    """What tracking in ``mode`` at the ``custom`` rates follows from ``at_s``."""
+    drift = ra_drift_hours_per_s(mode, custom)
+    return SkyTarget(ra_j2000_hours, dec_j2000_deg, at_s, drift, custom.dec_deg_per_s)
 
 
 def _unwrap(value: float, reference: float) -> float:
@@ -92,7 +117,7 @@ class SkyPath:
     def observed_at(self, t: float) -> tuple[float, float]:
         """Observed (altitude, azimuth) of the target at elapsed ``t``."""
         when = self.epoch + timedelta(seconds=t)
-        return j2000_to_observed(self.target.ra_at(t), self.target.dec_j2000_deg, when, self.site)
+        return j2000_to_observed(self.target.ra_at(t), self.target.dec_at(t), when, self.site)
 
     def _raw_axes_at(self, t: float) -> tuple[float, float]:
         alt, az = self.observed_at(t)
@@ -136,3 +161,17 @@ class PolarAxisPath:
 
     def secondary(self, t: float) -> float:
         return self.counters[1]
+
+
+def tracking_path(
+    counters: tuple[float, float],
+    t: float,
+    mode: TrackingMode,
+    geometry: Geometry,
+    sky_path: Callable[[], SkyPath],
+) -> SkyPath | PolarAxisPath:
+    """Tracking in ``mode`` from ``counters`` at ``t``: uniformly about the polar axis near the
+    pole (custom rates do not apply there), else the :class:`SkyPath` ``sky_path`` makes."""
+    if geometry.pole_distance_deg(*counters) < POLE_TRACKING_DEG:
+        return PolarAxisPath(counters, t, geometry.hemisphere * tracking_rate_deg_s(mode))
+    return sky_path()

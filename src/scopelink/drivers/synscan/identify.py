@@ -13,8 +13,13 @@ from scopelink.astro import SIDEREAL_RATE_DEG_S
 from scopelink.mount import AlignmentMode, Capabilities, Identity, TrackingMode
 from scopelink.protocol.synscan import Model, Tracking, Version, VersionDialect
 
+MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S = 3600.0
+"""Largest custom rate offset on a SynScan mount (1°/s per axis; the slew command reaches
+~4.5°/s, and the guard's budget is made for manual motion at such speeds)."""
+
 __all__ = [
     "MAX_SLEW_RATE_DEG_S",
+    "MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S",
     "HandControlInfo",
     "capabilities_for",
     "firmware_text",
@@ -35,8 +40,9 @@ _MOUNT_TRACKING: dict[int, TrackingMode] = {code: mode for mode, code in _TRACKI
 
 
 def synscan_tracking(mode: TrackingMode) -> Tracking:
-    """The ``T`` code of a tracking mode (KeyError for modes SynScan has not)."""
-    return _TRACKING_CODES[mode]
+    """The ``T`` code of a tracking mode; lunar, solar and King are the hand control's sidereal
+    (the driver's loop adds their offsets: rates.py)."""
+    return _TRACKING_CODES.get(mode, Tracking.EQUATORIAL)
 
 
 def mount_tracking(code: int) -> TrackingMode | None:
@@ -82,6 +88,8 @@ def capabilities_for(info: HandControlInfo) -> Capabilities:
     modes = {TrackingMode.OFF, sky_tracking}
     if equatorial:
         modes.add(TrackingMode.PEC)
+        # Lunar, solar and King: sidereal plus an RA offset, by the PC loop (rates.py).
+        modes |= {TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING}
     return Capabilities(
         alignment_mode=AlignmentMode.GERMAN_POLAR if equatorial else AlignmentMode.ALT_AZ,
         can_goto=True,
@@ -98,4 +106,6 @@ def capabilities_for(info: HandControlInfo) -> Capabilities:
         can_set_site=True,
         can_set_time=True,
         can_report_pier_side=equatorial,
+        # Custom rates: a PC loop of rate slews on the RA/Dec axes (rates.py), equatorial only.
+        max_tracking_offset_arcsec_s=MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S if equatorial else 0.0,
     )

@@ -25,7 +25,8 @@ from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site, angular_separat
 from scopelink.drivers.common import LinkFactory
 from scopelink.drivers.synscan.base import AXES, rate_zero
 from scopelink.drivers.synscan.identify import synscan_tracking
-from scopelink.drivers.synscan.parking import SlowGotoRefusedError, SynScanParking
+from scopelink.drivers.synscan.parking import SlowGotoRefusedError
+from scopelink.drivers.synscan.rates import SynScanRates
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.mount import (
     AlignmentMode,
@@ -81,7 +82,7 @@ def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float
     return float(angular_separation_deg(ra1_hours * 15.0, dec1, ra2_hours * 15.0, dec2))
 
 
-class SynScanMount(SynScanParking):
+class SynScanMount(SynScanRates):
     """A SynScan hand control on ``link``: a link spec (``/dev/ttyUSB0``, ``tcp://host:11880``,
     a pty path) or a factory that opens a :class:`~scopelink.links.Link`.
 
@@ -138,6 +139,8 @@ class SynScanMount(SynScanParking):
             await self.wire.close()
             return
         try:
+            with contextlib.suppress(MountError):
+                await self._end_custom_rates()  # the PC loop cannot outlive the link (rates.py)
             moving = await self._cancel_pulses()  # a cut-short pulse leaves its axis moving
             moving |= {axis for axis, rate in self._axis_rates.items() if rate}
             for axis in sorted(moving, key=lambda axis: axis.value):
@@ -382,9 +385,11 @@ class SynScanMount(SynScanParking):
         return set(pulses)
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
+        await self._end_custom_rates()  # custom rates: a loop on the PC (rates.py)
         await self._ask(SetTrackingMode(synscan_tracking(mode)), Ack)
         self._tracking = mode
         self._publish(dataclasses.replace(self.state, tracking=mode))
+        await self._start_custom_rates()
 
     async def _park(self) -> None:
         """Tracking off, then to :attr:`park_position`: by an Alt-Az goto, or by a slow goto

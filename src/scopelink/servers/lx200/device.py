@@ -87,6 +87,7 @@ _TRACKING_HZ = {
     TrackingMode.PEC: "60.1",
     TrackingMode.SOLAR: "60.0",
     TrackingMode.LUNAR: "57.9",
+    TrackingMode.KING: "60.1",  # 60.08: King's rate is 0.03 % under sidereal
 }
 """``:GT#``: Meade's tracking "frequency", 60.1 Hz standing for the sidereal rate."""
 _GUIDE = {

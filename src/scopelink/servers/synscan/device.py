@@ -49,10 +49,17 @@ _SYNSCAN_TRACKING = {
     TrackingMode.SIDEREAL: Tracking.EQUATORIAL,
     TrackingMode.LUNAR: Tracking.EQUATORIAL,
     TrackingMode.SOLAR: Tracking.EQUATORIAL,
+    TrackingMode.KING: Tracking.EQUATORIAL,
     TrackingMode.PEC: Tracking.PEC,
 }
 _EQUATORIAL_TRACKING = frozenset(
-    {TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.PEC}
+    {
+        TrackingMode.SIDEREAL,
+        TrackingMode.LUNAR,
+        TrackingMode.SOLAR,
+        TrackingMode.KING,
+        TrackingMode.PEC,
+    }
 )
 _MOUNT_TRACKING: dict[int, TrackingMode] = {
     Tracking.OFF: TrackingMode.OFF,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import enum
 
 from scopelink.mount import AlignmentMode, Mount, TrackingMode
+from scopelink.mount.rates import ra_rate_from_ascom, ra_rate_to_ascom
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
 from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
@@ -28,6 +29,7 @@ _DRIVE_RATE_OF_MODE = {
     TrackingMode.PEC: DriveRate.SIDEREAL,
     TrackingMode.LUNAR: DriveRate.LUNAR,
     TrackingMode.SOLAR: DriveRate.SOLAR,
+    TrackingMode.KING: DriveRate.KING,
 }
 
 
@@ -49,7 +51,7 @@ def mode_for(mount: Mount, rate: DriveRate) -> TrackingMode | None:
         return TrackingMode.LUNAR
     if rate is DriveRate.SOLAR:
         return TrackingMode.SOLAR
-    return None
+    return TrackingMode.KING
 
 
 def supported_drive_rates(mount: Mount) -> list[DriveRate]:
@@ -79,8 +81,13 @@ class TrackingMembers(MemberGroup):
                 get=lambda _: [int(rate) for rate in supported_drive_rates(mount)],
                 needs_connection=False,
             ),
-            "rightascensionrate": Member(get=lambda _: 0.0, put=ni("RightAscensionRate")),
-            "declinationrate": Member(get=lambda _: 0.0, put=ni("DeclinationRate")),
+            "rightascensionrate": Member(
+                get=lambda _: ra_rate_to_ascom(mount.tracking_rates.ra_arcsec_per_s),
+                put=self._put_ra_rate,
+            ),
+            "declinationrate": Member(
+                get=lambda _: mount.tracking_rates.dec_arcsec_per_s, put=self._put_dec_rate
+            ),
             "guideratedeclination": Member(get=self._guide_rate, put=ni("GuideRateDeclination")),
             "guideraterightascension": Member(
                 get=self._guide_rate, put=ni("GuideRateRightAscension")
@@ -107,6 +114,28 @@ class TrackingMembers(MemberGroup):
         if mode is None:
             raise AlpacaError(ErrorNumber.NOT_IMPLEMENTED, "this mount cannot track")
         await self.session.call(mount.set_tracking(mode))
+
+    async def _put_ra_rate(self, params: Params) -> None:
+        """RightAscensionRate, s of RA per sidereal s, an offset from sidereal: ASCOM refuses it
+        (InvalidOperation) at another TrackingRate."""
+        value = ra_rate_from_ascom(params.number("RightAscensionRate"))
+        mount = self.session.mount
+        if value != 0.0 and self._tracking_rate(params) != DriveRate.SIDEREAL:
+            raise AlpacaError(
+                ErrorNumber.INVALID_OPERATION,
+                "RightAscensionRate is an offset from the sidereal rate: set TrackingRate to "
+                "sidereal first",
+            )
+        await self.session.call(
+            mount.set_tracking_rates(value, mount.tracking_rates.dec_arcsec_per_s)
+        )
+
+    async def _put_dec_rate(self, params: Params) -> None:
+        value = params.number("DeclinationRate")
+        mount = self.session.mount
+        await self.session.call(
+            mount.set_tracking_rates(mount.tracking_rates.ra_arcsec_per_s, value)
+        )
 
     async def _put_tracking_rate(self, params: Params) -> None:
         value = params.integer("TrackingRate", 0, 3)

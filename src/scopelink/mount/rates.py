@@ -1,0 +1,152 @@
+"""Custom tracking rates: offsets from the tracking mode's rate in RA and Dec (docs/tracking.md).
+
+``Mount.set_tracking_rates(ra_arcsec_per_s, dec_arcsec_per_s)`` makes the mount follow a target
+whose J2000 RA and Dec change at these rates while tracking is on (a comet, the Moon's motion in
+Dec). Units, chosen so both axes read alike and nothing depends on the clock's kind:
+
+- ``ra_arcsec_per_s``: arcseconds *of right ascension* (15″ = one second of RA; a coordinate
+  rate, not a great-circle one: multiply by cos Dec for the speed on the sky) per SI second,
+  positive when RA grows (the target drifts east, so the polar axis turns slower than sidereal);
+- ``dec_arcsec_per_s``: arcseconds of declination per SI second, positive northwards.
+
+ASCOM's ``RightAscensionRate`` is in seconds of RA per *sidereal* second and ``DeclinationRate``
+in arcseconds per SI second: :func:`ra_rate_from_ascom` and :func:`ra_rate_to_ascom` convert.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+from scopelink.astro import (
+    KING_RATE_DEG_S,
+    LUNAR_RATE_DEG_S,
+    SIDEREAL_DAY_S,
+    SIDEREAL_RATE_DEG_S,
+    SOLAR_RATE_DEG_S,
+)
+from scopelink.mount.deadman import MotionClient, current_client
+from scopelink.mount.errors import InvalidValueError, NotSupportedError
+from scopelink.mount.types import Capabilities, MountState, TrackingMode
+
+__all__ = [
+    "SI_SECONDS_PER_SIDEREAL_SECOND",
+    "RateKeeper",
+    "RatesSetter",
+    "TrackingRates",
+    "check_tracking_rates",
+    "ra_rate_from_ascom",
+    "ra_rate_to_ascom",
+    "tracking_rate_deg_s",
+]
+
+logger = logging.getLogger(__name__)
+
+SI_SECONDS_PER_SIDEREAL_SECOND = SIDEREAL_DAY_S / 86400.0
+"""0.99726957: ASCOM's "number of UTC seconds in a sidereal second"."""
+
+OFFSET_MODES = frozenset(
+    {TrackingMode.SIDEREAL, TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING}
+)
+"""The tracking modes custom rates are added to (equatorial tracking at a set rate; not the
+alt-az or PEC modes of a hand control, which follow the sky their own way)."""
+
+
+def tracking_rate_deg_s(mode: TrackingMode) -> float:
+    """How fast the polar axis turns in ``mode`` (sidereal unless lunar, solar or King)."""
+    rates = {
+        TrackingMode.LUNAR: LUNAR_RATE_DEG_S,
+        TrackingMode.SOLAR: SOLAR_RATE_DEG_S,
+        TrackingMode.KING: KING_RATE_DEG_S,
+    }
+    return rates.get(mode, SIDEREAL_RATE_DEG_S)
+
+
+@dataclass(frozen=True, slots=True)
+class TrackingRates:
+    """Offsets of the tracked J2000 position, in arcsec per SI second (module docstring)."""
+
+    ra_arcsec_per_s: float = 0.0
+    dec_arcsec_per_s: float = 0.0
+
+    @property
+    def zero(self) -> bool:
+        return self.ra_arcsec_per_s == 0.0 and self.dec_arcsec_per_s == 0.0
+
+    def plus_mode(self, mode: TrackingMode) -> TrackingRates:
+        """These rates plus the RA drift of ``mode`` against the stars (lunar: 0.356″/s)."""
+        drift = (SIDEREAL_RATE_DEG_S - tracking_rate_deg_s(mode)) * 3600.0
+        return TrackingRates(self.ra_arcsec_per_s + drift, self.dec_arcsec_per_s)
+
+    @property
+    def ra_hours_per_s(self) -> float:
+        return self.ra_arcsec_per_s / (15.0 * 3600.0)
+
+    @property
+    def dec_deg_per_s(self) -> float:
+        return self.dec_arcsec_per_s / 3600.0
+
+
+def ra_rate_from_ascom(seconds_of_ra_per_sidereal_s: float) -> float:
+    """ASCOM ``RightAscensionRate`` (s of RA per sidereal s) in arcsec of RA per SI second."""
+    return seconds_of_ra_per_sidereal_s * 15.0 / SI_SECONDS_PER_SIDEREAL_SECOND
+
+
+def ra_rate_to_ascom(ra_arcsec_per_s: float) -> float:
+    """Arcsec of RA per SI second as ASCOM's ``RightAscensionRate``."""
+    return ra_arcsec_per_s * SI_SECONDS_PER_SIDEREAL_SECOND / 15.0
+
+
+def check_tracking_rates(
+    capabilities: Capabilities, ra_arcsec_per_s: float, dec_arcsec_per_s: float
+) -> TrackingRates:
+    """The rates, or a one-line refusal: finite, within the mount's
+    ``max_tracking_offset_arcsec_s``, and only on a mount that can set them."""
+    limit = capabilities.max_tracking_offset_arcsec_s
+    for name, value in (("RA", ra_arcsec_per_s), ("Dec", dec_arcsec_per_s)):
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            raise InvalidValueError(f"{name} tracking rate must be a number, not {value!r}")
+        if not math.isfinite(value):
+            raise InvalidValueError(f"{name} tracking rate {value} is not a finite number")
+    rates = TrackingRates(float(ra_arcsec_per_s), float(dec_arcsec_per_s))
+    if rates.zero:
+        return rates
+    if limit <= 0.0:
+        raise NotSupportedError("this mount cannot track at custom rates")
+    for name, value in (("RA", rates.ra_arcsec_per_s), ("Dec", rates.dec_arcsec_per_s)):
+        if abs(value) > limit:
+            raise InvalidValueError(
+                f"{name} tracking rate {value:g}″/s must lie within ±{limit:g}″/s on this mount"
+            )
+    return rates
+
+
+class RatesSetter(Protocol):
+    """What :class:`RateKeeper` needs of the mount: its state and the checked setter."""
+
+    @property
+    def state(self) -> MountState: ...
+
+    async def set_tracking_rates(self, ra_arcsec_per_s: float, dec_arcsec_per_s: float) -> None: ...
+
+
+class RateKeeper:
+    """The custom rates in force on one mount, and who set them (the dead-man calls
+    :meth:`left`, which resets them to zero: a custom rate never outlives its client)."""
+
+    def __init__(self, mount: RatesSetter) -> None:
+        self._mount = mount
+        self.rates = TrackingRates()
+        self.owner: MotionClient | None = None
+
+    def set(self, rates: TrackingRates) -> None:
+        self.rates = rates
+        self.owner = None if rates.zero else current_client()
+
+    async def left(self, client: MotionClient) -> None:
+        """``client`` has gone: its custom rates go back to zero (the mode's own rate)."""
+        if self.owner is client and not self.rates.zero and self._mount.state.connected:
+            logger.warning("%s went away with custom tracking rates: back to zero", client.name)
+            await self._mount.set_tracking_rates(0.0, 0.0)

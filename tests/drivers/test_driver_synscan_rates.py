@@ -1,0 +1,131 @@
+"""Custom tracking rates on the SynScan driver: the PC loop of rate slews (issue #16), against
+the real emulator over TCP, with the simulator behind it as the truth."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import pytest
+
+from scopelink.astro import angular_separation_deg
+from scopelink.drivers.synscan import SynScanMount
+from scopelink.drivers.synscan.rates import RateLoopStatistics
+from scopelink.mount import NotSupportedError, TrackingMode
+from scopelink.servers.synscan import SynScanConfig
+from scopelink.sim import AZ_GTI, SimClock
+from tests.support.synscan_driver import START, rig
+
+SPEED_UP = 10.0
+"""Simulated seconds per real second (the emulator's simulator costs CPU per rate command)."""
+
+
+def _running(mount: SynScanMount) -> bool:
+    """Whether the PC loop runs (a call, so mypy does not narrow it across awaits)."""
+    return mount.custom_rates_running
+
+
+def _truth_error_arcsec(
+    sim_j2000: tuple[float, float],
+    start: tuple[float, float, float],
+    t: float,
+    ra_arcsec_s: float,
+    dec_arcsec_s: float,
+) -> float:
+    dt = t - start[0]
+    ideal_ra = start[1] + ra_arcsec_s * dt / 54000.0
+    ideal_dec = start[2] + dec_arcsec_s * dt / 3600.0
+    ra, dec = sim_j2000
+    return 3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
+
+
+async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -> None:
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        ra_rate, dec_rate = 30.0, -8.0  # arcsec/s: a fast comet
+        async with r.mount.watching():
+            await r.mount.set_tracking_rates(ra_rate, dec_rate)
+            loop = r.mount.rate_loop_statistics
+            assert loop is not None
+            assert loop.started_at is not None
+            assert loop.anchor is not None
+            # The target: integrated from where the loop read the mount when it started.
+            t0 = (loop.started_at - r.sim.clock.epoch).total_seconds()
+            ra0, dec0 = loop.anchor
+            assert _running(r.mount)
+            assert r.mount.state.tracking is TrackingMode.SIDEREAL  # ours, though 't' reads off
+            errors: list[float] = []
+            for _ in range(40):  # 8 s of real time, 80 s of the mount's
+                await asyncio.sleep(0.2)
+                t = r.sim.elapsed()
+                errors.append(
+                    _truth_error_arcsec(r.sim.j2000_at(t), (t0, ra0, dec0), t, ra_rate, dec_rate)
+                )
+            assert r.mount.state.tracking is TrackingMode.SIDEREAL
+        settled = errors[15:]  # after 3 s real (30 s, six loop time constants)
+        rms = math.sqrt(sum(e * e for e in settled) / len(settled))
+        stats = r.mount.rate_loop_statistics
+        assert isinstance(stats, RateLoopStatistics)
+        print(
+            f"SynScan custom rates ({ra_rate}, {dec_rate})″/s: truth RMS {rms:.2f}″ after "
+            f"settling, max {max(settled):.2f}″, {len(stats.errors_arcsec)} polls, "
+            f"{stats.commands} rate commands"
+        )
+        assert rms < 5.0, f"RMS {rms:.2f}″ against the integrated target (errors {settled})"
+        # Back to zero: the hand control tracks by itself again.
+        await r.mount.set_tracking_rates(0.0, 0.0)
+        assert not _running(r.mount)
+        assert r.sim.tracking is TrackingMode.SIDEREAL
+        assert not r.mount.guard.rate_motions
+
+
+async def test_an_abort_ends_the_loop_and_tracking_carries_on() -> None:
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        async with r.mount.watching():
+            await r.mount.set_tracking_rates(0.0, 20.0)
+            await asyncio.sleep(0.5)
+            await r.mount.abort()
+            await r.mount.wait_for(lambda s: not r.mount.custom_rates_running, 5.0)
+        assert r.sim.tracking is TrackingMode.SIDEREAL
+        assert not r.mount.guard.rate_motions
+
+
+async def test_a_client_that_leaves_takes_its_rates_with_it() -> None:
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        async with r.mount.watching(), r.mount.motion_client("phone"):
+            await r.mount.set_tracking_rates(10.0, 10.0)
+            assert _running(r.mount)
+        assert not _running(r.mount)
+        assert r.mount.tracking_rates.zero
+        assert r.sim.tracking is TrackingMode.SIDEREAL
+        assert not r.mount.guard.rate_motions
+
+
+async def test_an_alt_az_hand_control_refuses_custom_rates() -> None:
+    async with rig("tcp", model=AZ_GTI, config=SynScanConfig(model=165)) as r:
+        assert r.mount.capabilities.max_tracking_offset_arcsec_s == 0.0
+        with pytest.raises(NotSupportedError, match="custom rates"):
+            await r.mount.set_tracking_rates(1.0, 0.0)
+
+
+async def test_a_goto_ends_the_loop_and_is_never_overridden() -> None:
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        async with r.mount.watching():
+            await r.mount.set_tracking_rates(20.0, 5.0)
+            assert _running(r.mount)
+            await r.mount.goto_equatorial(8.0, 30.0)  # the loop gives way to the goto
+            await r.mount.set_tracking_rates(20.0, 5.0)  # during the goto: not started
+            await r.mount.wait_for_slew(timeout_s=15.0)
+            assert not _running(r.mount)
+            state = await r.mount.refresh()
+        assert state.ra_j2000_hours == pytest.approx(8.0, abs=0.01)  # the goto landed
+        assert state.dec_j2000_deg == pytest.approx(30.0, abs=0.05)
+        assert r.sim.tracking is TrackingMode.SIDEREAL
+        assert not r.mount.guard.rate_motions
