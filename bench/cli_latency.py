@@ -33,7 +33,7 @@ from bench.provenance import print_provenance
 
 BITS_PER_BYTE = 10  # 8N1
 BAUD = 9600
-_TRACE_BYTES = re.compile(r"scopelink\.links\.trace .* (?:-->|<--) (\d+) bytes:")
+_TRACE_BYTES = re.compile(r"scopelink\.links\.trace:? .* (?:-->|<--) (\d+) bytes:")
 
 
 def _environment(config: Path) -> dict[str, str]:
@@ -134,6 +134,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             timing = _runs(status, env, runs)
             _, trace = _timed([*status, "-v"], env)
             wire_bytes = sum(int(count) for count in _TRACE_BYTES.findall(trace))
+            if not wire_bytes:
+                raise RuntimeError("`scopelink status -v` printed no byte trace to count")
             wire_s = wire_bytes * BITS_PER_BYTE / BAUD
             rows.append(
                 (
