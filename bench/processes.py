@@ -63,16 +63,16 @@ async def read_until(process: asyncio.subprocess.Process, pattern: str) -> str:
     return "\n".join(lines)
 
 
-async def stop(process: asyncio.subprocess.Process) -> None:
-    """SIGTERM, then SIGKILL after 15 s."""
+async def stop(process: asyncio.subprocess.Process) -> int:
+    """SIGTERM, then SIGKILL after 15 s; the exit status."""
     if process.returncode is None:
         process.send_signal(signal.SIGTERM)
     try:
         async with asyncio.timeout(15):
-            await process.wait()
+            return await process.wait()
     except TimeoutError:
         process.kill()
-        await process.wait()
+        return await process.wait()
 
 
 def cpu_seconds(pid: int | None = None) -> float:

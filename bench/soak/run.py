@@ -13,6 +13,7 @@ from typing import Any
 
 import aiohttp
 
+from bench.processes import stop
 from bench.soak.alpaca import Alpaca, alpaca_commander, alpaca_poller, final_slew
 from bench.soak.clients import (
     dashboard_churn,
@@ -32,7 +33,6 @@ from bench.soak.stack import (
     listening_port,
     start_emulator,
     start_serve,
-    stop,
     watch_emulator_log,
     watch_serve_log,
 )

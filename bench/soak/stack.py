@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
-from bench.processes import environment, start_scopelink
+from bench.processes import environment, start_scopelink, stop
 from bench.soak.config import SITE, SoakConfig
 from bench.soak.night import Night
 from scopelink.servers.faults import Fault, FaultInjector
@@ -147,17 +147,6 @@ async def watch_serve_log(process: asyncio.subprocess.Process, night: Night) -> 
         night.serve_log.append(f"{night.now():7.1f} s {line.rstrip()}")
         if "was stopped at" in line:
             night.guard_stops.append(night.now())
-
-
-async def stop(process: asyncio.subprocess.Process) -> int:
-    if process.returncode is None:
-        process.send_signal(signal.SIGTERM)
-    try:
-        async with asyncio.timeout(15):
-            return await process.wait()
-    except TimeoutError:
-        process.kill()
-        return await process.wait()
 
 
 def listening_port(printed: str, label: str) -> int:

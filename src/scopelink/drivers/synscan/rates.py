@@ -21,7 +21,7 @@ from contextlib import aclosing
 from dataclasses import dataclass, field
 from datetime import datetime
 
-from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide
+from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
 from scopelink.drivers.synscan.base import AXES
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SynScanParking
@@ -267,7 +267,7 @@ class SynScanRates(SynScanParking):
                     dt -= self._reading_lag_s(first, state, dt)
                     target_ra = ra0 + rates.ra_hours_per_s * dt
                     target_dec = dec0 + rates.dec_deg_per_s * dt
-                    ra_error = ((target_ra - state.ra_j2000_hours) * 15.0 + 180.0) % 360.0 - 180.0
+                    ra_error = wrap_signed_degrees((target_ra - state.ra_j2000_hours) * 15.0)
                     dec_error = target_dec - state.dec_j2000_deg
                     statistics.errors_arcsec.append(_sky_error_arcsec(ra_error, dec_error, state))
                     await self._drive(self._axis_rates_for(rates, ra_error, dec_error), statistics)
