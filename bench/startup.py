@@ -56,7 +56,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{label:<28} {seconds * 1000:>8.1f}  {seconds / floor:.1f}x")
     worst = max(seconds for _, seconds in rows[1:]) / floor
     verdict = "PASS" if worst <= GOAL_RATIO else "MISS"
-    print(f"{verdict}: slowest {worst:.1f}x (goal <= {GOAL_RATIO:g}x)")
+    print(f"goal: {verdict}, slowest {worst:.1f}x the peer (goal <= {GOAL_RATIO:g}x)")
     return 0
 
 

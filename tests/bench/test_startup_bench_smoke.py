@@ -28,4 +28,4 @@ def test_quick_startup_benchmark_prints_every_row_and_a_verdict() -> None:
     for label in ("python -c pass (peer)", "scopelink --help", "scopelink --version"):
         assert any(line.startswith(label + " ") for line in lines), (label, result.stdout)
     assert any(line.startswith("scopelink status --help ") for line in lines), result.stdout
-    assert lines[-1].startswith(("PASS: slowest", "MISS: slowest")), result.stdout
+    assert lines[-1].startswith(("goal: PASS, slowest", "goal: MISS, slowest")), result.stdout
