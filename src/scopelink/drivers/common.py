@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from datetime import datetime
 
 from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
-from scopelink.links import Link, open_link
+from scopelink.links import DEFAULT_BAUDRATE, Link, open_link
 
 __all__ = [
     "LinkFactory",
@@ -47,7 +47,7 @@ def link_factory(
     *,
     name: str | None,
     unnamed: str,
-    baudrate: int = 9600,
+    baudrate: int = DEFAULT_BAUDRATE,
     stopbits: int = 1,
     pace: bool = False,
 ) -> tuple[LinkFactory, str]:

@@ -4,7 +4,14 @@ Every link is a :class:`Link`: ``await read(n)``, ``await write(data)``, ``await
 Set the ``scopelink.links.trace`` logger to DEBUG to see every byte in hex.
 """
 
-from scopelink.links.base import Link, LinkClosedError, LinkError, LinkOpenError, LinkSpecError
+from scopelink.links.base import (
+    DEFAULT_BAUDRATE,
+    Link,
+    LinkClosedError,
+    LinkError,
+    LinkOpenError,
+    LinkSpecError,
+)
 from scopelink.links.memory import MemoryLink, memory_pair
 from scopelink.links.pacing import PacedLink, paced, precise_event_loop
 from scopelink.links.pty import LineSettings, PtyLink, open_pty
@@ -13,6 +20,7 @@ from scopelink.links.tcp import ConnectionHandler, TcpLink, TcpServer, open_tcp,
 from scopelink.links.url import open_link
 
 __all__ = [
+    "DEFAULT_BAUDRATE",
     "ConnectionHandler",
     "LineSettings",
     "Link",

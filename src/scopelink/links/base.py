@@ -17,6 +17,9 @@ from scopelink.links.trace import trace_logger, trace_transfer
 
 DEFAULT_READ_SIZE = 4096
 
+DEFAULT_BAUDRATE = 9600
+"""The line speed of both mount families (SynScan, Sky Tracker and Sky Commander)."""
+
 
 class LinkError(Exception):
     """Base class of every error a link raises."""

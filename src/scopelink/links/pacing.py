@@ -11,7 +11,7 @@ import math
 import selectors
 import time
 
-from scopelink.links.base import Link
+from scopelink.links.base import DEFAULT_BAUDRATE, Link
 from scopelink.links.memory import MemoryLink
 
 # A write starting within this long after the previous one's last byte continues its schedule:
@@ -132,7 +132,7 @@ class PacedLink(Link):
 
 
 def paced(
-    link: Link, baudrate: int = 9600, bits_per_byte: int = 10, *, batch_s: float = 0.0
+    link: Link, baudrate: int = DEFAULT_BAUDRATE, bits_per_byte: int = 10, *, batch_s: float = 0.0
 ) -> PacedLink:
     """Wrap ``link`` so writes leave at ``baudrate``; 8N1 is 10 bits per byte, 8N2 is 11.
     ``batch_s`` groups bytes into hand-overs at most that often (see :class:`PacedLink`)."""

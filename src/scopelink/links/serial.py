@@ -17,7 +17,13 @@ from typing import TypeVar
 
 import serial
 
-from scopelink.links.base import Link, LinkClosedError, LinkOpenError, LinkSpecError
+from scopelink.links.base import (
+    DEFAULT_BAUDRATE,
+    Link,
+    LinkClosedError,
+    LinkOpenError,
+    LinkSpecError,
+)
 from scopelink.links.fdstream import FdStream
 from scopelink.links.inbound import InboundBuffer
 
@@ -106,7 +112,7 @@ class _ThreadedSerialLink(SerialLink):
 
 async def open_serial(
     url_or_path: str,
-    baudrate: int = 9600,
+    baudrate: int = DEFAULT_BAUDRATE,
     *,
     bytesize: int = 8,
     parity: str = "N",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from urllib.parse import urlsplit
 
-from scopelink.links.base import Link, LinkSpecError
+from scopelink.links.base import DEFAULT_BAUDRATE, Link, LinkSpecError
 from scopelink.links.pacing import paced
 from scopelink.links.serial import open_serial
 from scopelink.links.tcp import open_tcp
@@ -21,7 +21,7 @@ _HOST_PORT = re.compile(r"^[\w.-]+:\d+$")
 
 
 async def open_link(
-    spec: str, baudrate: int = 9600, *, stopbits: int = 1, pace: bool = False
+    spec: str, baudrate: int = DEFAULT_BAUDRATE, *, stopbits: int = 1, pace: bool = False
 ) -> Link:
     """Open the link ``spec`` names; raise LinkSpecError for a malformed one.
 
