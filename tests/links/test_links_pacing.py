@@ -80,7 +80,9 @@ async def test_back_to_back_small_writes_do_not_drift() -> None:
             await line.write(b":j1\r:j2\r")
         elapsed = time.monotonic() - started
         await reader
-    assert elapsed == pytest.approx(800 * byte_seconds, rel=0.02)
+    # Never early; late by less than half of what drift would add (12 %): a loaded machine
+    # (the suite runs on two workers) wakes timers a few ms late once or twice, never 100 times.
+    assert 800 * byte_seconds * 0.99 <= elapsed <= 800 * byte_seconds * 1.06
 
 
 async def test_an_idle_line_banks_no_credit() -> None:

@@ -41,6 +41,9 @@ async def test_the_driver_reconnects_by_itself_and_claims_no_motion_meanwhile(
     tmp_path: Path,
 ) -> None:
     sim = sky_tracker_mount(rate=1.0)
+    # Well above the horizon: level at the north, tracking plus the arrow could sink below 0°
+    # within the test on a slow machine, and the guard would rightly stop it (a problem).
+    sim.set_axis_position(MountAxis.SECONDARY, 45.0)
     async with SkyTrackerEmulator(sim, tmp_path) as emulator:
         _, port = await emulator.on_tcp()
         driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, timeout_s=TIMEOUT_S, bus=BUS)
@@ -78,6 +81,9 @@ async def test_the_driver_reconnects_by_itself_and_claims_no_motion_meanwhile(
 
 async def test_a_silent_box_is_lost_then_found_again(tmp_path: Path) -> None:
     sim = sky_tracker_mount(rate=1.0)
+    # Well above the horizon: level at the north, tracking plus the arrow could sink below 0°
+    # within the test on a slow machine, and the guard would rightly stop it (a problem).
+    sim.set_axis_position(MountAxis.SECONDARY, 45.0)
     async with SkyTrackerEmulator(sim, tmp_path) as emulator:
         _, port = await emulator.on_tcp()
         driver = SkyTrackerMount(f"tcp://127.0.0.1:{port}", site=SITE, timeout_s=TIMEOUT_S, bus=BUS)
