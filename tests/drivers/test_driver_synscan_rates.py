@@ -39,6 +39,7 @@ def _truth_error_arcsec(
     return 3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
 
 
+@pytest.mark.solo
 async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -> None:
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)

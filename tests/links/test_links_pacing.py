@@ -9,6 +9,8 @@ import pytest
 
 from scopelink.links import Link, memory_pair, open_tcp, paced, serve_tcp
 
+pytestmark = pytest.mark.solo  # wire timing against the clock: runs alone (tests/README.md)
+
 BAUD = 9600
 
 

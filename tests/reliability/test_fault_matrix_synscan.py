@@ -607,6 +607,7 @@ COLUMN_GROUPS = [
 assert sorted(c.name for group in COLUMN_GROUPS for c in group) == sorted(c.name for c in COLUMNS)
 
 
+@pytest.mark.solo
 @pytest.mark.parametrize(
     "columns", COLUMN_GROUPS, ids=[" + ".join(c.name for c in group) for group in COLUMN_GROUPS]
 )

@@ -17,6 +17,7 @@ from scopelink.servers.access import DEFAULT_POLICY
 CONNECTIONS_PER_SERVER = 100
 
 
+@pytest.mark.solo
 @pytest.mark.timeout(90)
 async def test_a_flood_of_clients_leaves_the_poller_its_rate() -> None:
     sizes = Sizes(CONNECTIONS_PER_SERVER, seconds=2.0, sources=10)

@@ -8,6 +8,7 @@ import asyncio
 import math
 from pathlib import Path
 
+import pytest
 from alpaca.telescope import DriveRates, Telescope
 
 from scopelink.astro import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, angular_separation_deg
@@ -46,6 +47,7 @@ async def _rms_against_ideal(
     return math.sqrt(sum(e * e for e in errors) / len(errors))
 
 
+@pytest.mark.solo
 async def test_lunar_and_custom_rates_through_alpaca_on_synscan(tmp_path: Path) -> None:
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
