@@ -17,14 +17,17 @@ from scopelink.servers.synscan import SynScanEmulator
 __all__ = ["announcement", "ready_json"]
 
 
-def announcement(protocol: str, device: HostedDevice) -> dict[str, object]:
-    """Where and what ``device`` (a started emulator of ``protocol``) is.
+def announcement(
+    protocol: str, device: HostedDevice, address: str | None = None
+) -> dict[str, object]:
+    """Where and what ``device`` (a started emulator of ``protocol``) is; ``address`` when
+    another host serves it (default: its own).
 
     Keys: ``protocol``; ``tcp`` (``HOST:PORT``) or ``pty`` (the path); ``device``, the scopelink
     device string (``synscan:tcp://127.0.0.1:PORT``); ``model`` and ``firmware`` as the device
     reports them; ``pid``, this process.
     """
-    address = device.address
+    address = address if address is not None else device.address
     where = "pty" if address.startswith("/") else "tcp"
     link = address if where == "pty" else f"tcp://{address}"
     found: dict[str, object] = {
