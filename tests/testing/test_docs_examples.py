@@ -29,7 +29,9 @@ def test_every_python_example_in_the_docs_passes_as_a_test_module(
             name = f"test_{page.removesuffix('.md').replace('-', '_')}_{number}"
             modules[name] = block
     pytester.makepyfile(**modules)
-    result = pytester.runpytest_inprocess("-p", "no:cacheprovider", "-W", "ignore::DeprecationWarning")
+    result = pytester.runpytest_inprocess(
+        "-p", "no:cacheprovider", "-W", "ignore::DeprecationWarning"
+    )
     outcomes = result.parseoutcomes()
     assert outcomes.get("failed", 0) == 0, result.stdout.str()
     assert outcomes.get("errors", 0) == 0, result.stdout.str()

@@ -92,12 +92,14 @@ class EmulatorHandle:
             self.close()
             raise TimeoutError(f"the {self.spec.device} emulator did not start in time")
         if self._error is not None:
+            error, self._error = self._error, None
             self.close()
-            raise self._error
+            raise error
         return self
 
     def close(self) -> None:
-        """Stop the emulator: close its clients and listener, end its loop and thread."""
+        """Stop the emulator: close its clients and listener, end its loop and thread. Raises
+        what ended it if it failed on its own while serving."""
         thread, loop, stop = self._thread, self._loop, self._stop
         if thread is not None and thread.is_alive() and loop is not None and stop is not None:
             with contextlib.suppress(RuntimeError):  # the loop is already closed
@@ -108,6 +110,9 @@ class EmulatorHandle:
         if self._scratch is not None:
             shutil.rmtree(self._scratch, ignore_errors=True)
             self._scratch = None
+        if self._error is not None:  # it stopped on its own, on this error, while serving
+            error, self._error = self._error, None
+            raise RuntimeError(f"the {self.spec.device} emulator failed: {error!r}") from error
 
     def __enter__(self) -> Self:
         return self.start()
@@ -147,7 +152,7 @@ class EmulatorHandle:
     async def _main(self) -> None:
         self._loop = asyncio.get_running_loop()
         self._stop = asyncio.Event()
-        data_dir = self.spec.data_dir or self._scratch or Path()
+        data_dir = self.data_dir
         self._built = built = build(self.spec, data_dir)
         device = built.device
         serve = device.server.serve if isinstance(device, SynScanEmulator) else device.serve
@@ -208,6 +213,11 @@ class EmulatorHandle:
     def serial_url(self) -> str:
         """What pyserial's ``serial_for_url`` opens: ``socket://127.0.0.1:PORT`` or the pty."""
         return f"socket://{self.address}" if "tcp" in self.info else self.address
+
+    @property
+    def data_dir(self) -> Path:
+        """The Sky Tracker's and Sky Commander's memory: ``data_dir`` or the temporary one."""
+        return self.spec.data_dir or self._scratch or Path()
 
     # --- state ----------------------------------------------------------------------------------
 
