@@ -8,6 +8,11 @@ from pathlib import Path
 
 import pytest
 
+# In-process pytester runs drop the modules they imported afterwards; numpy cannot be imported
+# twice in one process, so what the examples import is imported here first, once.
+import scopelink.drivers
+import scopelink.testing.handle  # noqa: F401
+
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 PAGES = ("testing-with-scopelink.md", "emulators.md")
 FENCE = re.compile(r"^```python\n(.*?)^```", re.MULTILINE | re.DOTALL)
@@ -30,7 +35,7 @@ def test_every_python_example_in_the_docs_passes_as_a_test_module(
             modules[name] = block
     pytester.makepyfile(**modules)
     result = pytester.runpytest_inprocess(
-        "-p", "no:cacheprovider", "-W", "ignore::DeprecationWarning"
+        "-p", "no:cacheprovider", "-o", "asyncio_default_fixture_loop_scope=function"
     )
     outcomes = result.parseoutcomes()
     assert outcomes.get("failed", 0) == 0, result.stdout.str()
