@@ -1,10 +1,11 @@
 """scopelink.testing.EmulatorHandle: an emulator on its own thread, its address, state and log,
-and a clean stop (no thread, task, port or pty left)."""
+a clean stop (no thread, task, port or pty left), its options and their documented defaults."""
 
 from __future__ import annotations
 
 import socket
 import threading
+from dataclasses import fields
 from datetime import timedelta
 from pathlib import Path
 
@@ -14,7 +15,10 @@ import serial
 from scopelink.links import open_tcp
 from scopelink.protocol.skytracker import TrackerMode
 from scopelink.protocol.synscan import GetRaDec, GetVersion
+from scopelink.servers.synscan import DEFAULT_FIRMWARE
 from scopelink.testing import EmulatorHandle, EmulatorSpec, EmulatorSpecError
+from scopelink.testing.handle import START_TIMEOUT_S, STOP_TIMEOUT_S
+from scopelink.testing.options import DEFAULT_MODELS
 
 
 def _emulator_threads() -> list[threading.Thread]:
@@ -103,3 +107,30 @@ def test_nonsense_is_refused_in_one_line(options: dict[str, object], message: st
         EmulatorSpec(**options)  # type: ignore[arg-type]
     assert message in str(refusal.value)
     assert "\n" not in str(refusal.value)
+
+
+def test_the_documented_defaults_are_the_codes() -> None:
+    page = (Path(__file__).resolve().parents[2] / "docs" / "testing-with-scopelink.md").read_text()
+    rows = {
+        cells[0].strip("` "): cells[-1]
+        for line in page.splitlines()
+        if line.startswith("| `") and len(cells := line.strip("|").split("|")) == 3
+    }
+    spec = EmulatorSpec()
+    firmware = DEFAULT_FIRMWARE
+    expected = {
+        "transport": f'`"{spec.transport}"`',
+        "model": f'`"{DEFAULT_MODELS["synscan"]}"` (SynScan), `"{DEFAULT_MODELS["skytracker"]}"`',
+        "firmware": f'`"{firmware.major}.{firmware.minor:02}.{firmware.patch:02}"`',
+        "aligned": f"`{spec.aligned}`",
+        "site": f'`"{spec.site}"`',
+        "clock_rate": f"`{spec.clock_rate}`",
+        "start": spec.start.strftime("%Y-%m-%d %H:%M UTC"),
+        "pacing": f"`{spec.pacing}`",
+    }
+    for option, default in expected.items():
+        assert default in rows[option], option
+    assert set(rows) >= {field.name for field in fields(EmulatorSpec)} - {"device"}
+    assert DEFAULT_MODELS["skycommander"] == DEFAULT_MODELS["skytracker"]
+    assert f"waits at most {START_TIMEOUT_S:g} s" in page
+    assert f"`close()` {STOP_TIMEOUT_S:g} s" in page
