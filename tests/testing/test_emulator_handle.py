@@ -13,11 +13,12 @@ import pytest
 import serial
 
 from scopelink.links import open_tcp
+from scopelink.mount import TrackingMode
 from scopelink.protocol.skytracker import TrackerMode
-from scopelink.protocol.synscan import GetRaDec, GetVersion
+from scopelink.protocol.synscan import GetRaDec, GetVersion, SetTrackingMode, Tracking
 from scopelink.servers.synscan import DEFAULT_FIRMWARE
 from scopelink.testing import EmulatorHandle, EmulatorSpec, EmulatorSpecError
-from scopelink.testing.handle import START_TIMEOUT_S, STOP_TIMEOUT_S
+from scopelink.testing.handle import START_TIMEOUT_S, STOP_TIMEOUT_S, TASK_GRACE_S
 from scopelink.testing.options import DEFAULT_MODELS
 
 
@@ -39,8 +40,15 @@ async def test_from_asyncio_it_serves_logs_and_stops_without_leaving_anything() 
             assert after.read_at - before.read_at == timedelta(seconds=600)
             assert emulator.altaz == (before.alt_deg, before.az_deg)  # not tracking: it stood
             assert emulator.position != (before.ra_j2000_hours, before.dec_j2000_deg)
-        assert emulator.commands() == [GetRaDec(precise=True), GetVersion()]
-        assert [chunk.elapsed_s for chunk in emulator.chunks] == [0.0]  # stepped: time stood
+            await link.write(b"T\x02")  # track: the mount layer's meridian watch starts
+            assert await link.read_exactly(1) == b"#"
+            assert emulator.tracking is TrackingMode.SIDEREAL
+        assert emulator.commands() == [
+            GetRaDec(precise=True),
+            GetVersion(),
+            SetTrackingMode(Tracking.EQUATORIAL),
+        ]
+        assert [chunk.elapsed_s for chunk in emulator.chunks] == [0.0, 600.0]  # stepped
         port = emulator.port
     assert not emulator.running
     assert _emulator_threads() == []
@@ -134,3 +142,4 @@ def test_the_documented_defaults_are_the_codes() -> None:
     assert DEFAULT_MODELS["skycommander"] == DEFAULT_MODELS["skytracker"]
     assert f"waits at most {START_TIMEOUT_S:g} s" in page
     assert f"`close()` {STOP_TIMEOUT_S:g} s" in page
+    assert f"`handle.TASK_GRACE_S` ({TASK_GRACE_S:g} s)" in page

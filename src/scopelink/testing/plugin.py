@@ -72,8 +72,10 @@ def start_emulator(device: str, options: dict[str, Any]) -> EmulatorHandle:
     try:
         spec = EmulatorSpec(device=device, **options)
     except EmulatorSpecError as error:
-        pytest.fail(f"{device} emulator: {error}", pytrace=False)
-    return EmulatorHandle(spec).start()
+        refusal = f"{device} emulator: {error}"
+    else:
+        return EmulatorHandle(spec).start()
+    pytest.fail(refusal, pytrace=False)  # outside the except: no chained exception is shown
 
 
 def _fixture(request: pytest.FixtureRequest, device: str) -> Iterator[EmulatorHandle]:

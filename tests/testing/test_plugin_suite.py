@@ -1,7 +1,12 @@
-"""The plugin's parameters as a user's test gives them: the closest marker wins, and nonsense fails
-the test's setup with one line, no traceback."""
+"""The pytest plugin in a user's suite (one pytester run, in a fresh directory, through the
+installed plugin as a user's would): every ``python`` example in docs/testing-with-scopelink.md
+and docs/emulators.md passes as its own test module; the closest marker wins; nonsense fails the
+test's setup with one line and no traceback."""
 
 from __future__ import annotations
+
+import re
+from pathlib import Path
 
 import pytest
 
@@ -9,6 +14,11 @@ import pytest
 # twice in one process, so what the examples import is imported here first, once.
 import scopelink.drivers
 import scopelink.testing.handle  # noqa: F401
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+PAGES = ("testing-with-scopelink.md", "emulators.md")
+FENCE = re.compile(r"^```python\n(.*?)^```", re.MULTILINE | re.DOTALL)
+
 
 USER_TESTS = """
 import pytest
@@ -61,15 +71,27 @@ ONE_LINE_REFUSALS = (
 )
 
 
-def test_markers_apply_closest_first_and_nonsense_fails_in_one_line(
-    pytester: pytest.Pytester,
-) -> None:
-    pytester.makepyfile(test_user=USER_TESTS)
+def examples(page: str) -> list[str]:
+    """The ``python`` fenced blocks of ``docs/page``, in order."""
+    return FENCE.findall((DOCS / page).read_text(encoding="utf-8"))
+
+
+def test_the_docs_examples_pass_and_nonsense_fails_in_one_line(pytester: pytest.Pytester) -> None:
+    modules = {"test_user": USER_TESTS}
+    for page in PAGES:
+        blocks = examples(page)
+        assert blocks, f"{page} has no python example"
+        for number, block in enumerate(blocks, 1):
+            modules[f"test_{page.removesuffix('.md').replace('-', '_')}_{number}"] = block
+    pytester.makepyfile(**modules)
     result = pytester.runpytest_inprocess(
         "-p", "no:cacheprovider", "-rfE", "-o", "asyncio_default_fixture_loop_scope=function"
     )
-    result.assert_outcomes(passed=2, errors=4, failed=1)
     output = result.stdout.str()
+    for name in modules:  # each example holds a test, and it ran and passed
+        if name != "test_user":
+            assert re.search(rf"^{name}\.py \.+ +\[ *\d+%\]$", output, re.MULTILINE), (name, output)
+    assert re.search(r"^test_user\.py \.\.EEEEF +\[ *\d+%\]$", output, re.MULTILINE), output
     for refusal in ONE_LINE_REFUSALS:
         assert refusal in output
     assert "Traceback" not in output
