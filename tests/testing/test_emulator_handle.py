@@ -4,6 +4,8 @@ a clean stop (no thread, task, port or pty left), its options and their document
 from __future__ import annotations
 
 import socket
+import subprocess
+import sys
 import threading
 from dataclasses import fields
 from datetime import timedelta
@@ -143,3 +145,16 @@ def test_the_documented_defaults_are_the_codes() -> None:
     assert f"waits at most {START_TIMEOUT_S:g} s" in page
     assert f"`close()` {STOP_TIMEOUT_S:g} s" in page
     assert f"`handle.TASK_GRACE_S` ({TASK_GRACE_S:g} s)" in page
+
+
+def test_loading_the_plugin_imports_nothing_heavy() -> None:
+    """pytest imports the plugin at every start, in every project where scopelink is installed."""
+    script = "import sys, scopelink.testing.plugin; print(*sorted(m for m in sys.modules))"
+    loaded = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True
+    ).stdout
+    assert loaded.split() == [
+        "['scopelink',",
+        "'scopelink.testing',",
+        "'scopelink.testing.plugin']",
+    ]
