@@ -8,7 +8,7 @@ import subprocess
 import sys
 import threading
 from dataclasses import fields
-from datetime import timedelta
+from datetime import datetime, timedelta
 from pathlib import Path
 
 import pytest
@@ -95,6 +95,12 @@ def test_a_failed_start_raises_in_the_caller_and_leaves_no_thread(tmp_path: Path
     assert _emulator_threads() == []
 
 
+def test_names_are_read_in_any_case_and_one_fault_rule_needs_no_list() -> None:
+    spec = EmulatorSpec(device="SynScan", transport="PTY", model="az-gti", faults="e:drop")
+    assert (spec.device, spec.transport, spec.model_name) == ("synscan", "pty", "az-gti")
+    assert [rule.command for rule in spec.make_faults().faults] == ["e"]
+
+
 @pytest.mark.parametrize(
     ("options", "message"),
     [
@@ -110,6 +116,9 @@ def test_a_failed_start_raises_in_the_caller_and_leaves_no_thread(tmp_path: Path
         ({"faults": ["e:explode"]}, "explode"),
         ({"site": (95.0, 0.0)}, "latitude_deg must be in [-90, 90]"),
         ({"site": "Madrid"}, "site 'Madrid' is not LAT,LON"),
+        ({"pacing": "no"}, "pacing is True or False, not 'no'"),
+        ({"start": datetime(2026, 1, 1)}, "must carry a time zone"),
+        ({"model_code": 256}, "model code 256 must be a byte"),
     ],
 )
 def test_nonsense_is_refused_in_one_line(options: dict[str, object], message: str) -> None:

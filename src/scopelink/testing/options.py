@@ -56,7 +56,8 @@ class EmulatorSpec:
     ``model_code``, ``firmware`` (``"4.39.05"``) and ``aligned``: the SynScan hand control's
     ``m``, ``V`` and ``J``. ``site``: a :class:`~scopelink.astro.Site`, ``(lat, lon)`` or
     ``"LAT,LON"`` (default Greenwich, as the CLI). ``faults``: fault rules as ``scopelink emulate
-    --fault`` takes them (``"e:drop"``) or :class:`~scopelink.servers.faults.Fault` s, ``seed``
+    --fault`` takes them (``"e:drop"``) or :class:`~scopelink.servers.faults.Fault` s (one or a
+    list), ``seed``
     for probabilistic ones. ``clock_rate``: simulated seconds per real second (1 real time, 100
     for gotos 100 times sooner, 0 stepped: time moves only by ``handle.advance()``); ``start``:
     the simulated UTC date at start. ``pacing``: replies at 9600 baud (off: at once).
@@ -71,7 +72,7 @@ class EmulatorSpec:
     firmware: str | None = None
     aligned: bool = True
     site: SiteLike = DEFAULT_SITE
-    faults: Sequence[str | Fault] = field(default_factory=tuple)
+    faults: str | Fault | Sequence[str | Fault] = field(default_factory=tuple)
     seed: int | None = None
     clock_rate: float = 1.0
     start: datetime = DEFAULT_EPOCH
@@ -79,8 +80,12 @@ class EmulatorSpec:
     data_dir: Path | None = None
 
     def __post_init__(self) -> None:
-        _one_of("device", self.device, DEVICES)
-        _one_of("transport", self.transport, TRANSPORTS)
+        # frozen: the checked, lower-case names replace what was given ("SynScan", "PTY")
+        object.__setattr__(self, "device", _one_of("device", self.device, DEVICES))
+        object.__setattr__(self, "transport", _one_of("transport", self.transport, TRANSPORTS))
+        for name in ("aligned", "pacing"):
+            if not isinstance(getattr(self, name), bool):
+                raise EmulatorSpecError(f"{name} is True or False, not {getattr(self, name)!r}")
         preset = PRESETS.get(self.model_name.lower())
         if preset is None:
             _one_of("model", self.model_name, tuple(model.name for model in PRESETS.values()))
@@ -135,7 +140,8 @@ class EmulatorSpec:
         return SimClock(start=self.start, rate=self.clock_rate)
 
     def make_faults(self) -> FaultInjector:
-        rules = [rule if isinstance(rule, Fault) else Fault.parse(rule) for rule in self.faults]
+        given = [self.faults] if isinstance(self.faults, str | Fault) else self.faults
+        rules = [rule if isinstance(rule, Fault) else Fault.parse(rule) for rule in given]
         return FaultInjector(rules, seed=self.seed)
 
     def make_firmware(self) -> Version:
@@ -154,9 +160,12 @@ class EmulatorSpec:
         return SynScanConfig(model=code, firmware=self.make_firmware(), aligned=self.aligned)
 
 
-def _one_of(name: str, value: str, choices: tuple[str, ...]) -> None:
-    if not any(value.lower() == choice.lower() for choice in choices):
-        raise EmulatorSpecError(f"{name} {value!r} is not one of {', '.join(choices)}")
+def _one_of(name: str, value: object, choices: tuple[str, ...]) -> str:
+    """The choice ``value`` names, whatever its case; else a one-line refusal."""
+    for choice in choices:
+        if isinstance(value, str) and value.lower() == choice.lower():
+            return choice
+    raise EmulatorSpecError(f"{name} {value!r} is not one of {', '.join(choices)}")
 
 
 Device = SynScanEmulator | SkyTrackerEmulator | SkyCommanderEmulator
