@@ -20,7 +20,12 @@ from scopelink.protocol.skytracker import TrackerMode
 from scopelink.protocol.synscan import GetRaDec, GetVersion, SetTrackingMode, Tracking
 from scopelink.servers.synscan import DEFAULT_FIRMWARE
 from scopelink.testing import EmulatorHandle, EmulatorSpec, EmulatorSpecError
-from scopelink.testing.handle import START_TIMEOUT_S, STOP_TIMEOUT_S, TASK_GRACE_S
+from scopelink.testing.handle import (
+    CALL_TIMEOUT_S,
+    START_TIMEOUT_S,
+    STOP_TIMEOUT_S,
+    TASK_GRACE_S,
+)
 from scopelink.testing.options import DEFAULT_MODELS
 
 
@@ -154,6 +159,7 @@ def test_the_documented_defaults_are_the_codes() -> None:
     assert f"waits at most {START_TIMEOUT_S:g} s" in page
     assert f"`close()` {STOP_TIMEOUT_S:g} s" in page
     assert f"`handle.TASK_GRACE_S` ({TASK_GRACE_S:g} s)" in page
+    assert f"`handle.CALL_TIMEOUT_S` ({CALL_TIMEOUT_S:g} s)" in page
 
 
 def test_loading_the_plugin_imports_nothing_heavy() -> None:

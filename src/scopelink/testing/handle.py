@@ -34,7 +34,13 @@ from scopelink.sim import SimulatedMount
 from scopelink.testing.options import Built, Device, EmulatorSpec, build
 from scopelink.testing.recording import CommandLog, Received, record_reads
 
-__all__ = ["START_TIMEOUT_S", "STOP_TIMEOUT_S", "TASK_GRACE_S", "EmulatorHandle"]
+__all__ = [
+    "CALL_TIMEOUT_S",
+    "START_TIMEOUT_S",
+    "STOP_TIMEOUT_S",
+    "TASK_GRACE_S",
+    "EmulatorHandle",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -43,6 +49,9 @@ START_TIMEOUT_S = 30.0
 
 STOP_TIMEOUT_S = 10.0
 """How long :meth:`EmulatorHandle.close` waits for the emulator's thread to end."""
+
+CALL_TIMEOUT_S = 10.0
+"""How long :meth:`EmulatorHandle.call` waits for its function on the emulator's loop."""
 
 TASK_GRACE_S = 1.0
 """How long the tasks still running once the device stopped and its mount was switched off (the
@@ -251,7 +260,8 @@ class EmulatorHandle:
 
     def call(self, function: Callable[[], _T | Awaitable[_T]]) -> _T:
         """Run ``function`` on the emulator's loop and return its result (awaited if it is a
-        coroutine). From the emulator's own thread it runs at once."""
+        coroutine), waiting at most :data:`CALL_TIMEOUT_S` (then ``TimeoutError``). Not from the
+        emulator's own thread (call the function directly there)."""
         loop = self._loop
         if loop is None or not self.running:
             raise RuntimeError("the emulator is not running")
@@ -265,7 +275,7 @@ class EmulatorHandle:
         if threading.current_thread() is self._thread:
             raise RuntimeError("call() from the emulator's own thread: call the function directly")
         future: Future[_T] = asyncio.run_coroutine_threadsafe(run(), loop)
-        return future.result(STOP_TIMEOUT_S)
+        return future.result(CALL_TIMEOUT_S)
 
     def state(self) -> MountState:
         """The simulated mount's state now (position, slewing, tracking, parked...)."""
