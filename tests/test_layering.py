@@ -22,6 +22,7 @@ LAYER_OF = {
     "servers": 6,
     "web": 7,
     "cli": 7,
+    "testing": 7,
 }
 # What the sans-IO layer must never touch: it has no I/O and no clock.
 FORBIDDEN_IN_PROTOCOL = {"asyncio", "socket", "time", "serial", "select", "threading", "os"}

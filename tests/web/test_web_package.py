@@ -9,9 +9,8 @@ import sys
 import zipfile
 from pathlib import Path
 
-from hatchling.builders.wheel import WheelBuilder
+from tests.support.wheel import scopelink_wheel
 
-ROOT = Path(__file__).resolve().parents[2]
 STATIC = ("index.html", "app.js", "skycommander.js", "style.css")
 
 SERVE_FROM_INSTALLED_COPY = """
@@ -42,10 +41,7 @@ asyncio.run(main())
 def test_the_wheel_carries_the_static_files_and_an_installed_copy_serves_them(
     tmp_path: Path,
 ) -> None:
-    wheel = Path(
-        next(iter(WheelBuilder(str(ROOT)).build(directory=str(tmp_path), versions=["standard"])))
-    )
-    with zipfile.ZipFile(wheel) as archive:
+    with zipfile.ZipFile(scopelink_wheel()) as archive:
         names = set(archive.namelist())
         for name in STATIC:
             assert f"scopelink/web/static/{name}" in names

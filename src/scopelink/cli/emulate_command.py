@@ -29,6 +29,7 @@ from scopelink.mount import Limits
 from scopelink.protocol.synscan import Version, VersionDialect
 from scopelink.servers.faults import Fault, FaultInjector, FaultSpecError
 from scopelink.servers.hosting import SERIAL_9600_8N1, HostedDevice, WireSpeed
+from scopelink.servers.ready import ready_json
 from scopelink.servers.skytracker import SkyCommanderEmulator, SkyTrackerEmulator
 from scopelink.servers.synscan import DEFAULT_FIRMWARE, Quirks, SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount, geometry_for
@@ -301,6 +302,9 @@ def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
         "e:drop, any:delay=6:p=0.1 (kinds: drop short malformed delay slow stall halt close)",
     )
     parser.add_argument("--seed", type=int, help="seed of probabilistic faults")
+    parser.add_argument(
+        "--ready-json", action="store_true", help="say where it listens as one JSON line"
+    )
     add_site_and_clock_arguments(parser)
 
 
@@ -326,10 +330,10 @@ async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
         async with until_stopped() as stop, device:
             if args.tcp is not None:
                 await device.on_tcp(*parse_host_port(args.tcp, "--tcp"))
-                print(f"{args.device} emulator listening on {device.address}", flush=True)
+                ready = f"{args.device} emulator listening on {device.address}"
             else:
-                path = await device.on_pty(args.pty or None)
-                print(f"{args.device} emulator on {path}", flush=True)
+                ready = f"{args.device} emulator on {await device.on_pty(args.pty or None)}"
+            print(ready_json(args.device, device) if args.ready_json else ready, flush=True)
             await stop.wait()
     except LinkError as error:
         raise CommandError(str(error)) from None

@@ -20,6 +20,7 @@ from types import TracebackType
 from typing import Self
 
 from scopelink.links import Link, memory_pair
+from scopelink.mount import AlignmentMode
 from scopelink.servers.faults import FaultInjector
 from scopelink.servers.hosting import HostedDevice
 from scopelink.sim import SimulatedMount
@@ -29,6 +30,17 @@ from .line import DEFAULT_JITTER_ALLOWANCE_S
 from .objects import ObjectStore
 from .port import DevicePort
 from .tracker import SkyTracker
+
+
+def require_alt_az(mount: SimulatedMount, device: str) -> None:
+    """Refuse a mount these devices cannot sit on: the Sky Tracker drives, and the Sky Commander
+    reads, the two axes of an alt-azimuth telescope (the spec's first line)."""
+    if mount.model.alignment_mode is not AlignmentMode.ALT_AZ:
+        mode = mount.model.alignment_mode.name.lower().replace("_", " ")
+        raise ValueError(
+            f"the {device} works on an alt-azimuth telescope only, not the {mount.model.name} "
+            f"({mode}): use an alt-az preset such as SKY_TRACKER"
+        )
 
 
 def commander_for(mount: SimulatedMount, data_dir: Path) -> SkyCommander:
@@ -51,6 +63,7 @@ class SkyCommanderEmulator(HostedDevice):
         faults: FaultInjector | None = None,
         pace: bool = True,
     ) -> None:
+        require_alt_az(mount, "Sky Commander")
         super().__init__(self.serve)
         self.commander = commander_for(mount, data_dir)
         self.faults = faults if faults is not None else FaultInjector()
@@ -80,6 +93,7 @@ class SkyTrackerEmulator(HostedDevice):
         jitter_allowance_s: float = DEFAULT_JITTER_ALLOWANCE_S,
         commander_faults: FaultInjector | None = None,
     ) -> None:
+        require_alt_az(mount, "Sky Tracker")
         super().__init__(self.serve)
         self.mount = mount
         self.faults = faults if faults is not None else FaultInjector()
