@@ -49,6 +49,11 @@ COMMANDS: Final = (
         "annotate a byte trace of SynScan or Sky Tracker / Sky Commander traffic",
         "decode_command",
     ),
+    Command(
+        "record",
+        "record a session with a device, every byte with its time (for decode and replay)",
+        "record_command",
+    ),
     Command("ports", "list serial ports, flagging likely hand-control cables", "ports_command"),
     Command(
         "info",

@@ -301,6 +301,11 @@ def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
         "e:drop, any:delay=6:p=0.1 (kinds: drop short malformed delay slow stall halt close)",
     )
     parser.add_argument("--seed", type=int, help="seed of probabilistic faults")
+    parser.add_argument(
+        "--replay",
+        metavar="FILE",
+        help="answer from a recording ('scopelink record'), reporting each divergence on stderr",
+    )
     add_site_and_clock_arguments(parser)
 
 
@@ -321,7 +326,13 @@ def run(args: argparse.Namespace) -> int:
 
 
 async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
-    device = await EMULATORS[args.device].create(args, options)
+    device: HostedDevice
+    if args.replay:
+        from scopelink.cli.replay_device import replay_device  # noqa: PLC0415 - if asked for
+
+        device = replay_device(args.replay, args.device, options.wire)
+    else:
+        device = await EMULATORS[args.device].create(args, options)
     try:
         async with until_stopped() as stop, device:
             if args.tcp is not None:
