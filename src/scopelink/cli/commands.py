@@ -56,6 +56,11 @@ COMMANDS: Final = (
     ),
     Command("ports", "list serial ports, flagging likely hand-control cables", "ports_command"),
     Command(
+        "doctor",
+        "try what answers on a port and say what it is and what to do (read-only probes)",
+        "doctor_command",
+    ),
+    Command(
         "info",
         "identify what is on a port: SynScan firmware and model, Sky Tracker, Sky Commander",
         "info_command",
