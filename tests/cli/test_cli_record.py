@@ -45,19 +45,23 @@ async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, conf
     # The file: a versioned header, then every transfer with its time and direction.
     lines = recording.read_text().splitlines()
     header = json.loads(lines[0])
-    assert header["scopelink_recording"] == 1 and header["protocol"] == "synscan"
+    assert header["scopelink_recording"] == 1
+    assert header["protocol"] == "synscan"
     first = json.loads(lines[1])
-    assert first["dir"] == "->" and first["data"].startswith("K")  # the driver's echo first
+    assert first["dir"] == "->"
+    assert first["data"].startswith("K")
     loaded = read_recording(recording.read_bytes())
     times = [transfer.t for transfer in loaded.transfers]
-    assert times == sorted(times) and times[0] > 0
+    assert times == sorted(times)
+    assert times[0] > 0
     assert {t.direction for t in loaded.transfers} == {Direction.PC, Direction.DEVICE}
     assert not any(a.is_error for a in annotate(loaded.chunks()))
 
     # `decode FILE`: the recording's own protocol, each line annotated.
     status, out, _ = scopelink_here(config, "decode", str(recording))
     assert status == 0
-    assert "get hand control version" in out and "version 4.39.05" in out
+    assert "get hand control version" in out
+    assert "version 4.39.05" in out
 
     # The regression test: the driver against the recording, no divergence, same identity.
     result = await replay_to_driver(recording, site=SITE)
@@ -68,12 +72,11 @@ async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, conf
 
     # A divergence is reported with the line and the byte, not answered; the replay resumes.
     device_replay = ReplayDevice(loaded)
-    async with device_replay:
-        async with await open_serial(await device_replay.on_pty()) as link:
-            await link.write(b"Kz")  # recorded: K\x80
-            await link.write(first["data"].replace("\\x80", "\x80").encode("latin-1"))
-            async with asyncio.timeout(5):
-                assert await link.read_exactly(2) == b"\x80#"
+    async with device_replay, await open_serial(await device_replay.on_pty()) as link:
+        await link.write(b"Kz")  # recorded: K\x80
+        await link.write(first["data"].replace("\\x80", "\x80").encode("latin-1"))
+        async with asyncio.timeout(5):
+            assert await link.read_exactly(2) == b"\x80#"
     (divergence,) = device_replay.divergences
     assert (divergence.line, divergence.offset, divergence.received) == (2, 1, b"z")
     assert "divergence at line 2 (exchange 1, byte 1): expected '\\x80', received 'z'" in (
@@ -94,6 +97,8 @@ def test_replay_refuses_a_recording_of_another_device(tmp_path: Path, config: Pa
     broken = tmp_path / "broken.jsonl"
     broken.write_text('{"scopelink_recording": 1, "protocol": "synscan"}\n{"t": 1, "dir": "=>"}\n')
     status, _, err = scopelink_here(config, "decode", "--file", str(broken))
-    assert status == 1 and "line 2: 'dir' must be '->' or '<-'" in err
+    assert status == 1
+    assert "line 2: 'dir' must be '->' or '<-'" in err
     status, _, err = scopelink_here(config, "record", "--device", "sim", str(broken))
-    assert status == 1 and "no bytes to record" in err
+    assert status == 1
+    assert "no bytes to record" in err
