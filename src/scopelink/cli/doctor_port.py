@@ -4,7 +4,6 @@ Linux whether ModemManager is running, which grabs new serial ports to look for 
 
 from __future__ import annotations
 
-import errno
 import grp
 import os
 import shutil
@@ -15,6 +14,8 @@ from pathlib import Path
 from typing import Final
 
 from scopelink.cli.doctor_probe import Finding
+from scopelink.links import LinkOpenError
+from scopelink.links.serial import NO_SUCH_DEVICE, PERMISSION_DENIED, PORT_BUSY
 
 __all__ = [
     "DEFAULT_GROUP",
@@ -41,17 +42,17 @@ class Holder:
 
 
 def open_failure(port: str, error: BaseException) -> Finding:
-    """What a failure to open ``port`` means and what to do, from the error's errno (pyserial
-    keeps the OSError as the cause) or its exclusive-lock message."""
-    code = _errno_of(error)
+    """What a failure to open ``port`` means and what to do, from the reason the link gave
+    (``links.serial`` reads it from the errno of the real open, or the exclusive lock)."""
+    reason = error.reason if isinstance(error, LinkOpenError) else None
     text = str(error)
-    if code == errno.ENOENT:
+    if reason == NO_SUCH_DEVICE:
         return Finding(
             "no-such-port",
             f"{port} does not exist",
             "plug the cable in; 'scopelink ports' lists the serial ports there are",
         )
-    if code in (errno.EACCES, errno.EPERM):
+    if reason == PERMISSION_DENIED:
         group = _group_of(port)
         return Finding(
             "permission",
@@ -59,7 +60,7 @@ def open_failure(port: str, error: BaseException) -> Finding:
             f"run: sudo usermod -aG {group} $USER   then log out and in again (or reboot)",
             details={"group": group},
         )
-    if code in (errno.EBUSY, errno.EAGAIN, errno.EWOULDBLOCK) or "exclusively lock" in text:
+    if reason == PORT_BUSY:
         holders = holders_of(port)
         if holders:
             who = ", ".join(str(holder) for holder in holders)
@@ -152,11 +153,3 @@ def _group_of(port: str) -> str:
     except (OSError, KeyError):
         return DEFAULT_GROUP
     return DEFAULT_GROUP if name in ("root", "tty") else name
-
-
-def _errno_of(error: BaseException | None) -> int | None:
-    while error is not None:
-        if isinstance(error, OSError) and error.errno is not None:
-            return error.errno
-        error = error.__cause__ or error.__context__
-    return None

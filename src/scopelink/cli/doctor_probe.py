@@ -181,6 +181,8 @@ async def _commander_on_bus(link: Link, wait_s: float) -> bool | None:
     """Whether a Sky Commander answers behind the Sky Tracker: None when the bus is refused."""
     grant = await ask(link, b"Q", wait_s)
     if grant != b"A":
+        if grant != b"\0":  # a grant that came late or garbled must not keep the bus held
+            await link.write(b"q")
         return None
     try:
         position = await ask(link, _COMMANDER_POSITION, wait_s)

@@ -206,14 +206,7 @@ async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) 
     # and every other command reads and moves through them.
     mount.keep_pointing_in(DeviceMemory(device_key(mount.identity)))
     try:
-        return await body(mount)
-    except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:
-        raise mount_error(error) from None
-    except TimeoutError:
-        raise CommandError(
-            "the mount did not report the end of the command in time",
-            "'scopelink status' shows what it is doing; 'scopelink stop' stops it",
-        ) from None
+        return await _one_line_errors(body(mount))
     finally:
         try:
             await mount.disconnect()
@@ -242,11 +235,20 @@ async def _run_on_serve(command: DeviceCommand, body: Callable[[Mount], Awaitabl
             f"{len(chosen)} scopelink serves are running (PIDs {pids})",
             f"say which: --device serve:{chosen[0].pid}",
         )
-    try:
+
+    async def on_serve() -> int:
         mount = await ServeMount.open(chosen[0])
         if command.site_given:  # 'scopelink site' sends the configured site or --site
             mount.site = command.site
         return await body(cast(Mount, mount))
+
+    return await _one_line_errors(on_serve())
+
+
+async def _one_line_errors(running: Awaitable[int]) -> int:
+    """A command's exit status; what the mount, the link or the catalogue raised, in one line."""
+    try:
+        return await running
     except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:
         raise mount_error(error) from None
     except TimeoutError:

@@ -125,6 +125,7 @@ async def _record(
     from scopelink.decode.recording import header_line  # noqa: PLC0415 - only to run
     from scopelink.links import Link, LinkError, open_link, open_pty, serve_tcp  # noqa: PLC0415
     from scopelink.links.relay import relay  # noqa: PLC0415
+    from scopelink.servers.hosts import bound_beyond_loopback  # noqa: PLC0415
 
     try:
         device = await open_link(target, 9600, stopbits=stopbits)
@@ -150,6 +151,12 @@ async def _record(
             if args.tcp is not None:
                 host, port = parse_host_port(args.tcp, "--tcp")
                 server = await serve_tcp(serve_client, host=host, port=port)
+                if bound_beyond_loopback(host):
+                    print(
+                        f"warning: the relay listens on {host}: other machines can drive the "
+                        "device through it, with no scopelink limits",
+                        file=sys.stderr,
+                    )
                 where = f"tcp {server.host}:{server.port}"
                 closer = server.close
             else:
