@@ -28,7 +28,7 @@ from scopelink.sim import PRESETS, SKY_TRACKER, SimClock, SimulatedMount
 from tests.support.cli import scopelink_here
 
 SITE = Site(40.4, -3.7)
-WAIT_S = 0.5
+WAIT_S = 1.0  # the default: what a user waits, robust on a loaded machine
 # What a device would send: every byte it is sent, the reply (None: keeps quiet).
 Peer = Callable[[bytes], bytes | None]
 FORBIDDEN = frozenset(b"KGUTDBudlrbSsPrRHhWwMOL")  # motion or settings, SynScan or Sky Tracker

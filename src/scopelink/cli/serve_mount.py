@@ -21,7 +21,7 @@ from datetime import UTC, datetime, timedelta
 from typing import Any, Final, NoReturn
 
 from scopelink.astro import Site
-from scopelink.astro.catalog import CatalogObject, UnknownObjectError, lookup
+from scopelink.astro.catalog import CatalogObject, lookup
 from scopelink.cli.serve_registry import ServeEntry
 from scopelink.mount import (
     AlignmentMode,
@@ -131,8 +131,11 @@ class ServeMount:
     # --- commands -----------------------------------------------------------------------------
 
     async def goto_object(self, name: str) -> CatalogObject:
+        # The same offline catalogue as the serve's: an unknown name is told here, with the
+        # closest names; the serve looks the name up again at its own time.
+        found = lookup(name, self.now(), self.site)
         await self._command("/api/goto", {"name": name})
-        return lookup(name, self.now(), self.site)  # the same offline catalogue as the serve's
+        return found
 
     async def goto_equatorial(self, ra_j2000_hours: float, dec_j2000_deg: float) -> None:
         await self._command("/api/goto", {"ra_hours": ra_j2000_hours, "dec_deg": dec_j2000_deg})
@@ -185,6 +188,8 @@ class ServeMount:
         )
 
     def __getattr__(self, name: str) -> NoReturn:
+        if name.startswith("__"):  # Python's own protocols: not a mount feature
+            raise AttributeError(name)
         raise self._cannot(name.strip("_").replace("_", " "))
 
     # --- the wire ---------------------------------------------------------------------------------
@@ -255,8 +260,6 @@ def _refusal(error: urllib.error.HTTPError) -> Exception:
     except (ValueError, OSError):
         body = {}
     message = str(body.get("error") or f"the serve answered {error.code} {error.reason}")
-    if body.get("kind") == "UnknownObjectError":
-        return UnknownObjectError(message, tuple(body.get("suggestions") or ()))
     kind = getattr(mount_errors, str(body.get("kind")), None)
     if isinstance(kind, type) and issubclass(kind, MountError):
         return kind(message)
