@@ -13,7 +13,7 @@ from scopelink.astro import Site
 from scopelink.decode import Direction, annotate
 from scopelink.decode.recording import read_recording
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import open_serial
+from scopelink.links import open_serial, open_tcp
 from scopelink.servers.replay import ReplayDevice, replay_to_driver
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimClock, SimulatedMount
@@ -102,3 +102,36 @@ def test_replay_refuses_a_recording_of_another_device(tmp_path: Path, config: Pa
     status, _, err = scopelink_here(config, "record", "--device", "sim", str(broken))
     assert status == 1
     assert "no bytes to record" in err
+
+
+async def test_emulate_replay_answers_and_reports_divergences_on_stderr(
+    tmp_path: Path, config: Path
+) -> None:
+    recording = tmp_path / "session.jsonl"
+    recording.write_text(
+        '{"scopelink_recording": 1, "protocol": "synscan"}\n'
+        '{"t": 0.1, "dir": "->", "data": "V"}\n{"t": 0.11, "dir": "<-", "data": "042705#"}\n'
+        '{"t": 0.2, "dir": "->", "data": "J"}\n{"t": 0.21, "dir": "<-", "data": "\\\\x01#"}\n'
+    )
+    emulator = await start_scopelink(
+        config, "emulate", "synscan", "--replay", str(recording), "--tcp", "127.0.0.1:0"
+    )
+    try:
+        line = await read_line_matching(emulator.stdout, r"listening on", emulator.stderr)
+        port = int(line.rsplit(":", 1)[1])
+        async with await open_tcp("127.0.0.1", port) as link:
+            await link.write(b"e")  # not recorded here: reported, not answered
+            await link.write(b"V")
+            async with asyncio.timeout(5):
+                assert await link.read_exactly(7) == b"042705#"
+            await link.write(b"J")
+            async with asyncio.timeout(5):
+                assert await link.read_exactly(2) == b"\x01#"
+    finally:
+        emulator.send_signal(signal.SIGTERM)
+        async with asyncio.timeout(10):
+            assert await emulator.wait() == 0
+    assert emulator.stderr is not None
+    err = (await emulator.stderr.read()).decode()
+    assert "replaying 2 exchanges from" in err
+    assert "replay: divergence at line 2 (exchange 1, byte 0): expected 'V', received 'e'" in err
