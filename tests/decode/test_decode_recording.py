@@ -1,4 +1,4 @@
-"""The recording format (`scopelink.decode.recording`): written, read back, refused with the line."""
+"""The recording format (`scopelink.decode.recording`): written, read back, bad lines named."""
 
 from __future__ import annotations
 
