@@ -7,6 +7,9 @@ import asyncio
 import json
 import re
 import signal
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 from scopelink.astro import Site
@@ -20,6 +23,7 @@ from scopelink.sim import PRESETS, SimClock, SimulatedMount
 from tests.support.cli import read_line_matching, scopelink_here, start_scopelink
 
 SITE = Site(40.4, -3.7)
+DOCS = Path(__file__).parents[2] / "docs" / "cli.md"
 
 
 async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, config: Path) -> None:
@@ -63,7 +67,22 @@ async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, conf
     assert "get hand control version" in out
     assert "version 4.39.05" in out
 
-    # The regression test: the driver against the recording, no divergence, same identity.
+    # The regression test as docs/cli.md shows it, run by pytest beside the recording.
+    snippet = re.search(r"```python\n(.*?replay_to_driver.*?)```", DOCS.read_text(), re.S)
+    assert snippet is not None
+    (tmp_path / "test_recorded.py").write_text(textwrap.dedent(snippet[1]))
+    (tmp_path / "pytest.ini").write_text("[pytest]\nasyncio_mode = auto\n")
+    run = await asyncio.to_thread(
+        subprocess.run,
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_recorded.py"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stdout
+    assert "1 passed" in run.stdout
+    # The same, here: the driver against the recording, no divergence, same identity.
     result = await replay_to_driver(recording, site=SITE)
     assert result.divergences == ()
     assert result.identity.model == identity.model == "EQ6 GOTO"
