@@ -89,12 +89,14 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"{path} exists", "give a new name: a recording is never overwritten")
     protocol = Protocol(spec.kind) if spec.kind else None
     stopbits = SKY_TRACKER_STOP_BITS if spec.kind == "skytracker" else 1
+    return asyncio.run(_record(args, spec.target, protocol, stopbits, path))
+
+
+def _create(path: Path) -> IO[str]:
     try:
-        output = path.open("x", encoding="utf-8")
+        return path.open("x", encoding="utf-8")
     except OSError as error:
         raise CommandError(f"cannot write {path}: {error.strerror}") from None
-    with output:
-        return asyncio.run(_record(args, spec.target, protocol, stopbits, output))
 
 
 class _Writer:
@@ -120,7 +122,7 @@ async def _record(
     target: str,
     protocol: Protocol | None,
     stopbits: int,
-    output: IO[str],
+    path: Path,
 ) -> int:
     from scopelink.decode.recording import header_line  # noqa: PLC0415 - only to run
     from scopelink.links import Link, LinkError, open_link, open_pty, serve_tcp  # noqa: PLC0415
@@ -131,12 +133,18 @@ async def _record(
         device = await open_link(target, 9600, stopbits=stopbits)
     except LinkError as error:
         raise CommandError(str(error)) from None
+    try:
+        output = _create(path)  # once the device is open: no empty file for a wrong port
+    except CommandError:
+        await device.close()
+        raise
     started = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     output.write(header_line(protocol, device=args.device, started=started) + "\n")
     output.flush()
     writer = _Writer(output)
     busy = asyncio.Lock()
     gone = False
+    relaying: asyncio.Task[None] | None = None
     try:
         async with until_stopped() as stop:
 
@@ -157,24 +165,28 @@ async def _record(
                         "device through it, with no scopelink limits",
                         file=sys.stderr,
                     )
-                where = f"tcp {server.host}:{server.port}"
+                where = f"tcp://{server.host}:{server.port}"
                 closer = server.close
             else:
                 pty = await open_pty(args.pty or None)
                 where = pty.path
                 relaying = asyncio.create_task(serve_client(pty))
+                relaying.add_done_callback(lambda _: stop.set())  # the device went, or a fault
                 closer = pty.close
             print(f"recording {args.device} to {args.file}: connect the program to {where}")
             print("Ctrl-C ends the recording.", flush=True)
             await stop.wait()
             gone = device.closed
             await closer()
-            if args.tcp is None:
-                relaying.cancel()
-    except LinkError as error:
+            if relaying is not None and relaying.done() and not relaying.cancelled():
+                relaying.result()  # a fault of the relay itself: reported below
+    except (LinkError, OSError) as error:
         raise CommandError(str(error)) from None
     finally:
+        if relaying is not None:
+            relaying.cancel()
         await device.close()
+        output.close()
     note = " (the device went away)" if gone else ""
     print(f"recorded {writer.transfers} transfers to {args.file}{note}", file=sys.stderr)
     return 1 if gone else 0
