@@ -245,3 +245,11 @@ def test_modem_manager_running_is_reported_with_the_udev_hint(
     assert report["modem_manager"] == modem_manager_note()
     monkeypatch.setenv("PATH", str(tmp_path / "empty"))
     assert modem_manager_note() is None
+
+
+def test_documented_defaults_are_the_code_s() -> None:
+    from scopelink.cli.doctor_probe import FIRST_BYTE_WAIT_S, QUIET_S
+
+    docs = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    assert f"`--wait` seconds (default **{FIRST_BYTE_WAIT_S:g} s**)" in docs
+    assert f"after **{QUIET_S:g} s** of quiet" in docs

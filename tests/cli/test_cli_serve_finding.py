@@ -120,3 +120,11 @@ def test_only_a_live_serve_of_this_user_is_found(
     os.chmod(runtime_dir / "scopelink", 0o777)  # a directory others may write in: not trusted
     register_serve(entry)
     assert running_serves() == []
+
+
+def test_documented_defaults_are_the_code_s() -> None:
+    from scopelink.cli.serve_mount import POLL_S, REQUEST_TIMEOUT_S
+
+    docs = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    assert f"reads the serve every **{POLL_S:g} s**" in docs
+    assert f"each request may take **{REQUEST_TIMEOUT_S:g} s**" in docs
