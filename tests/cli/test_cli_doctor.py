@@ -251,5 +251,5 @@ def test_documented_defaults_are_the_code_s() -> None:
     from scopelink.cli.doctor_probe import FIRST_BYTE_WAIT_S, QUIET_S
 
     docs = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
-    assert f"`--wait` seconds (default **{FIRST_BYTE_WAIT_S:g} s**)" in docs
+    assert f"`--wait` seconds (default **{FIRST_BYTE_WAIT_S:g} s**, 0.05-10)" in docs
     assert f"after **{QUIET_S:g} s** of quiet" in docs
