@@ -50,8 +50,10 @@ def test_park_then_status_agree_through_the_running_serve(config: Path, runtime_
     )
     try:
         assert serve.stdout is not None
-        printed = [serve.stdout.readline() for _ in range(4)]
-        assert printed[-1] == "Ctrl-C stops.\n", printed
+        printed: list[str] = []
+        while (line := serve.stdout.readline()) and line != "Ctrl-C stops.\n":
+            printed.append(line)  # ends at EOF if the serve failed to start
+        assert line == "Ctrl-C stops.\n", printed
         (registration,) = (runtime_dir / "scopelink").glob("serve-*.json")
         assert registration.stat().st_mode & 0o777 == 0o600
         about = json.loads(registration.read_text())
