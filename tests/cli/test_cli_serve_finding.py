@@ -3,6 +3,7 @@ user (its runtime file) and drives that serve's mount, through the serve's own g
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import re
@@ -101,6 +102,19 @@ def test_only_a_live_serve_of_this_user_is_found(
     # The config names the device this serve holds: the serve's mount, not a busy port.
     config.write_text('device = "synscan:/dev/ttyFAKE"\n')
     assert DeviceCommand.from_args(args).device == DeviceSpec("serve", str(os.getpid()))
+    # Naming that device while the serve holds it: a busy port, and the way to the serve.
+    master, slave = os.openpty()
+    fcntl.flock(slave, fcntl.LOCK_EX)
+    held = os.ttyname(slave)
+    unregister_serve(path)
+    path = register_serve({"device": f"synscan:{held}", "dashboard": "http://127.0.0.1:9"})
+    assert path is not None
+    status, _, err = scopelink_here(config, "status", "--device", f"synscan:{held}")
+    os.close(master)
+    os.close(slave)
+    assert status == 1
+    assert "port busy" in err
+    assert f"hint: scopelink serve (PID {os.getpid()}) holds it: give --device serve" in err
     config.write_text('device = "sim"\n')  # a simulator lives in the command's own process
     assert DeviceCommand.from_args(args).device == DeviceSpec("sim", "eq6")
     with pytest.raises(CommandError, match="cannot drive another serve's mount"):

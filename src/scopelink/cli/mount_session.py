@@ -31,6 +31,7 @@ from scopelink.drivers.open import (
     parse_device,
 )
 from scopelink.links import LinkError
+from scopelink.links.serial import PORT_BUSY
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (
     LimitError,
@@ -126,14 +127,20 @@ def _running_serve_or_hint() -> str:
 def _serve_holding(spec: DeviceSpec) -> DeviceSpec:
     """The config's device, or the running serve when that serve holds this very device (its
     port is then busy): never a simulator, which lives in each command's own process."""
-    if spec.kind in (None, "sim", SERVE_KIND):
+    if spec.kind in ("sim", SERVE_KIND):
         return spec
+    holder = _serve_of(spec)
+    return spec if holder is None else DeviceSpec(SERVE_KIND, str(holder))
+
+
+def _serve_of(spec: DeviceSpec) -> int | None:
+    """The PID of this user's running serve that holds the device ``spec`` names, if any."""
     from scopelink.cli.serve_registry import running_serves  # noqa: PLC0415 - light
 
     for entry in running_serves():
         if entry.about.get("device") == str(spec):
-            return DeviceSpec(SERVE_KIND, str(entry.pid))
-    return spec
+            return entry.pid
+    return None
 
 
 def parse_site(text: str) -> Site:
@@ -177,6 +184,11 @@ async def open_device(command: DeviceCommand) -> Mount:
             timeout_s=command.timeout_s,
         )
     except DeviceOpenError as error:
+        busy = error.unopenable and PORT_BUSY in str(error)
+        holder = _serve_of(command.device) if busy else None
+        if holder is not None:  # the port is busy because our own serve has it
+            hint = f"scopelink serve (PID {holder}) holds it: give --device serve to drive it"
+            raise CommandError(str(error), hint) from None
         raise CommandError(str(error), error.hint) from None
     mount.stale_after_s = command.config.stale_after_s
     if command.config.park is not None:  # [park] in the settings file
