@@ -223,13 +223,14 @@ async def open_mount(
     raise DeviceOpenError(
         f"nothing recognisable answered on {parsed.target} ({'; '.join(failures)})",
         "check the cable and that the hand control is powered and past its start-up "
-        "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection",
+        "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection; "
+        "'scopelink doctor PORT' says what answers there",
     )
 
 
 _PORT_HINT: Final = (
     "'scopelink ports' lists the serial ports; check the path and your permissions "
-    "(the dialout group on Linux)"
+    "(the dialout group on Linux); 'scopelink doctor PORT' says what is wrong"
 )
 
 
