@@ -49,7 +49,17 @@ COMMANDS: Final = (
         "annotate a byte trace of SynScan or Sky Tracker / Sky Commander traffic",
         "decode_command",
     ),
+    Command(
+        "record",
+        "record a session with a device, every byte with its time (for decode and replay)",
+        "record_command",
+    ),
     Command("ports", "list serial ports, flagging likely hand-control cables", "ports_command"),
+    Command(
+        "doctor",
+        "try what answers on a port and say what it is and what to do (read-only probes)",
+        "doctor_command",
+    ),
     Command(
         "info",
         "identify what is on a port: SynScan firmware and model, Sky Tracker, Sky Commander",

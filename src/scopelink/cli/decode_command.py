@@ -23,6 +23,7 @@ from scopelink.decode import (
     escape_bytes,
     parse_trace,
 )
+from scopelink.decode.recording import Recording, RecordingError, is_recording, read_recording
 
 _ARROWS: Final = {Direction.PC: "->", Direction.DEVICE: "<-"}
 _PEER_TAGS: Final = {Peer.SYNSCAN: "", Peer.SKY_TRACKER: "[ST] ", Peer.SKY_COMMANDER: "[SC] "}
@@ -55,12 +56,16 @@ def register(commands: CommandParsers) -> None:
     parser.add_argument(
         "--protocol",
         choices=[protocol.value for protocol in Protocol],
-        default=Protocol.SYNSCAN.value,
-        help="what the trace holds: synscan (default); skytracker (the Sky Commander behind its "
-        "bus); skycommander (alone on its port)",
+        default=None,
+        help="what the trace holds: synscan (default; a recording's own protocol for a "
+        "recording); skytracker (the Sky Commander behind its bus); skycommander (alone on its "
+        "port)",
     )
     parser.add_argument(
-        "--file", metavar="PATH", help="read the trace from a file, one chunk a line ('-': stdin)"
+        "--file",
+        metavar="PATH",
+        help="read the trace from a file, one chunk a line ('-': stdin), or a recording "
+        "('scopelink record'; also given alone as BYTES)",
     )
     parser.add_argument("--hex", action="store_true", help="chunks are hex bytes, not text")
     parser.add_argument(
@@ -72,7 +77,14 @@ def register(commands: CommandParsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read the trace, annotate it, print the annotations; 1 if the trace has an error."""
-    chunks = _read_chunks(args)
+    recording = _recording(args)
+    if recording is not None:
+        chunks = recording.chunks()
+        recorded = recording.protocol
+        args.protocol = args.protocol or (recorded.value if recorded else None)
+    else:
+        chunks = _read_chunks(args)
+    args.protocol = args.protocol or Protocol.SYNSCAN.value
     annotations = annotate(chunks, Protocol(args.protocol))
     if args.json:
         for annotation in annotations:
@@ -97,6 +109,23 @@ def _looks_like_a_path(chunk: str) -> bool:
 
 
 # ------------------------------------------------------------------------------------------ input
+
+
+def _recording(args: argparse.Namespace) -> Recording | None:
+    """The recording ``--file`` names, or the one BYTES argument naming a recording file."""
+    if args.file is not None and args.file != "-" and not (args.raw or args.hex or args.chunks):
+        path = args.file
+    elif args.file is None and len(args.chunks) == 1 and os.path.isfile(args.chunks[0]):
+        path = args.chunks[0]
+    else:
+        return None
+    data = _read_file(path)
+    if not is_recording(data):
+        return None
+    try:
+        return read_recording(data)
+    except RecordingError as error:
+        raise CommandError(f"{path}: {error}") from None
 
 
 def _read_chunks(args: argparse.Namespace) -> list[Chunk]:

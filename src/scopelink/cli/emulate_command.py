@@ -305,6 +305,11 @@ def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--ready-json", action="store_true", help="say where it listens as one JSON line"
     )
+    parser.add_argument(
+        "--replay",
+        metavar="FILE",
+        help="answer from a recording ('scopelink record'), reporting each divergence on stderr",
+    )
     add_site_and_clock_arguments(parser)
 
 
@@ -325,7 +330,13 @@ def run(args: argparse.Namespace) -> int:
 
 
 async def _serve(args: argparse.Namespace, options: EmulatorOptions) -> int:
-    device = await EMULATORS[args.device].create(args, options)
+    device: HostedDevice
+    if args.replay:
+        from scopelink.cli.replay_device import replay_device  # noqa: PLC0415 - if asked for
+
+        device = replay_device(args.replay, args.device, options.wire)
+    else:
+        device = await EMULATORS[args.device].create(args, options)
     try:
         async with until_stopped() as stop, device:
             if args.tcp is not None:

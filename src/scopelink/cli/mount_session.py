@@ -13,6 +13,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
+from typing import cast
 
 from rich.console import Console
 
@@ -21,8 +22,16 @@ from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError
 from scopelink.cli.config import CONFIG_ENV_VAR, Config, ConfigError, config_path, load_config
 from scopelink.cli.errors import CommandError
 from scopelink.cli.options import positive_rate
-from scopelink.drivers.open import EXAMPLES, DeviceOpenError, DeviceSpec, open_mount, parse_device
+from scopelink.drivers.open import (
+    EXAMPLES,
+    SERVE_KIND,
+    DeviceOpenError,
+    DeviceSpec,
+    open_mount,
+    parse_device,
+)
 from scopelink.links import LinkError
+from scopelink.links.serial import PORT_BUSY
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (
     LimitError,
@@ -74,6 +83,8 @@ class DeviceCommand:
     config: Config
     clock_rate: float
     timeout_s: float | None
+    site_given: bool = False
+    """The site is to be sent (``scopelink site``): a serve's mount is then given this one."""
 
     @classmethod
     def from_args(
@@ -84,18 +95,52 @@ class DeviceCommand:
         config = read_config()
         text = device or args.device or config.device or default_device
         if not text:
-            raise CommandError(
-                "no device given",
-                f'add --device DEVICE ({EXAMPLES}) or set device = "..." in {config_path()}',
-            )
+            text = _running_serve_or_hint()
         try:
             spec = parse_device(text)
         except DeviceOpenError as error:
             raise CommandError(str(error), error.hint) from None
+        if not (device or args.device or default_device):
+            spec = _serve_holding(spec)
+        if spec.kind == SERVE_KIND and default_device:
+            raise CommandError("scopelink serve cannot drive another serve's mount")
         site = parse_site(args.site) if args.site else config.site
         if args.timeout is not None and not args.timeout > 0:
             raise CommandError(f"--timeout must be positive, not {args.timeout}")
-        return cls(spec, site, config, positive_rate(args.clock_rate), args.timeout)
+        sends_site = getattr(args, "command", None) == "site"
+        return cls(spec, site, config, positive_rate(args.clock_rate), args.timeout, sends_site)
+
+
+def _running_serve_or_hint() -> str:
+    """``serve`` when a scopelink serve of this user runs here; else the one-line hint."""
+    from scopelink.cli.serve_registry import running_serves  # noqa: PLC0415 - light
+
+    if running_serves():
+        return SERVE_KIND
+    raise CommandError(
+        "no device given, and no scopelink serve is running",
+        f"start 'scopelink serve' (the commands then drive its mount), add --device DEVICE "
+        f'({EXAMPLES}), or set device = "..." in {config_path()}',
+    )
+
+
+def _serve_holding(spec: DeviceSpec) -> DeviceSpec:
+    """The config's device, or the running serve when that serve holds this very device (its
+    port is then busy): never a simulator, which lives in each command's own process."""
+    if spec.kind in ("sim", SERVE_KIND):
+        return spec
+    holder = _serve_of(spec)
+    return spec if holder is None else DeviceSpec(SERVE_KIND, str(holder))
+
+
+def _serve_of(spec: DeviceSpec) -> int | None:
+    """The PID of this user's running serve that holds the device ``spec`` names, if any."""
+    from scopelink.cli.serve_registry import running_serves  # noqa: PLC0415 - light
+
+    for entry in running_serves():
+        if entry.about.get("device") == str(spec):
+            return entry.pid
+    return None
 
 
 def parse_site(text: str) -> Site:
@@ -139,6 +184,11 @@ async def open_device(command: DeviceCommand) -> Mount:
             timeout_s=command.timeout_s,
         )
     except DeviceOpenError as error:
+        busy = error.unopenable and PORT_BUSY in str(error)
+        holder = _serve_of(command.device) if busy else None
+        if holder is not None:  # the port is busy because our own serve has it
+            hint = f"scopelink serve (PID {holder}) holds it: give --device serve to drive it"
+            raise CommandError(str(error), hint) from None
         raise CommandError(str(error), error.hint) from None
     mount.stale_after_s = command.config.stale_after_s
     if command.config.park is not None:  # [park] in the settings file
@@ -161,12 +211,56 @@ def warn_if_sun_unguarded(limits: Limits) -> None:
 
 
 async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
+    if command.device.kind == SERVE_KIND:
+        return await _run_on_serve(command, body)
     mount = await open_device(command)
     # The syncs kept on the PC for this device (docs/pointing.md): 'scopelink sync' adds one,
     # and every other command reads and moves through them.
     mount.keep_pointing_in(DeviceMemory(device_key(mount.identity)))
     try:
-        return await body(mount)
+        return await _one_line_errors(body(mount))
+    finally:
+        try:
+            await mount.disconnect()
+        except (MountError, LinkError) as error:
+            _log.warning("while disconnecting: %s", error)
+
+
+async def _run_on_serve(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) -> int:
+    """``body`` on the mount of a running serve, through its dashboard (cli/serve_mount.py):
+    every command runs through the serve's own Mount and its guard."""
+    from scopelink.cli.serve_mount import ServeMount  # noqa: PLC0415 - only for a serve
+    from scopelink.cli.serve_registry import running_serves  # noqa: PLC0415
+
+    serves = running_serves()
+    wanted = command.device.target
+    chosen = [entry for entry in serves if not wanted or str(entry.pid) == wanted]
+    if not chosen:
+        which = f"with PID {wanted} " if wanted else ""
+        raise CommandError(
+            f"no scopelink serve {which}is running for this user on this machine",
+            "start one with 'scopelink serve', or give --device DEVICE",
+        )
+    if len(chosen) > 1:
+        pids = ", ".join(str(entry.pid) for entry in chosen)
+        raise CommandError(
+            f"{len(chosen)} scopelink serves are running (PIDs {pids})",
+            f"say which: --device serve:{chosen[0].pid}",
+        )
+
+    async def on_serve() -> int:
+        mount = await ServeMount.open(chosen[0])
+        if command.site_given:  # 'scopelink site' sends the configured site or --site
+            mount.site = command.site
+        return await body(cast(Mount, mount))
+
+    return await _one_line_errors(on_serve())
+
+
+async def _one_line_errors(running: Awaitable[int]) -> int:
+    """A command's exit status; what the mount, the link or the catalogue raised, in one line."""
+    try:
+        return await running
     except (MountError, LinkError, UnknownObjectError, EphemerisRangeError) as error:
         raise mount_error(error) from None
     except TimeoutError:
@@ -174,8 +268,3 @@ async def _run(command: DeviceCommand, body: Callable[[Mount], Awaitable[int]]) 
             "the mount did not report the end of the command in time",
             "'scopelink status' shows what it is doing; 'scopelink stop' stops it",
         ) from None
-    finally:
-        try:
-            await mount.disconnect()
-        except (MountError, LinkError) as error:
-            _log.warning("while disconnecting: %s", error)

@@ -32,6 +32,7 @@ from scopelink.cli.mount_session import (
     open_device,
 )
 from scopelink.cli.options import add_device_arguments
+from scopelink.cli.serve_registry import register_serve, unregister_serve
 from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
 from scopelink.links import LinkError
@@ -404,8 +405,11 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
             mount.keep_pointing_in(DeviceMemory(device_key(mount.identity), args.state_dir))
             # One poller for every front end: reads come from the state cache.
             await stack.enter_async_context(mount.watching())
-            for line in await _start_servers(stack, mount, plan, args):
+            endpoints: dict[str, object] = {"device": str(command.device)}
+            for line in await _start_servers(stack, mount, plan, args, endpoints):
                 print(f"  {line}", flush=True)
+            # Found by the command line, which then drives this mount (cli/serve_registry.py).
+            stack.callback(unregister_serve, register_serve(endpoints))
             print("Ctrl-C stops.", flush=True)
             await stop.wait()
     except StateDirError as error:
@@ -425,9 +429,14 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
 
 
 async def _start_servers(
-    stack: AsyncExitStack, mount: Mount, plan: ServePlan, args: argparse.Namespace
+    stack: AsyncExitStack,
+    mount: Mount,
+    plan: ServePlan,
+    args: argparse.Namespace,
+    endpoints: dict[str, object],
 ) -> list[str]:
-    """Start every planned server; the lines saying what listens where."""
+    """Start every planned server; the lines saying what listens where. ``endpoints`` gets
+    the dashboard's address as this machine reaches it, for the command line."""
     host = plan.host
     policy = plan.access
     lines: list[str] = [f"Access      {policy.describe()}"]
@@ -499,11 +508,24 @@ async def _start_servers(
         )
         await stack.enter_async_context(dashboard)
         lines.append(f"Dashboard   {dashboard.url}")
+        endpoints["dashboard"] = local_url(host, dashboard.port)
+        endpoints["pairing"] = dashboard.pairing_token
         pairing = dashboard.pairing_url
         if pairing is not None:
             lines.append(f"Dashboard   pairing link for other machines (controls): {pairing}")
             lines.extend(_qr_lines(pairing))
     return lines
+
+
+def local_url(host: str, port: int) -> str:
+    """An HTTP server's address as a client on this machine reaches it (loopback for a
+    wildcard address: the dashboard exempts loopback from pairing)."""
+    if host in ("0.0.0.0", ""):
+        host = "127.0.0.1"
+    elif host == "::":
+        host = "::1"
+    shown = f"[{host}]" if ":" in host else host
+    return f"http://{shown}:{port}"
 
 
 def _qr_lines(url: str) -> list[str]:

@@ -29,6 +29,7 @@ if TYPE_CHECKING:  # the CLI builds its parsers from EXAMPLES: no numpy before a
 __all__ = [
     "AUTODETECT_TIMEOUT_S",
     "KINDS",
+    "SERVE_KIND",
     "DeviceOpenError",
     "DeviceSpec",
     "create_mount",
@@ -38,7 +39,11 @@ __all__ = [
 
 _log = logging.getLogger(__name__)
 
-KINDS: Final = ("sim", "synscan", "skytracker", "skycommander")
+KINDS: Final = ("sim", "synscan", "skytracker", "skycommander", "serve")
+SERVE_KIND: Final = "serve"
+"""``serve`` (or ``serve:PID``): the mount of a ``scopelink serve`` running on this machine for
+this user; the command line drives it through that serve (cli/serve_mount.py), nothing here
+opens it."""
 DEFAULT_SIM_PRESET: Final = "eq6"
 AUTODETECT_TIMEOUT_S: Final = 1.5
 """Reply timeout while probing a device of unknown kind: long enough for any real hand control
@@ -46,7 +51,7 @@ AUTODETECT_TIMEOUT_S: Final = 1.5
 
 EXAMPLES: Final = (
     "sim, sim:az-gti, synscan:/dev/ttyUSB0, synscan:tcp://192.168.4.1:11880, "
-    "skytracker:/dev/ttyUSB0, or a bare port to autodetect"
+    "skytracker:/dev/ttyUSB0, serve (a running scopelink serve), or a bare port to autodetect"
 )
 
 
@@ -69,7 +74,9 @@ class DeviceSpec:
     target: str
 
     def __str__(self) -> str:
-        return f"{self.kind}:{self.target}" if self.kind else self.target
+        if self.kind and self.target:
+            return f"{self.kind}:{self.target}"
+        return self.kind or self.target
 
 
 def parse_device(text: str) -> DeviceSpec:
@@ -79,6 +86,8 @@ def parse_device(text: str) -> DeviceSpec:
         raise DeviceOpenError("empty device", f"give one of: {EXAMPLES}")
     if text == "sim":
         return DeviceSpec("sim", DEFAULT_SIM_PRESET)
+    if text.lower() == SERVE_KIND:
+        return DeviceSpec(SERVE_KIND, "")
     kind, colon, rest = text.partition(":")
     _refuse_a_mistyped_kind(text, kind if colon and not rest.startswith("//") else None, rest)
     if colon and kind.lower() in KINDS and not rest.startswith("//"):
@@ -95,6 +104,11 @@ def parse_device(text: str) -> DeviceSpec:
                     "presets: " + ", ".join(sorted(PRESETS)),
                 )
             return DeviceSpec("sim", preset)
+        if kind == SERVE_KIND and not rest.strip().isdigit():
+            raise DeviceOpenError(
+                f"{text!r}: serve takes the PID of a running scopelink serve",
+                "give serve (the one running) or serve:PID",
+            )
         return DeviceSpec(kind, rest.strip())
     return DeviceSpec(None, text)
 
@@ -157,6 +171,11 @@ def create_mount(
         if timeout_s is None:
             return SkyCommanderMount(spec.target, site=site, limits=limits)
         return SkyCommanderMount(spec.target, site=site, limits=limits, timeout_s=timeout_s)
+    if spec.kind == SERVE_KIND:
+        raise DeviceOpenError(
+            "a running scopelink serve is driven by the command line only",
+            "give serve's own --device the device itself (sim, synscan:PORT...)",
+        )
     raise DeviceOpenError(f"cannot create a mount of unknown kind for {spec}")
 
 
@@ -204,13 +223,14 @@ async def open_mount(
     raise DeviceOpenError(
         f"nothing recognisable answered on {parsed.target} ({'; '.join(failures)})",
         "check the cable and that the hand control is powered and past its start-up "
-        "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection",
+        "screens; name the kind (synscan:PORT or skytracker:PORT) to skip detection; "
+        "'scopelink doctor PORT' says what answers there",
     )
 
 
 _PORT_HINT: Final = (
     "'scopelink ports' lists the serial ports; check the path and your permissions "
-    "(the dialout group on Linux)"
+    "(the dialout group on Linux); 'scopelink doctor PORT' says what is wrong"
 )
 
 

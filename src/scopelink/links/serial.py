@@ -38,6 +38,13 @@ _DIALOUT_HINT = (
 )
 _BUSY_HINT = "another program has it open (another scopelink? ModemManager? gpsd?)"
 
+NO_SUCH_DEVICE = "no such device"
+"""The ``reason`` of a :class:`LinkOpenError` for a port that does not exist (ENOENT)."""
+PERMISSION_DENIED = "permission denied"
+"""... for a port this user may not open (EACCES, EPERM)."""
+PORT_BUSY = "port busy"
+"""... for a port another program holds (EBUSY, or its exclusive lock)."""
+
 
 class SerialLink(Link):
     """An open pyserial port. ``port`` gives the pyserial object (line settings, DTR/RTS)."""
@@ -154,11 +161,11 @@ async def open_serial(
 def _open_error(port: str, exc: BaseException) -> LinkOpenError:
     code = _errno_of(exc)
     if code == errno.ENOENT:
-        return LinkOpenError(port, "no such device", _LIST_PORTS_HINT)
+        return LinkOpenError(port, NO_SUCH_DEVICE, _LIST_PORTS_HINT)
     if code in (errno.EACCES, errno.EPERM):
-        return LinkOpenError(port, "permission denied", _DIALOUT_HINT)
+        return LinkOpenError(port, PERMISSION_DENIED, _DIALOUT_HINT)
     if code in (errno.EBUSY, errno.EAGAIN) or "exclusively lock" in str(exc):
-        return LinkOpenError(port, "port busy", _BUSY_HINT)
+        return LinkOpenError(port, PORT_BUSY, _BUSY_HINT)
     if code == errno.ECONNREFUSED:
         return LinkOpenError(port, "connection refused", "is the serial-to-network bridge running?")
     return LinkOpenError(port, str(exc))
