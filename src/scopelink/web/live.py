@@ -19,6 +19,11 @@ from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
 from scopelink.mount.deadman import MotionClient
+from scopelink.web.almanac import clock_json
+from scopelink.web.health import HealthMeter
+from scopelink.web.pad import pad_json
+from scopelink.web.progress import SlewWatch
+from scopelink.web.pushto_live import PushToTarget
 from scopelink.web.sky import SkyPositions, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
@@ -50,6 +55,11 @@ class LiveHub:
         self._sky: SkyPositions | None = None
         self._traffic_seq = 0
         self._described: dict[str, object] | None = None
+        self._slew = SlewWatch()
+        self._health = HealthMeter()
+        self._clock: dict[str, object] | None = None
+        self.pushto = PushToTarget(mount)
+        """The push-to target every page shows (one telescope, one target)."""
 
     @property
     def clients(self) -> int:
@@ -61,6 +71,25 @@ class LiveHub:
         if self._sky is None:
             self._sky = sky_positions(now)
         return [obj.as_json() for obj in self._sky.at(now, self._mount.site)]
+
+    def live_state(self) -> dict[str, object]:
+        """The state as the page shows it: the mount's (``state_json``) with what the hub
+        follows across updates (slew progress, health in words), the pad's directions, the
+        clock of the last sky update and the push-to figures."""
+        mount = self._mount
+        state = mount.state
+        data = state_json(mount, state)
+        data["slew"] = self._slew.update(mount, state)
+        data["health_words"] = self._health.update(mount, state)
+        data["pad"] = pad_json(mount, state)
+        data["clock"] = self._clock
+        data["pushto"] = self.pushto.figures(state)
+        return data
+
+    def _sky_and_clock(self) -> list[dict[str, object]]:
+        """The chart's objects and the clock (both in a worker thread: they cost ERFA time)."""
+        self._clock = clock_json(self._mount.now(), self._mount.site)
+        return self.sky_json()
 
     def _traffic_json(self, since: int) -> tuple[list[dict[str, object]], int]:
         if self._traffic is None:
@@ -85,8 +114,8 @@ class LiveHub:
             "mount": describe_mount(self._mount),
             "traffic_enabled": self._traffic is not None,
             "traffic": traffic,
-            "state": state_json(self._mount, self._mount.state),
-            "sky": await asyncio.to_thread(self.sky_json),
+            "sky": await asyncio.to_thread(self._sky_and_clock),
+            "state": self.live_state(),
             "interval_s": self.interval_s,
             "session": client.token,
         }
@@ -131,7 +160,6 @@ class LiveHub:
         traffic, self._traffic_seq = self._traffic_json(self._traffic_seq)
         update: dict[str, object] = {
             "type": "update",
-            "state": state_json(self._mount, self._mount.state),
             "traffic": traffic,
         }
         if with_sky:
@@ -141,9 +169,10 @@ class LiveHub:
                 self._described = described
                 update["mount"] = described
             try:
-                update["sky"] = await asyncio.to_thread(self.sky_json)
+                update["sky"] = await asyncio.to_thread(self._sky_and_clock)
             except Exception:  # a chart without objects beats a dead dashboard
                 logger.exception("cannot compute the sky chart's objects")
+        update["state"] = self.live_state()
         return json.dumps(update)
 
     async def _broadcast(self, message: str) -> None:
