@@ -1,0 +1,201 @@
+"""The panel's server side (issue #17 parts 2-6) over real HTTP and a real WebSocket on a simulated
+mount: the pad's directions and the hand control's speeds, the clock and twilight, an object's
+almanac and when it reaches the mount's limits, slew progress and how a slew ended, health in
+words, push-to figures on the updates, and the first-run check saving the settings file."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable
+from datetime import datetime, timedelta
+from pathlib import Path
+from typing import Any
+
+import aiohttp
+import pytest
+
+from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site
+from scopelink.astro.catalog import rise_transit_set
+from scopelink.cli.config import load_config
+from scopelink.cli.site_store import SettingsSiteStore
+from scopelink.mount import Limits
+from scopelink.sim import AZ_GTI, SKY_TRACKER, SimClock, SimulatedMount
+from scopelink.web.almanac import clock_json, twilight_phase
+from scopelink.web.pad import pad_json, rates_json
+from scopelink.web.progress import ARRIVED_DEG
+from tests.support.web import HIGH_UP, SITE, START, served, sim_mount
+
+
+async def next_state(
+    ws: aiohttp.ClientWebSocketResponse,
+    until: Callable[[dict[str, Any]], bool],
+    timeout_s: float = 10.0,
+) -> dict[str, Any]:
+    """The first update's state for which ``until`` holds."""
+    for _ in range(int(timeout_s / 0.05)):
+        message = json.loads((await ws.receive(timeout=timeout_s)).data)
+        state: dict[str, Any] = message["state"]
+        if until(state):
+            return state
+    raise AssertionError("no such state came")
+
+
+async def test_pad_directions_follow_the_sky_and_speeds_the_hand_control() -> None:
+    eq6 = sim_mount()
+    await eq6.connect()
+    try:
+        state = eq6.state
+        east_side = dataclasses.replace(state, pier_side=PierSide.EAST)
+        pad = pad_json(eq6, east_side)
+        assert [pad[d]["label"] for d in ("up", "down", "left", "right")] == ["N", "S", "E", "W"]
+        # North: declination up, on the normal (east) side the secondary axis forwards; east:
+        # the primary backwards (forwards turns west in the north).
+        assert (pad["up"]["axis"], pad["up"]["sign"]) == ("secondary", 1)
+        assert (pad["left"]["axis"], pad["left"]["sign"]) == ("primary", -1)
+        flipped = pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.WEST))
+        assert flipped["up"]["sign"] == -1  # a meridian flip turns the buttons with the tube
+        unknown = pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.UNKNOWN))
+        assert unknown["up"]["label"] == "Dec +"  # never a guess at north
+        rates = rates_json(eq6)
+        assert rates["hand_control"] == "synscan"
+        assert [c["key"] for c in rates["choices"]] == [str(n) for n in range(1, 10)]
+        assert rates["choices"][1]["rate_deg_s"] == 8 * SIDEREAL_RATE_DEG_S
+        assert rates["choices"][8]["label"] == "rate 9 · 800× (3.3°/s)"
+    finally:
+        await eq6.disconnect()
+    south = SimulatedMount(AZ_GTI, site=Site(-33.9, 18.4), clock=SimClock(start=START))
+    pad = pad_json(south, south.state)
+    assert [pad[d]["label"] for d in ("up", "down", "left", "right")] == [
+        "Up",
+        "Down",
+        "Left",
+        "Right",
+    ]
+    assert (pad["right"]["axis"], pad["right"]["sign"]) == ("primary", 1)  # azimuth up
+    tracker = SimulatedMount(SKY_TRACKER, site=SITE, clock=SimClock(start=START))
+    speeds = rates_json(tracker)["choices"]
+    assert [c["label"] for c in speeds] == ["guide 2′/s", "track 8′/s", "utility 4°/s"]
+
+
+def test_twilight_phases_and_the_clock() -> None:
+    phases = [twilight_phase(alt) for alt in (10.0, -0.5, -3.0, -9.0, -15.0, -20.0)]
+    assert phases == [
+        "day",
+        "day",
+        "civil twilight",
+        "nautical twilight",
+        "astronomical twilight",
+        "night",
+    ]
+    night = clock_json(START, SITE)  # 21:00 UTC on 1 March at 45° N
+    assert night["twilight"] == "night"
+    assert isinstance(night["sun_alt"], float)
+    assert night["sun_alt"] < -18
+    assert night["lst_hours"] == pytest.approx(8.11, abs=0.02)
+    noon = clock_json(START.replace(hour=11, minute=30), SITE)
+    assert noon["twilight"] == "day"
+
+
+async def test_object_almanac_and_the_time_it_reaches_the_mounts_horizon() -> None:
+    # A raised horizon of 30°: M 31 (16° up in the north-west) is below it and rises above it
+    # when the almanac with a 30° horizon says so, to the 5-minute sampling.
+    async with served(sim_mount(limits=Limits(horizon_deg=30.0))) as s:
+        status, info = await s.get("/api/object", name="m31")
+        assert status == 200
+        assert info["name"] == "M 31"
+        assert info["type"] == "Galaxy"
+        assert info["constellation"] == "And"
+        assert info["size_arcmin"][0] > 100  # OpenNGC: 177.8' x 69.7'
+        assert info["limit"]["event"] == "rises"
+        expected = rise_transit_set("M 31", s.mount.site, s.mount.now(), horizon_deg=30.0).rise
+        assert expected is not None
+        assert abs(_parse(info["limit"]["at"]) - expected) <= timedelta(minutes=5, seconds=30)
+        assert info["meridian_limit"] is not None  # an EQ6: a German mount
+        assert _parse(info["transit"]) < _parse(info["meridian_limit"])
+        status, error = await s.get("/api/object", name="M 3l")
+        assert status == 404
+        assert error["suggestions"]
+        status, error = await s.get("/api/object", name="")
+        assert status == 400
+
+
+def _parse(text: str) -> datetime:
+    return datetime.fromisoformat(text)
+
+
+async def test_progress_arrival_stop_health_and_push_to_ride_on_the_updates() -> None:
+    async with served(sim_mount(rate=10.0), interval_s=0.05) as s, s.http.ws_connect("/ws") as ws:
+        assert (await s.post("/api/goto", {"name": HIGH_UP}))[0] == 200
+        going = await next_state(ws, lambda st: bool(st["slew"] and st["slew"].get("eta_s")))
+        assert going["slew"]["kind"] == "goto"
+        assert going["slew"]["target"] == HIGH_UP
+        assert going["slew"]["distance_deg"] > 1.0
+        arrived = await next_state(ws, lambda st: bool(st["slew"] and not st["slew"]["active"]))
+        assert arrived["slew"]["arrived"] is True
+        assert arrived["slew"]["distance_deg"] <= ARRIVED_DEG
+        words = arrived["health_words"]
+        assert words["level"] == "ok"
+        assert words["text"].startswith("link OK, ")
+        assert words["readings_per_s"] > 1
+
+        assert (await s.post("/api/goto", {"name": "Arcturus"}))[0] == 200
+        await next_state(ws, lambda st: bool(st["slew"] and st["slew"].get("target") == "Arcturus"))
+        assert (await s.post("/api/abort"))[0] == 200
+        stopped = await next_state(ws, lambda st: bool(st["slew"] and not st["slew"]["active"]))
+        assert stopped["slew"]["arrived"] is False
+        assert stopped["slew"]["distance_deg"] > 1.0  # "stopped 40.2° short of Arcturus"
+        # A rate motion after the goto is not the goto: no target is claimed.
+        assert (await s.post("/api/move", {"axis": "primary", "rate_deg_s": 1.0}))[0] == 200
+        moving = await next_state(ws, lambda st: bool(st["slew"] and st["slew"]["active"]))
+        assert moving["slew"] == {"active": True, "kind": "moving", "target": None}
+        assert (await s.post("/api/move", {"axis": "primary", "rate_deg_s": 0.0}))[0] == 200
+
+        status, _ = await s.post("/api/pushto", {"name": "vega"})
+        assert status == 200
+        figures = (await next_state(ws, lambda st: st["pushto"] is not None))["pushto"]
+        assert figures["target"] == "Vega"
+        assert "° away" in figures["text"]
+        assert (await s.post("/api/pushto", {"name": "Vegaa"}))[0] == 404
+        assert (await s.post("/api/pushto", {}))[0] == 200
+        await next_state(ws, lambda st: st["pushto"] is None)
+
+        await s.mount.disconnect()
+        down = await next_state(ws, lambda st: st["health_words"]["level"] == "bad")
+        assert down["health_words"]["text"].startswith("link down")
+        assert down["slew"] is None  # nothing is claimed about motion while the link is down
+
+
+async def test_first_run_check_saves_the_site_to_the_settings_file(tmp_path: Path) -> None:
+    path = tmp_path / "config.toml"
+    store = SettingsSiteStore(path, saved=False)
+    async with served(site_store=store) as s:
+        status, setup = await s.get("/api/setup")
+        assert status == 200
+        assert setup["needed"] is True
+        assert setup["where"] == str(path)
+        status, error = await s.post("/api/setup", {"latitude_deg": 95, "longitude_deg": 7})
+        assert status == 400
+        assert "latitude_deg" in error["error"]
+        assert not path.exists()  # a refused site is never saved
+        body = {
+            "latitude_deg": 40.4,
+            "longitude_deg": -3.7,
+            "elevation_m": 667,
+            "utc": "2026-11-24T23:00:00Z",
+        }
+        status, saved = await s.post("/api/setup", body)
+        assert status == 200, saved
+        assert saved["saved_to"] == str(path)
+        assert saved["time_set"] is True
+        assert saved["status"]["needed"] is False
+        config = load_config(path)
+        assert config.site_configured
+        assert (config.site.latitude_deg, config.site.longitude_deg) == (40.4, -3.7)
+        assert config.site.elevation_m == 667
+        assert s.mount.site.latitude_deg == 40.4
+        assert abs(s.mount.now() - _parse("2026-11-24T23:00:00+00:00")) < timedelta(minutes=5)
+    async with served() as s:  # no store: the page never asks
+        status, setup = await s.get("/api/setup")
+        assert setup["needed"] is False
+        assert setup["can_save"] is False
