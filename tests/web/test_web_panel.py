@@ -27,6 +27,15 @@ from scopelink.web.progress import ARRIVED_DEG
 from tests.support.web import HIGH_UP, SITE, START, served, sim_mount
 
 
+def plain_pad_json(*args: Any) -> Any:
+    """``pad_json`` as the page gets it (through JSON)."""
+    return json.loads(json.dumps(pad_json(*args)))
+
+
+def plain_rates_json(*args: Any) -> Any:
+    return json.loads(json.dumps(rates_json(*args)))
+
+
 async def next_state(
     ws: aiohttp.ClientWebSocketResponse,
     until: Callable[[dict[str, Any]], bool],
@@ -47,17 +56,17 @@ async def test_pad_directions_follow_the_sky_and_speeds_the_hand_control() -> No
     try:
         state = eq6.state
         east_side = dataclasses.replace(state, pier_side=PierSide.EAST)
-        pad = pad_json(eq6, east_side)
+        pad = plain_pad_json(eq6, east_side)
         assert [pad[d]["label"] for d in ("up", "down", "left", "right")] == ["N", "S", "E", "W"]
         # North: declination up, on the normal (east) side the secondary axis forwards; east:
         # the primary backwards (forwards turns west in the north).
         assert (pad["up"]["axis"], pad["up"]["sign"]) == ("secondary", 1)
         assert (pad["left"]["axis"], pad["left"]["sign"]) == ("primary", -1)
-        flipped = pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.WEST))
+        flipped = plain_pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.WEST))
         assert flipped["up"]["sign"] == -1  # a meridian flip turns the buttons with the tube
-        unknown = pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.UNKNOWN))
+        unknown = plain_pad_json(eq6, dataclasses.replace(state, pier_side=PierSide.UNKNOWN))
         assert unknown["up"]["label"] == "Dec +"  # never a guess at north
-        rates = rates_json(eq6)
+        rates = plain_rates_json(eq6)
         assert rates["hand_control"] == "synscan"
         assert [c["key"] for c in rates["choices"]] == [str(n) for n in range(1, 10)]
         assert rates["choices"][1]["rate_deg_s"] == 8 * SIDEREAL_RATE_DEG_S
@@ -65,7 +74,7 @@ async def test_pad_directions_follow_the_sky_and_speeds_the_hand_control() -> No
     finally:
         await eq6.disconnect()
     south = SimulatedMount(AZ_GTI, site=Site(-33.9, 18.4), clock=SimClock(start=START))
-    pad = pad_json(south, south.state)
+    pad = plain_pad_json(south, south.state)
     assert [pad[d]["label"] for d in ("up", "down", "left", "right")] == [
         "Up",
         "Down",
@@ -74,7 +83,7 @@ async def test_pad_directions_follow_the_sky_and_speeds_the_hand_control() -> No
     ]
     assert (pad["right"]["axis"], pad["right"]["sign"]) == ("primary", 1)  # azimuth up
     tracker = SimulatedMount(SKY_TRACKER, site=SITE, clock=SimClock(start=START))
-    speeds = rates_json(tracker)["choices"]
+    speeds = plain_rates_json(tracker)["choices"]
     assert [c["label"] for c in speeds] == ["guide 2′/s", "track 8′/s", "utility 4°/s"]
 
 
