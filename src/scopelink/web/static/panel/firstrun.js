@@ -13,12 +13,20 @@ const FirstRun = (() => {
     $("fr-elev").value = String(site.elevation_m);
   }
 
+  function span(seconds) {
+    const s = Math.abs(seconds);
+    if (s >= 86400) return `${Math.floor(s / 86400)} d ${Math.floor((s % 86400) / 3600)} h`;
+    if (s >= 3600) return `${Math.floor(s / 3600)} h ${Math.floor((s % 3600) / 60)} min`;
+    if (s >= 60) return `${Math.floor(s / 60)} min ${Math.round(s % 60)} s`;
+    return `${Math.round(s)} s`;
+  }
+
   function showClock(mountUtc) {
     const device = new Date();
     const skew = (new Date(mountUtc) - device) / 1000;
-    const text = `This device: ${device.toISOString().slice(11, 19)} UTC; the mount: ` +
-      `${mountUtc.slice(11, 19)} UTC (${Math.abs(skew) < 2 ? "the same" : `${skew > 0 ? "+" : "−"}${Math.abs(skew).toFixed(0)} s`}).`;
-    $("fr-clock").textContent = text;
+    const differs = Math.abs(skew) < 2 ? "the same" : `${span(skew)} ${skew > 0 ? "ahead" : "behind"}`;
+    $("fr-clock").textContent = `This device: ${device.toISOString().replace("T", " ").slice(0, 19)} UTC; ` +
+      `the mount: ${mountUtc.replace("T", " ").slice(0, 19)} UTC (${differs}).`;
     $("fr-time").checked = Math.abs(skew) > CLOCK_WARN_S;
   }
 
