@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from collections.abc import Callable
 from datetime import datetime, timedelta
 from pathlib import Path
@@ -20,10 +21,18 @@ from scopelink.astro.catalog import rise_transit_set
 from scopelink.cli.config import load_config
 from scopelink.cli.site_store import SettingsSiteStore
 from scopelink.mount import Limits
-from scopelink.sim import AZ_GTI, SKY_TRACKER, SimClock, SimulatedMount
-from scopelink.web.almanac import clock_json, twilight_phase
-from scopelink.web.pad import pad_json, rates_json
-from scopelink.web.progress import ARRIVED_DEG
+from scopelink.sim import (
+    AZ_GTI,
+    SKY_TRACKER,
+    SYNSCAN_FIXED_RATE_MULTIPLES,
+    SimClock,
+    SimulatedMount,
+)
+from scopelink.web.almanac import TWILIGHT_BOUNDARIES_DEG, clock_json, twilight_phase
+from scopelink.web.health import WINDOW_S
+from scopelink.web.objectinfo import LIMIT_STEP_MIN
+from scopelink.web.pad import DEFAULT_SYNSCAN_RATE, GENERIC_MULTIPLES, pad_json, rates_json
+from scopelink.web.progress import ARRIVED_DEG, ENDED_SHOWN_S
 from tests.support.web import HIGH_UP, SITE, START, served, sim_mount
 
 
@@ -208,3 +217,40 @@ async def test_first_run_check_saves_the_site_to_the_settings_file(tmp_path: Pat
         status, setup = await s.get("/api/setup")
         assert setup["needed"] is False
         assert setup["can_save"] is False
+
+
+def test_the_documented_defaults_are_the_codes() -> None:
+    """docs/dashboard.md states every limit and default of the panel as the code has it."""
+    root = Path(__file__).resolve().parents[2]
+    docs = " ".join((root / "docs" / "dashboard.md").read_text(encoding="utf-8").split())
+    static = root / "src" / "scopelink" / "web" / "static" / "panel"
+
+    def js(name: str, constant: str) -> float:
+        text = (static / name).read_text(encoding="utf-8")
+        match = re.search(rf"const {constant} = ([0-9.]+);", text)
+        assert match, f"{constant} in {name}"
+        return float(match.group(1))
+
+    stated = [
+        f"`ARRIVED_DEG` = {ARRIVED_DEG:g}°",
+        f"`ENDED_SHOWN_S` = {ENDED_SHOWN_S:g} s",
+        f"`WINDOW_S` = {WINDOW_S:g} s",
+        f"`LIMIT_STEP_MIN` = {LIMIT_STEP_MIN} min",
+        ", ".join(f"{m:g}×" for m in SYNSCAN_FIXED_RATE_MULTIPLES) + " sidereal",
+        ", ".join(f"{m:g}×" for m in GENERIC_MULTIPLES) + " sidereal",
+        f"default rate {DEFAULT_SYNSCAN_RATE}, "
+        f"{SYNSCAN_FIXED_RATE_MULTIPLES[DEFAULT_SYNSCAN_RATE - 1]:g}×",
+        f"dead zone of {js('gamepad.js', 'DEAD_ZONE'):g}",
+        f"every {js('gamepad.js', 'POLL_MS'):g} ms",
+        f"more than {js('firstrun.js', 'CLOCK_WARN_S'):g} s",
+        f"again every {js('info.js', 'OBJECT_REFRESH_MS') / 1000:g} s",
+    ]
+    boundaries = [(-0.833, "day"), *TWILIGHT_BOUNDARIES_DEG[1:]]
+    for (boundary, phase), (table_boundary, table_phase) in zip(
+        boundaries, TWILIGHT_BOUNDARIES_DEG, strict=True
+    ):
+        assert phase == table_phase
+        assert boundary == pytest.approx(table_boundary, abs=1e-3)
+        stated.append(f"−{abs(boundary):g}°")
+    for text in stated:
+        assert text in docs, text

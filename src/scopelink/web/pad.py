@@ -24,11 +24,11 @@ from scopelink.mount import AlignmentMode, Mount, MountState
 from scopelink.protocol.skytracker.messages import DEFAULT_GUIDE_SPEED_ARCSEC_PER_S
 from scopelink.sim import SKY_TRACKER, SYNSCAN_FIXED_RATE_MULTIPLES, SimulatedMount
 
-__all__ = ["GENERIC_MULTIPLES", "pad_json", "rates_json"]
+__all__ = ["DEFAULT_SYNSCAN_RATE", "GENERIC_MULTIPLES", "pad_json", "rates_json"]
 
 GENERIC_MULTIPLES = (1.0, 8.0, 32.0, 128.0, 400.0)
 """Multiples of the sidereal rate offered by a mount with no hand-control speeds of its own."""
-_DEFAULT_SYNSCAN_RATE = 7
+DEFAULT_SYNSCAN_RATE = 7
 """Rate 7 (400×): the first speed that crosses an eyepiece's field at a useful pace."""
 
 
@@ -60,7 +60,7 @@ def rates_json(mount: Mount) -> dict[str, object]:
             rate = multiple * SIDEREAL_RATE_DEG_S
             label = f"rate {number} · {multiple:g}× ({_speed(rate)})"
             choices.append({"key": str(number), "label": label, "rate_deg_s": min(rate, limit)})
-        default = str(_DEFAULT_SYNSCAN_RATE)
+        default = str(DEFAULT_SYNSCAN_RATE)
     elif kind == "skytracker":
         for key, arcsec_s in (
             ("guide", float(DEFAULT_GUIDE_SPEED_ARCSEC_PER_S)),
