@@ -207,6 +207,10 @@ async def test_first_run_check_saves_the_site_to_the_settings_file(tmp_path: Pat
         assert saved["saved_to"] == str(path)
         assert saved["time_set"] is True
         assert saved["status"]["needed"] is False
+        again = {"latitude_deg": 10.0, "longitude_deg": 10.0}
+        status, error = await s.post("/api/setup", again)  # first run only
+        assert status == 409
+        assert "config set" in error["error"]
         config = load_config(path)
         assert config.site_configured
         assert (config.site.latitude_deg, config.site.longitude_deg) == (40.4, -3.7)
@@ -217,6 +221,9 @@ async def test_first_run_check_saves_the_site_to_the_settings_file(tmp_path: Pat
         status, setup = await s.get("/api/setup")
         assert setup["needed"] is False
         assert setup["can_save"] is False
+        status, _ = await s.post("/api/setup", {"latitude_deg": 10.0, "longitude_deg": 10.0})
+        assert status == 409
+        assert s.mount.site.latitude_deg != 10.0
 
 
 def test_the_documented_defaults_are_the_codes() -> None:
@@ -243,7 +250,7 @@ def test_the_documented_defaults_are_the_codes() -> None:
         f"dead zone of {js('gamepad.js', 'DEAD_ZONE'):g}",
         f"every {js('gamepad.js', 'POLL_MS'):g} ms",
         f"more than {js('firstrun.js', 'CLOCK_WARN_S'):g} s",
-        f"again every {js('info.js', 'OBJECT_REFRESH_MS') / 1000:g} s",
+        f"at most every {js('info.js', 'REFETCH_MIN_MS') / 1000:g} s",
     ]
     boundaries = [(-0.833, "day"), *TWILIGHT_BOUNDARIES_DEG[1:]]
     for (boundary, phase), (table_boundary, table_phase) in zip(

@@ -9,7 +9,8 @@ The web layer does not know where settings live: whoever starts the dashboard pa
   "mount_utc": iso}`` (``needed``: a store is given and it holds no site yet);
 - ``POST /api/setup``: ``{"latitude_deg", "longitude_deg", "elevation_m"?, "utc"?}``: sets the
   mount's site (and its clock, when ``utc`` is given), then saves the site to the store.
-  The mount is told first: a site the mount refuses is never saved.
+  The mount is told first: a site the mount refuses is never saved. Only while ``needed``:
+  afterwards (or with no store) it is refused with 409 and changes nothing.
 """
 
 from __future__ import annotations
@@ -91,25 +92,32 @@ class _Setup:
 
     async def save(self, request: web.Request) -> web.Response:
         body = await read_body(request)
+        store = self.store
+        if store is None or store.saved:
+            # First run only: the settings file is not the web's to rewrite afterwards.
+            why = (
+                "the site is saved already: change it with 'scopelink config set site.latitude "
+                "...' (the Site form changes the mount, not the file)"
+                if store is not None
+                else "this dashboard has no settings file to save the site to"
+            )
+            return web.json_response({"error": why, "kind": "SetupDone"}, status=409)
         site = site_from_body(body, self.mount.site)
         utc = parse_utc(body.text("utc", max_length=40)) if body.has("utc") else None
         await self.mount.set_site(site)
         if utc is not None:
             await self.mount.set_time(utc)
-        saved_to = None
-        if self.store is not None:
-            try:
-                self.store.save(site)
-            except SiteStoreError as error:
-                return web.json_response(
-                    {"error": f"site set on the mount but not saved: {error}", "kind": "NotSaved"},
-                    status=500,
-                )
-            saved_to = self.store.where
+        try:
+            store.save(site)
+        except SiteStoreError as error:
+            return web.json_response(
+                {"error": f"site set on the mount but not saved: {error}", "kind": "NotSaved"},
+                status=500,
+            )
         return web.json_response(
             {
                 "ok": True,
-                "saved_to": saved_to,
+                "saved_to": store.where,
                 "time_set": utc is not None,
                 "mount": describe_mount(self.mount),
                 "status": self._status(),

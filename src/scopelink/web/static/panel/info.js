@@ -5,7 +5,6 @@
 // showMessage and view.
 
 const Info = (() => {
-  const OBJECT_REFRESH_MS = 60000; // the almanac of the shown object, again (it moves)
   const pad2 = (n) => String(n).padStart(2, "0");
 
   function hms(hours) {
@@ -23,12 +22,15 @@ const Info = (() => {
     return `${Math.floor(m / 60)} h ${pad2(m % 60)} min`;
   }
 
-  // A time of the mount's clock as local time of this device, and how far from `now` it is.
-  function when(iso, nowIso) {
+  // A time of the mount's clock as local time of this device, and how far from the mount's
+  // clock now (the last update's: the countdown runs with the updates, nothing is polled).
+  let mountNow = null;
+  function when(iso) {
     if (!iso) return "—";
     const t = new Date(iso);
     const clock = t.toLocaleTimeString([], { hour: "2-digit", minute: "2-digit", hour12: false });
-    const minutes = (t - new Date(nowIso)) / 60000;
+    if (!mountNow) return clock;
+    const minutes = (t - mountNow) / 60000;
     const rel = minutes >= 0 ? `in ${duration(minutes * 60)}` : `${duration(-minutes * 60)} ago`;
     return `${clock} (${rel})`;
   }
@@ -36,6 +38,7 @@ const Info = (() => {
   function renderClock(clock) {
     if (!clock) return;
     const utc = new Date(clock.utc);
+    mountNow = utc;
     setText("ck-utc", `${utc.toISOString().slice(0, 10)} ${utc.toISOString().slice(11, 19)}`);
     const zone = Intl.DateTimeFormat().resolvedOptions().timeZone || "this device";
     setText("ck-local", `${utc.toLocaleTimeString([], { hour12: false })} (${zone})`);
@@ -84,7 +87,16 @@ const Info = (() => {
 
   // --- the selected object (or, with nothing selected, the goto target)
 
+  const REFETCH_MIN_MS = 10000;
+  let fetchedAt = 0;
+  // An event of the shown almanac is past: fetch the next ones (once per event, not a poll).
+  function passed(info) {
+    const times = [info.rise, info.transit, info.set, info.limit && info.limit.at];
+    return times.some((iso) => iso && mountNow && new Date(iso) < mountNow);
+  }
+
   let shownName = null;
+  let shownInfo = null;
   let infoSerial = 0;
 
   function objectName() {
@@ -100,7 +112,9 @@ const Info = (() => {
     if (name === shownName && !force) return;
     shownName = name;
     const serial = ++infoSerial;
+    fetchedAt = Date.now();
     $("object-info").hidden = !name;
+    shownInfo = null;
     if (!name) return;
     let info;
     try {
@@ -109,6 +123,7 @@ const Info = (() => {
       if (!response.ok) { if (serial === infoSerial) $("object-info").hidden = true; return; }
     } catch (_) { return; }
     if (serial !== infoSerial) return;
+    shownInfo = info;
     renderObject(info);
   }
 
@@ -122,17 +137,16 @@ const Info = (() => {
       parts.push(minor ? `${major.toFixed(1)}′ × ${minor.toFixed(1)}′` : `${major.toFixed(1)}′`);
     }
     setText("oi-mag", parts.join(", "));
-    setText("oi-now", `alt ${fmtAngle(info.alt_deg)}  az ${fmtAngle(info.az_deg)}`);
     let rts;
-    if (info.always_up) rts = `never sets; transit ${when(info.transit, info.now)}`;
+    if (info.always_up) rts = `never sets; transit ${when(info.transit)}`;
     else if (info.never_up) rts = "does not rise in the next 24 h";
-    else rts = `rises ${when(info.rise, info.now)}, transits ${when(info.transit, info.now)}, sets ${when(info.set, info.now)}`;
+    else rts = `rises ${when(info.rise)}, transits ${when(info.transit)}, sets ${when(info.set)}`;
     setText("oi-rts", rts);
     setText("oi-limit", info.limit
-      ? `${info.limit.event === "sets" ? "sinks below" : "rises above"} it ${when(info.limit.at, info.now)}`
+      ? `${info.limit.event === "sets" ? "sinks below" : "rises above"} it ${when(info.limit.at)}`
       : (info.alt_deg > 0 ? "stays above it for 24 h" : "stays below it for 24 h"));
     $("oi-meridian").parentElement.hidden = false;
-    setText("oi-meridian", info.meridian_limit ? `reached ${when(info.meridian_limit, info.now)} (tube on the west side)` : "none (not a German mount)");
+    setText("oi-meridian", info.meridian_limit ? `reached ${when(info.meridian_limit)} (tube on the west side)` : "none (not a German mount)");
   }
 
   // --- traffic: folded by default; a mount without a wire says so in one line
@@ -159,12 +173,15 @@ const Info = (() => {
       renderSlew(state.slew);
       renderHealth(state);
       refreshObject(false);
+      if (shownInfo && state.clock) {
+        renderObject(shownInfo); // the countdowns run with the updates
+        if (passed(shownInfo) && Date.now() - fetchedAt > REFETCH_MIN_MS) refreshObject(true);
+      }
     });
     document.addEventListener("scopelink:mount", (event) => {
       renderTraffic(event.detail);
       renderMotors(event.detail);
     });
-    setInterval(() => { if (shownName) refreshObject(true); }, OBJECT_REFRESH_MS);
     // The chart's selection shows in #selection-name (app.js): follow it from there.
     new MutationObserver(() => refreshObject(false)).observe($("selection"), {
       subtree: true, childList: true, characterData: true, attributes: true,

@@ -41,10 +41,14 @@ const Motion = (() => {
       if (rate === sent[axis]) return;
       const reply = await api("/api/move", { axis, rate_deg_s: rate, session: view.session });
       if (reply) { sent[axis] = rate; return; }
-      // Refused (a limit, parked...): nothing holds on, or the next press would look held.
+      if (rate === 0) return; // the error is shown; the next change tries again
+      // Refused (a limit, parked...): nothing holds on, and a motion the axis had before (a
+      // speed change refused) is stopped rather than left running.
       for (const dir of DIRECTIONS) if (pad && pad[dir].axis === axis) holders[dir].clear();
-      sent[axis] = rate === 0 ? sent[axis] : 0;
       showButtons();
+      if (sent[axis] !== 0 && (await api("/api/move", { axis, rate_deg_s: 0, session: view.session }))) {
+        sent[axis] = 0;
+      }
     });
     return queues[axis];
   }
@@ -180,7 +184,11 @@ const Motion = (() => {
   function setup() {
     setupPointer();
     setupKeys();
-    $("rate").addEventListener("change", () => { apply("primary"); apply("secondary"); });
+    $("rate").addEventListener("change", () => {
+      $("rate").blur(); // back to the keys: arrows on a focused menu would change the speed
+      apply("primary");
+      apply("secondary");
+    });
     document.addEventListener("scopelink:state", (event) => {
       renderPad(event.detail);
       renderTracking(event.detail);
