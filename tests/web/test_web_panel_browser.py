@@ -189,6 +189,13 @@ async def test_phone_first_run_saves_the_site_and_stop_stays_in_view(
         assert (config.site.latitude_deg, config.site.longitude_deg) == (-31.27, 149.06)
         assert s.mount.site.elevation_m == 1165
 
+        await page.click("#site-form >> xpath=ancestor::details/summary")
+        field = await page.locator("#site-lon").bounding_box()
+        form = await page.locator("#site-form").bounding_box()
+        assert field is not None
+        assert form is not None
+        assert field["x"] + field["width"] <= form["x"] + form["width"] + 0.5  # fits its panel
+
         assert (await s.post("/api/goto", {"name": "Canopus"}))[0] == 200
         await page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
         assert await page.evaluate("window.scrollY") > 500

@@ -40,9 +40,9 @@ class HealthMeter:
         age = state.position_age_s()
         stale_after = mount.stale_after_s
         if not state.connected:
-            level, text = "bad", f"link down: no reading for {age:.0f} s"
+            level, text = "bad", f"link down: no reading for {_span(age)}"
         elif age > stale_after:
-            level, text = "bad", f"no reading for {age:.0f} s"
+            level, text = "bad", f"no reading for {_span(age)}"
         elif age > max(0.5 * stale_after, 1.0):
             level, text = "warn", f"no reading for {age:.1f} s"
         else:
@@ -51,6 +51,15 @@ class HealthMeter:
             if failed > 0:
                 text += f", {failed} failed reading{'s' if failed > 1 else ''}"
         return {"level": level, "text": text, "readings_per_s": _round(rate)}
+
+
+def _span(seconds: float) -> str:
+    """``6 s``, ``12 min``, ``3 h``: how long, as an observer says it."""
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.0f} h"
 
 
 def _round(value: float | None) -> float | None:

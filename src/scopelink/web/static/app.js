@@ -580,6 +580,19 @@ function setupPad() {
   Gamepads.setup();
 }
 
+// This device's location (the browser's geolocation) into a site form's three fields.
+function fillDeviceLocation(latId, lonId, elevId) {
+  if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
+  navigator.geolocation.getCurrentPosition(
+    (position) => {
+      $(latId).value = position.coords.latitude.toFixed(5);
+      $(lonId).value = position.coords.longitude.toFixed(5);
+      if (position.coords.altitude != null) $(elevId).value = position.coords.altitude.toFixed(0);
+    },
+    (error) => showMessage(`no location: ${error.message}`),
+  );
+}
+
 function setupNight() {
   const toggle = $("night-toggle");
   const apply = (on) => {
@@ -654,17 +667,7 @@ function setup() {
       showMessage(`site set: ${site.latitude_deg.toFixed(4)}°, ${site.longitude_deg.toFixed(4)}°, ${site.elevation_m.toFixed(0)} m`, "info");
     }
   });
-  $("site-here").addEventListener("click", () => {
-    if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
-    navigator.geolocation.getCurrentPosition(
-      (position) => {
-        $("site-lat").value = position.coords.latitude.toFixed(5);
-        $("site-lon").value = position.coords.longitude.toFixed(5);
-        if (position.coords.altitude != null) $("site-elev").value = position.coords.altitude.toFixed(0);
-      },
-      (error) => showMessage(`no location: ${error.message}`),
-    );
-  });
+  $("site-here").addEventListener("click", () => fillDeviceLocation("site-lat", "site-lon", "site-elev"));
   $("time-push").addEventListener("click", async () => {
     const sent = new Date().toISOString();
     if (await api("/api/time", { utc: sent })) showMessage(`mount clock set to ${sent.slice(0, 19).replace("T", " ")} UTC`, "info");

@@ -1,8 +1,8 @@
 "use strict";
 // First run (docs/dashboard.md, "First run"): when no site is saved, ask once for the site
 // (the mount's, this device's location, or typed) and check the clock, then save the site to
-// the settings file through POST /api/setup. Uses app.js's $, api, view, renderMount and
-// showMessage.
+// the settings file through POST /api/setup. Uses app.js's $, api, view, renderMount,
+// fillDeviceLocation and showMessage.
 
 const FirstRun = (() => {
   const CLOCK_WARN_S = 60; // a mount clock further off than this is worth setting
@@ -55,21 +55,9 @@ const FirstRun = (() => {
     showMessage(`site saved to ${reply.saved_to}${reply.time_set ? "; mount clock set" : ""}`, "info");
   }
 
-  function here() {
-    if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
-    navigator.geolocation.getCurrentPosition(
-      (position) => {
-        $("fr-lat").value = position.coords.latitude.toFixed(5);
-        $("fr-lon").value = position.coords.longitude.toFixed(5);
-        if (position.coords.altitude != null) $("fr-elev").value = position.coords.altitude.toFixed(0);
-      },
-      (error) => showMessage(`no location: ${error.message}`),
-    );
-  }
-
   function setup() {
     $("firstrun-form").addEventListener("submit", save);
-    $("fr-here").addEventListener("click", here);
+    $("fr-here").addEventListener("click", () => fillDeviceLocation("fr-lat", "fr-lon", "fr-elev"));
     $("fr-later").addEventListener("click", () => { $("firstrun").hidden = true; });
     open();
   }
