@@ -15,7 +15,7 @@ from scopelink.astro import Site
 from scopelink.mount import Limits
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
-from scopelink.web.firstrun import SiteStore
+from scopelink.web.site_check import SiteStore
 
 SITE = Site(latitude_deg=45.0, longitude_deg=7.0, elevation_m=300.0)
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)  # Capella high in the west, Acrux never up

@@ -53,7 +53,7 @@ async def next_state(
     """The first update's state for which ``until`` holds."""
     for _ in range(int(timeout_s / 0.05)):
         message = json.loads((await ws.receive(timeout=timeout_s)).data)
-        state: dict[str, Any] = message["state"]
+        state: dict[str, Any] = {**message["state"], **message["panel"]}  # as the page reads it
         if until(state):
             return state
     raise AssertionError("no such state came")

@@ -1,5 +1,5 @@
 """Where the dashboard's first-run check saves the site: the settings file's ``[site]`` table
-(``scopelink.web.firstrun``, ``docs/dashboard.md``, "First run").
+(``scopelink.web.site_check``, ``docs/dashboard.md``, "First run").
 
 The file is edited as ``scopelink config set`` edits it (comments and order kept, checked before
 writing, written atomically). A site given on the command line (``--site``) or already in the
@@ -13,13 +13,13 @@ from pathlib import Path
 from scopelink.astro import Site
 from scopelink.cli.config import ConfigError
 from scopelink.cli.config_edit import set_values
-from scopelink.web.firstrun import SiteStoreError
+from scopelink.web.site_check import SiteStoreError
 
 __all__ = ["SettingsSiteStore"]
 
 
 class SettingsSiteStore:
-    """A :class:`scopelink.web.firstrun.SiteStore` on the settings file at ``path``."""
+    """A :class:`scopelink.web.site_check.SiteStore` on the settings file at ``path``."""
 
     def __init__(self, path: Path, *, saved: bool) -> None:
         self._path = path

@@ -26,8 +26,8 @@ from scopelink.mount import (
     ParkedError,
     TrackingMode,
 )
-from scopelink.web.firstrun import site_from_body
 from scopelink.web.params import BadRequestError, read_body
+from scopelink.web.site_check import site_from_body
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.timeset import parse_utc
 

@@ -32,9 +32,9 @@ from scopelink.servers.access import AccessControl, AccessPolicy, retry_after
 from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList, machine_addresses
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
-from scopelink.web.firstrun import SiteStore, add_setup_routes
 from scopelink.web.live import LiveHub
 from scopelink.web.panel_api import add_panel_routes
+from scopelink.web.site_check import SiteStore
 from scopelink.web.skycommander import add_skycommander_routes
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
 
@@ -177,7 +177,7 @@ class Dashboard:
     used as it is: connect it before, disconnect it after. ``access`` (default: no limits)
     applies the servers' allow-list, request rate and read-only mode (the page then disables
     its controls, and the API refuses every command). ``site_store`` is where the page's
-    first-run check saves the site (``scopelink.web.firstrun``; None: the page never asks).
+    first-run check saves the site (``scopelink.web.site_check``; None: the page never asks).
     """
 
     def __init__(
@@ -242,13 +242,12 @@ class Dashboard:
             return web.json_response({"read_only": self.access.read_only})
 
         app.router.add_get("/", page)
+        add_panel_routes(app, self.mount, self.hub, self.site_store)  # and /api/setup
         app.router.add_get("/api/access", access)
         app.router.add_get("/pair", self._pair)
         app.router.add_get("/ws", self.hub.handle)
         add_api_routes(app, self.mount)
         add_skycommander_routes(app, self.mount)
-        add_panel_routes(app, self.mount, self.hub)
-        add_setup_routes(app, self.mount, self.site_store)
         app.router.add_static("/static/", static_dir(), follow_symlinks=False)
         return app
 

@@ -2,7 +2,8 @@
 
 While at least one page is connected, one task holds ``mount.watching()`` (so the state cache is
 polled; each update is a read that raises the poll rate, see docs/mount-api.md), and every
-``interval_s`` sends all pages the same update: the mount's state, the chart's
+``interval_s`` sends all pages the same update: the mount's state (with what the panel shows
+beside it, :class:`~scopelink.web.view_state.PanelView`), the chart's
 objects (every ``sky_every`` updates: they cost ERFA time) and the new traffic lines. A page that
 cannot take an update within ``send_timeout_s`` is closed rather than allowed to stall the others.
 When the last page goes, polling stops.
@@ -19,14 +20,10 @@ from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
 from scopelink.mount.deadman import MotionClient
-from scopelink.web.almanac import clock_json
-from scopelink.web.health import HealthMeter
-from scopelink.web.pad import pad_json
-from scopelink.web.progress import SlewWatch
-from scopelink.web.pushto_live import PushToTarget
 from scopelink.web.sky import SkyPositions, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
+from scopelink.web.view_state import PanelView
 
 __all__ = ["LiveHub"]
 
@@ -55,11 +52,8 @@ class LiveHub:
         self._sky: SkyPositions | None = None
         self._traffic_seq = 0
         self._described: dict[str, object] | None = None
-        self._slew = SlewWatch()
-        self._health = HealthMeter()
-        self._clock: dict[str, object] | None = None
-        self.pushto = PushToTarget(mount)
-        """The push-to target every page shows (one telescope, one target)."""
+        self.panel = PanelView(mount)
+        """What the panel shows beside the state (slew progress, health, clock, push-to...)."""
 
     @property
     def clients(self) -> int:
@@ -71,25 +65,6 @@ class LiveHub:
         if self._sky is None:
             self._sky = sky_positions(now)
         return [obj.as_json() for obj in self._sky.at(now, self._mount.site)]
-
-    def live_state(self) -> dict[str, object]:
-        """The state as the page shows it: the mount's (``state_json``) with what the hub
-        follows across updates (slew progress, health in words), the pad's directions, the
-        clock of the last sky update and the push-to figures."""
-        mount = self._mount
-        state = mount.state
-        data = state_json(mount, state)
-        data["slew"] = self._slew.update(mount, state)
-        data["health_words"] = self._health.update(mount, state)
-        data["pad"] = pad_json(mount, state)
-        data["clock"] = self._clock
-        data["pushto"] = self.pushto.figures(state)
-        return data
-
-    def _sky_and_clock(self) -> list[dict[str, object]]:
-        """The chart's objects and the clock (both in a worker thread: they cost ERFA time)."""
-        self._clock = clock_json(self._mount.now(), self._mount.site)
-        return self.sky_json()
 
     def _traffic_json(self, since: int) -> tuple[list[dict[str, object]], int]:
         if self._traffic is None:
@@ -111,11 +86,12 @@ class LiveHub:
         traffic, _ = self._traffic_json(0)
         hello = {
             "type": "hello",
+            "panel": await self.panel.as_json(with_clock=True),
             "mount": describe_mount(self._mount),
             "traffic_enabled": self._traffic is not None,
             "traffic": traffic,
-            "sky": await asyncio.to_thread(self._sky_and_clock),
-            "state": self.live_state(),
+            "state": state_json(self._mount, self._mount.state),
+            "sky": await asyncio.to_thread(self.sky_json),
             "interval_s": self.interval_s,
             "session": client.token,
         }
@@ -160,6 +136,8 @@ class LiveHub:
         traffic, self._traffic_seq = self._traffic_json(self._traffic_seq)
         update: dict[str, object] = {
             "type": "update",
+            "panel": await self.panel.as_json(with_clock=with_sky),
+            "state": state_json(self._mount, self._mount.state),
             "traffic": traffic,
         }
         if with_sky:
@@ -169,10 +147,9 @@ class LiveHub:
                 self._described = described
                 update["mount"] = described
             try:
-                update["sky"] = await asyncio.to_thread(self._sky_and_clock)
+                update["sky"] = await asyncio.to_thread(self.sky_json)
             except Exception:  # a chart without objects beats a dead dashboard
                 logger.exception("cannot compute the sky chart's objects")
-        update["state"] = self.live_state()
         return json.dumps(update)
 
     async def _broadcast(self, message: str) -> None:

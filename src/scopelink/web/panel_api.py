@@ -4,7 +4,8 @@
   (:func:`scopelink.web.objectinfo.object_info`: type, magnitude, size, rise/transit/set, when it
   reaches the mount's horizon or meridian limit), computed off the event loop;
 - ``POST /api/pushto``: ``{"name": ...}`` makes it the push-to target whose figures ride on every
-  WebSocket update (``state.pushto``); ``{}`` or ``{"name": null}`` stops.
+  WebSocket update (``panel.pushto``); ``{}`` or ``{"name": null}`` stops;
+- ``GET``/``POST /api/setup``: the first-run site check (:mod:`scopelink.web.site_check`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from scopelink.mount import Mount
 from scopelink.web.live import LiveHub
 from scopelink.web.objectinfo import object_info
 from scopelink.web.params import BadRequestError, read_body
+from scopelink.web.site_check import SiteStore, add_setup_routes
 
 __all__ = ["add_panel_routes"]
 
@@ -36,11 +38,15 @@ class _PanelApi:
 
     async def pushto(self, request: web.Request) -> web.Response:
         body = await read_body(request)
-        self.hub.pushto.set(body.text("name") if body.has("name") else None)
-        return web.json_response({"ok": True, "target": self.hub.pushto.name})
+        self.hub.panel.pushto.set(body.text("name") if body.has("name") else None)
+        return web.json_response({"ok": True, "target": self.hub.panel.pushto.name})
 
 
-def add_panel_routes(app: web.Application, mount: Mount, hub: LiveHub) -> None:
+def add_panel_routes(
+    app: web.Application, mount: Mount, hub: LiveHub, site_store: SiteStore | None
+) -> None:
+    """The panel's routes, and the first-run check's (:mod:`scopelink.web.site_check`)."""
     api = _PanelApi(mount, hub)
     app.router.add_get("/api/object", api.object)
     app.router.add_post("/api/pushto", api.pushto)
+    add_setup_routes(app, mount, site_store)

@@ -444,6 +444,8 @@ function connect() {
   socket.addEventListener("message", (event) => {
     let message;
     try { message = JSON.parse(event.data); } catch (_) { return; }
+    // What the panel shows beside the state (web/view_state.py) is read as part of it.
+    if (message.panel && message.state) Object.assign(message.state, message.panel);
     if (message.type === "hello") {
       view.mount = message.mount;
       view.session = message.session; // the pad's moves name it: they stop if this page goes

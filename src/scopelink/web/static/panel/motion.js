@@ -150,11 +150,13 @@ const Motion = (() => {
       const dir = KEYS[event.key];
       if (dir) { event.preventDefault(); if (!event.repeat) hold(dir, `key ${event.key.toLowerCase()}`); }
     });
-    document.addEventListener("keyup", (event) => {
+    // Releases are heard in the capture phase: no other handler (the chart's keys) can swallow
+    // the keyup that stops a motion.
+    window.addEventListener("keyup", (event) => {
       const dir = KEYS[event.key];
       if (!dir) return;
       release(dir, `key ${event.key.toLowerCase()}`); // "w" and "W" (Shift) are one key
-    });
+    }, true);
     // A key released while the window had no focus never sends keyup: stop on losing focus.
     window.addEventListener("blur", () => {
       for (const dir of DIRECTIONS) for (const source of [...holders[dir]]) {
