@@ -9,6 +9,8 @@ The page merges ``panel`` into the state it shows (``state.slew``, ``state.healt
 from __future__ import annotations
 
 import asyncio
+import logging
+from collections.abc import Callable
 
 from scopelink.mount import Mount
 from scopelink.web.almanac import clock_json
@@ -18,6 +20,8 @@ from scopelink.web.progress import SlewWatch
 from scopelink.web.pushto_live import PushToTarget
 
 __all__ = ["PanelView"]
+
+logger = logging.getLogger(__name__)
 
 
 class PanelView:
@@ -33,15 +37,26 @@ class PanelView:
 
     async def as_json(self, *, with_clock: bool) -> dict[str, object]:
         """The panel's fields now; ``with_clock`` computes the clock again (the Sun and Moon
-        cost ERFA time: off the event loop, with the chart's objects), else the last one."""
+        cost ERFA time: off the event loop, with the chart's objects), else the last one.
+        A part that fails is left out (logged): the page, and its STOP, must keep updating."""
         mount = self._mount
         if with_clock or self._clock is None:
-            self._clock = await asyncio.to_thread(clock_json, mount.now(), mount.site)
+            try:
+                self._clock = await asyncio.to_thread(clock_json, mount.now(), mount.site)
+            except Exception:
+                logger.exception("cannot compute the dashboard's clock")
         state = mount.state
-        return {
-            "slew": self._slew.update(mount, state),
-            "health_words": self._health.update(mount, state),
-            "pad": pad_json(mount, state),
-            "clock": self._clock,
-            "pushto": self.pushto.figures(state),
+        parts: dict[str, Callable[[], object]] = {
+            "slew": lambda: self._slew.update(mount, state),
+            "health_words": lambda: self._health.update(mount, state),
+            "pad": lambda: pad_json(mount, state),
+            "pushto": lambda: self.pushto.figures(state),
         }
+        panel: dict[str, object] = {"clock": self._clock}
+        for name, part in parts.items():
+            try:
+                panel[name] = part()
+            except Exception:
+                logger.exception("cannot compute the dashboard's %s", name)
+                panel[name] = None
+        return panel

@@ -435,6 +435,8 @@ function setLinkStatus(ok, text) {
   const badge = $("link-status");
   badge.dataset.ok = String(ok);
   badge.textContent = text;
+  // The pad lets go when the link drops: the server's dead-man stopped this page's motions.
+  document.dispatchEvent(new CustomEvent("scopelink:link", { detail: ok }));
 }
 
 function connect() {

@@ -3,8 +3,9 @@
 // (past a dead zone) or the d-pad holds the pad's directions through Motion, so the same mapping
 // and speeds apply; any face button (A, B, X, Y) is STOP. Dead-man: centring the stick or
 // letting go of the d-pad releases the direction, and losing the gamepad (unplugged, the
-// browser stops reporting it, the page hidden) releases everything. After STOP nothing moves
-// again until the stick has come back to the centre.
+// browser stops reporting it, the page hidden) releases everything; so do losing the window's
+// focus and losing the link. After any of these, and after STOP, nothing moves again until the
+// stick has come back to the centre.
 
 const Gamepads = (() => {
   const DEAD_ZONE = 0.3; // of full deflection: a resting stick drifts up to ~0.1-0.2
@@ -95,6 +96,11 @@ const Gamepads = (() => {
     window.addEventListener("gamepadconnected", startPolling);
     window.addEventListener("gamepaddisconnected", () => { if (present) poll(); });
     document.addEventListener("visibilitychange", () => { if (document.hidden && present) lose("hidden"); });
+    // An unfocused page may get a frozen snapshot of the pad: let go, and wait for the stick to
+    // come back to the centre (as after STOP) before moving again. The same when the link drops.
+    const letGo = () => { if (present) { releaseAll(); latched = true; } };
+    window.addEventListener("blur", letGo);
+    document.addEventListener("scopelink:link", (event) => { if (!event.detail) letGo(); });
     if (pads().length) startPolling();
   }
 

@@ -86,8 +86,8 @@ const Motion = (() => {
   }
 
   function renderPad(state) {
+    if (!state.pad) return; // keep the last mapping: a release must still find its axis
     pad = state.pad;
-    if (!pad) return;
     for (const button of document.querySelectorAll("#pad button[data-dir]")) {
       const dir = pad[button.dataset.dir];
       const label = button.querySelector(".dir");
@@ -194,6 +194,14 @@ const Motion = (() => {
     document.addEventListener("scopelink:state", (event) => {
       renderPad(event.detail);
       renderTracking(event.detail);
+    });
+    document.addEventListener("scopelink:link", (event) => {
+      if (event.detail) return;
+      // The socket closed: the server stopped this page's motions (dead-man). Nothing is held
+      // any more: a key or stick still down must be pressed again once the page is back.
+      for (const dir of DIRECTIONS) holders[dir].clear();
+      sent.primary = sent.secondary = 0;
+      showButtons();
     });
     document.addEventListener("scopelink:mount", (event) => {
       renderRates(event.detail);
