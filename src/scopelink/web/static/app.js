@@ -480,7 +480,7 @@ async function applyAccess() {
   document.body.dataset.readOnly = "true";
   $("read-only-note").hidden = false;
   const controls = document.querySelectorAll(
-    'section[aria-label="Controls"] :is(button, input, select), #go-selected, #sync-selected');
+    'section[aria-label="Controls"] :is(button, input, select), #go-selected, #sync-selected, #abort');
   for (const control of controls) control.disabled = true;
 }
 

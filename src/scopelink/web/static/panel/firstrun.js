@@ -31,9 +31,12 @@ const FirstRun = (() => {
   }
 
   async function open() {
-    let status;
-    try { status = await (await fetch("/api/setup")).json(); } catch (_) { return; }
-    if (!status || !status.needed || document.body.dataset.readOnly === "true") return;
+    let status, access;
+    try {
+      status = await (await fetch("/api/setup")).json();
+      access = await (await fetch("/api/access")).json();
+    } catch (_) { return; }
+    if (!status || !status.needed || !access || access.read_only) return; // read-only: cannot save
     $("fr-where").textContent = status.where;
     fill(status.site);
     showClock(status.mount_utc);
