@@ -208,7 +208,7 @@ async def test_phone_first_run_saves_the_site_and_stop_stays_in_view(
             "([x, y]) => document.elementFromPoint(x, y).id", [box["x"] + 5, box["y"] + 5]
         )
         assert on_top == "abort"  # nothing covers it
-        await screenshot(page, "panel-04-phone-scrolled")
+        await screenshot(page, "panel-04-phone-scrolled", full_page=False)
         await page.click("#abort")
         await expect(page.locator("#message")).to_have_text("stopped")
         await until(lambda: _not(slewing(s)), "STOP stops the goto")

@@ -113,7 +113,7 @@ const Info = (() => {
     shownName = name;
     const serial = ++infoSerial;
     fetchedAt = Date.now();
-    $("object-info").hidden = !name;
+    $("object-info").hidden = true; // until the new object's almanac has come
     shownInfo = null;
     if (!name) return;
     let info;
@@ -125,6 +125,7 @@ const Info = (() => {
     if (serial !== infoSerial) return;
     shownInfo = info;
     renderObject(info);
+    $("object-info").hidden = false;
   }
 
   function renderObject(info) {
