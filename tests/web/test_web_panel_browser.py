@@ -148,6 +148,7 @@ async def test_desktop_controls_keys_gamepad_progress_and_feedback(browser: Brow
             f"arrived at {HIGH_UP}", timeout=TIMEOUT_MS
         )
         await expect(page.locator("#goto-suggestions li")).to_have_count(0)  # still closed
+        await expect(page.locator("#message")).to_be_hidden()  # no "slewing to" left over
         await expect(page.locator("#oi-title")).to_have_text(HIGH_UP)
         await expect(page.locator("#oi-rts")).to_contain_text("transit")
         await expect(page.locator("#ck-twilight")).to_have_text("night")

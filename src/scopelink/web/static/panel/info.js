@@ -72,6 +72,10 @@ const Info = (() => {
     setText("slew-status", text);
     line.dataset.kind = kind;
     line.hidden = !text;
+    // The goto's own "slewing to ..." toast must not outlive the slew it announced.
+    const toast = $("message");
+    if (kind && kind !== "active" && !toast.hidden && toast.className === "info"
+        && toast.textContent.startsWith("slewing to ")) toast.hidden = true;
   }
 
   function renderHealth(state) {
