@@ -5,6 +5,7 @@ words, push-to figures on the updates, and the first-run check saving the settin
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import json
 import re
@@ -20,7 +21,7 @@ from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site
 from scopelink.astro.catalog import rise_transit_set
 from scopelink.cli.config import load_config
 from scopelink.cli.site_store import SettingsSiteStore
-from scopelink.mount import Limits
+from scopelink.mount import Limits, MountAxis
 from scopelink.sim import (
     AZ_GTI,
     SKY_TRACKER,
@@ -261,3 +262,30 @@ def test_the_documented_defaults_are_the_codes() -> None:
         stated.append(f"−{abs(boundary):g}°")
     for text in stated:
         assert text in docs, text
+
+
+async def test_north_and_east_move_the_sim_north_and_east_on_both_sides_of_the_pier() -> None:
+    """The pad's mapping against the real simulated mount: on either side of the pier (after a
+    goto east of the meridian the tube is flipped), N raises the declination, E the RA."""
+    mount = sim_mount(rate=100.0)
+    await mount.connect()
+    try:
+        sides = set()
+        for name in ("Capella", "Regulus"):  # west, then east of the meridian at START
+            await mount.goto_object(name)
+            await mount.wait_for_slew(timeout_s=10)
+            state = await mount.refresh()
+            sides.add(state.pier_side)
+            pad = plain_pad_json(mount, state)
+            for direction, coordinate in (("up", "dec_j2000_deg"), ("left", "ra_j2000_hours")):
+                axis = MountAxis[pad[direction]["axis"].upper()]
+                sign = pad[direction]["sign"]
+                before = getattr(await mount.refresh(), coordinate)
+                await mount.move_axis(axis, sign * 0.5)
+                await asyncio.sleep(0.05)
+                after = getattr(await mount.refresh(), coordinate)
+                await mount.move_axis(axis, 0.0)
+                assert after > before, (name, state.pier_side, direction)
+        assert sides == {PierSide.EAST, PierSide.WEST}
+    finally:
+        await mount.disconnect()
