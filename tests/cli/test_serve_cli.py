@@ -14,6 +14,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from scopelink.astro import Site, angular_separation_deg, observed_to_j2000
+from scopelink.cli.config import load_config
 from scopelink.links import open_serial, open_tcp
 from scopelink.mount import MountAxis
 from scopelink.protocol.synscan import (
@@ -43,6 +44,15 @@ def http_get(url: str) -> tuple[int, str]:
 def http_put(url: str, form: dict[str, str]) -> dict[str, object]:
     data = urllib.parse.urlencode(form).encode()
     request = urllib.request.Request(url, data=data, method="PUT")
+    with urllib.request.urlopen(request, timeout=10) as response:
+        reply: dict[str, object] = json.loads(response.read())
+        return reply
+
+
+def http_post_json(url: str, body: dict[str, object]) -> dict[str, object]:
+    request = urllib.request.Request(
+        url, data=json.dumps(body).encode(), headers={"Content-Type": "application/json"}
+    )
     with urllib.request.urlopen(request, timeout=10) as response:
         reply: dict[str, object] = json.loads(response.read())
         return reply
@@ -125,12 +135,18 @@ async def test_serve_puts_the_simulated_mount_behind_every_server(tmp_path: Path
             position = await ask(link, SynScanClientConnection(), GetRaDec(precise=False))
             assert isinstance(position, Position)
 
-        # the dashboard
-        status, page = await asyncio.to_thread(
-            http_get, f"http://127.0.0.1:{listening(printed, 'Dashboard')}/"
-        )
+        # the dashboard, and its first-run check saving the site to the settings file
+        dashboard = f"http://127.0.0.1:{listening(printed, 'Dashboard')}"
+        status, page = await asyncio.to_thread(http_get, f"{dashboard}/")
         assert status == 200
         assert "<html" in page.lower()
+        settings = tmp_path / "absent.toml"  # tests.support.serve: no settings file yet
+        _, setup = await asyncio.to_thread(http_get, f"{dashboard}/api/setup")
+        assert json.loads(setup)["needed"] is True
+        site: dict[str, object] = {"latitude_deg": 40.4, "longitude_deg": -3.7}
+        saved = await asyncio.to_thread(http_post_json, f"{dashboard}/api/setup", site)
+        assert saved["saved_to"] == str(settings)
+        assert load_config(settings).site == Site(40.4, -3.7)
 
 
 SKY_SITE = Site(48.0, 11.0)

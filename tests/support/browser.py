@@ -16,19 +16,28 @@ ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "web"
 TIMEOUT_MS = 10_000
 
 
-async def screenshot(page: Page, name: str) -> None:
+async def screenshot(page: Page, name: str, *, full_page: bool = True) -> None:
+    """``full_page=False``: what the viewport shows now (e.g. after scrolling)."""
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     path = ARTIFACTS / f"{name}.png"
-    await page.screenshot(path=str(path), full_page=True)
+    await page.screenshot(path=str(path), full_page=full_page)
     print(f"screenshot: {path}")
 
 
 @asynccontextmanager
 async def open_page(
-    browser: Browser, s: Served, width: int = 1300, height: int = 1000
+    browser: Browser,
+    s: Served,
+    width: int = 1300,
+    height: int = 1000,
+    *,
+    init_script: str | None = None,
 ) -> AsyncIterator[Page]:
-    """A fresh browser context on the dashboard, live; no script error may happen meanwhile."""
+    """A fresh browser context on the dashboard, live; no script error may happen meanwhile.
+    ``init_script`` runs in the page before its own scripts (e.g. a fake gamepad)."""
     context = await browser.new_context(viewport={"width": width, "height": height})
+    if init_script is not None:
+        await context.add_init_script(init_script)
     try:
         page = await context.new_page()
         errors: list[str] = []

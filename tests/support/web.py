@@ -15,6 +15,7 @@ from scopelink.astro import Site
 from scopelink.mount import Limits
 from scopelink.sim import EQ6, SimClock, SimulatedMount
 from scopelink.web import Dashboard
+from scopelink.web.site_check import SiteStore
 
 SITE = Site(latitude_deg=45.0, longitude_deg=7.0, elevation_m=300.0)
 START = datetime(2026, 3, 1, 21, 0, tzinfo=UTC)  # Capella high in the west, Acrux never up
@@ -43,14 +44,20 @@ class Served:
 
 @asynccontextmanager
 async def served(
-    mount: SimulatedMount | None = None, *, interval_s: float = 0.1, connect: bool = True
+    mount: SimulatedMount | None = None,
+    *,
+    interval_s: float = 0.1,
+    connect: bool = True,
+    site_store: SiteStore | None = None,
 ) -> AsyncIterator[Served]:
     mount = mount or sim_mount()
     if connect:
         await mount.connect()
     try:
         async with (
-            Dashboard(mount, port=0, update_interval_s=interval_s) as dashboard,
+            Dashboard(
+                mount, port=0, update_interval_s=interval_s, site_store=site_store
+            ) as dashboard,
             aiohttp.ClientSession(base_url=dashboard.url) as http,
         ):
             yield Served(mount, dashboard, http)

@@ -138,7 +138,7 @@ async def axis_speeds(s: Served, seconds: float = 0.3) -> tuple[float, float]:
 async def test_the_pads_sidereal_multiples_use_the_servers_sidereal_rate(browser: Browser) -> None:
     """app.js writes no sidereal rate of its own: 8x is 8 x the package's one constant."""
     async with served(sim_mount(rate=2.0)) as s, open_page(browser, s) as page:
-        await page.select_option("#rate", "8")
+        await page.select_option("#rate", "2")  # SynScan rate 2: 8x
         async with page.expect_request(
             lambda request: request.url.endswith("/api/move") and request.method == "POST"
         ) as sent:
@@ -152,7 +152,7 @@ async def test_the_pads_sidereal_multiples_use_the_servers_sidereal_rate(browser
 
 async def test_the_pad_moves_while_held_by_pointer_or_key(browser: Browser) -> None:
     async with served(sim_mount(rate=2.0)) as s, open_page(browser, s) as page:
-        await page.select_option("#rate", "400")
+        await page.select_option("#rate", "7")  # SynScan rate 7: 400x
         await page.locator(".pad-down").hover()
         await page.mouse.down()
         await expect(page.locator(".pad-down")).to_have_class(re.compile("held"))

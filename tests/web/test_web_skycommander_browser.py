@@ -4,13 +4,14 @@ emulated EEPROM and is listed, and "clear" writes the pole over it."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 from playwright.async_api import Browser, expect
 
 from scopelink.servers.skytracker.objects import StoredObject
-from tests.support.browser import TIMEOUT_MS, open_page
+from tests.support.browser import TIMEOUT_MS, open_page, screenshot
 from tests.support.skycommander_web import panel
 from tests.support.web import HIGH_UP, served
 
@@ -36,6 +37,17 @@ async def test_store_a_name_from_the_page_and_clear_it(
 ) -> None:
     async with panel(tmp_path, monkeypatch) as p, open_page(browser, p.served) as page:
         await expect(page.locator("#skycommander-memory")).to_be_visible(timeout=TIMEOUT_MS)
+        # No motors: no pad, and the push-to view comes first, in big figures per axis.
+        await expect(page.locator("body")).to_have_attribute("data-motors", "false")
+        await expect(page.locator("#pad")).to_be_hidden()
+        await page.fill("#pushto-name", "Vega")
+        await page.click("#pushto-form button[type=submit]")
+        await expect(page.locator("#pushto-view")).to_be_visible(timeout=TIMEOUT_MS)
+        await expect(page.locator("#pushto-vertical")).to_have_text(re.compile(r"^(up|down) \d"))
+        await expect(page.locator("#pushto-horizontal")).to_have_text(
+            re.compile(r"^(left|right) \d")
+        )
+        await screenshot(page, "panel-05-skycommander-pushto")
         await page.fill("#slot-name", "M 57")
         await page.fill("#slot-number", "7")
         await page.click("#slot-form button[type=submit]")

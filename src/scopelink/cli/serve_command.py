@@ -24,15 +24,17 @@ from typing import TypeVar
 import segno
 
 from scopelink.cli.commands import CommandParsers
-from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig
+from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig, config_path
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
     mount_error,
     open_device,
+    read_config,
 )
 from scopelink.cli.options import add_device_arguments
 from scopelink.cli.serve_registry import register_serve, unregister_serve
+from scopelink.cli.site_store import SettingsSiteStore
 from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
 from scopelink.links import LinkError
@@ -505,6 +507,10 @@ async def _start_servers(
             trace=trace,
             access=policy,
             allowed_hosts=plan.allowed_hosts,
+            # First run: with no site saved, the page asks for one and saves it here.
+            site_store=SettingsSiteStore(
+                config_path(), saved=bool(args.site) or read_config().site_configured
+            ),
         )
         await stack.enter_async_context(dashboard)
         lines.append(f"Dashboard   {dashboard.url}")

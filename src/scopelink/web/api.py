@@ -10,11 +10,9 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Awaitable, Callable
-from datetime import UTC, datetime
 
 from aiohttp import web
 
-from scopelink.astro import Site
 from scopelink.astro.catalog import EphemerisRangeError, UnknownObjectError, lookup, search
 from scopelink.mount import (
     DeviceError,
@@ -29,7 +27,9 @@ from scopelink.mount import (
     TrackingMode,
 )
 from scopelink.web.params import BadRequestError, read_body
+from scopelink.web.site_check import site_from_body
 from scopelink.web.snapshot import describe_mount, state_json
+from scopelink.web.timeset import parse_utc
 
 __all__ = ["add_api_routes", "error_middleware"]
 
@@ -38,7 +38,6 @@ logger = logging.getLogger(__name__)
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 _MAX_SEARCH_RESULTS = 20
-_TIME_SKEW_LIMIT_YEARS = 200
 
 
 def _error(status: int, error: Exception, **extra: object) -> web.Response:
@@ -200,38 +199,12 @@ class _Api:
 
     async def site(self, request: web.Request) -> web.Response:
         body = await read_body(request)
-        current = self.mount.site
-        try:
-            site = Site(
-                latitude_deg=body.number("latitude_deg", -90.0, 90.0),
-                longitude_deg=body.number("longitude_deg", -180.0, 180.0),
-                elevation_m=body.number(
-                    "elevation_m", -500.0, 10000.0, default=current.elevation_m
-                ),
-                pressure_hpa=current.pressure_hpa,
-                temperature_c=current.temperature_c,
-                relative_humidity=current.relative_humidity,
-                wavelength_um=current.wavelength_um,
-            )
-        except ValueError as error:
-            raise BadRequestError(str(error)) from None
-        await self.mount.set_site(site)
+        await self.mount.set_site(site_from_body(body, self.mount.site))
         return web.json_response({"ok": True, "mount": describe_mount(self.mount)})
 
     async def time(self, request: web.Request) -> web.Response:
         body = await read_body(request)
-        text = body.text("utc", max_length=40)
-        try:
-            utc = datetime.fromisoformat(text.replace("Z", "+00:00"))
-        except ValueError:
-            raise BadRequestError(
-                f"'utc' must be an ISO 8601 time with a zone, not {text!r}"
-            ) from None
-        if utc.tzinfo is None:
-            raise BadRequestError("'utc' must carry a time zone (end it with Z for UTC)")
-        if abs(utc.year - datetime.now(UTC).year) > _TIME_SKEW_LIMIT_YEARS:
-            raise BadRequestError(f"'utc' {text!r} is not a plausible time")
-        await self.mount.set_time(utc.astimezone(UTC))
+        await self.mount.set_time(parse_utc(body.text("utc", max_length=40)))
         return self._ok()
 
 

@@ -33,6 +33,8 @@ from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList, machine_a
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.live import LiveHub
+from scopelink.web.panel_api import add_panel_routes
+from scopelink.web.site_check import SiteStore
 from scopelink.web.skycommander import add_skycommander_routes
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
 
@@ -174,7 +176,8 @@ class Dashboard:
     ``False`` hides the panel. The mount is
     used as it is: connect it before, disconnect it after. ``access`` (default: no limits)
     applies the servers' allow-list, request rate and read-only mode (the page then disables
-    its controls, and the API refuses every command).
+    its controls, and the API refuses every command). ``site_store`` is where the page's
+    first-run check saves the site (``scopelink.web.site_check``; None: the page never asks).
     """
 
     def __init__(
@@ -190,6 +193,7 @@ class Dashboard:
         allowed_hosts: tuple[str, ...] = (),
         pairing_token: str | None = None,
         pairing_exempts_loopback: bool = True,
+        site_store: SiteStore | None = None,
     ) -> None:
         if not 0 <= port <= 65535:
             raise ValueError(f"port {port} must lie in [0, 65535]")
@@ -208,6 +212,8 @@ class Dashboard:
         self._loopback_exempt = pairing_exempts_loopback
         """A browser on this machine needs no token (tests turn this off to see a refusal)."""
         self._requested_port = port
+        self.site_store = site_store
+        """Where the first-run check saves the site (None: the page never asks)."""
         protocol = _trace_protocol(mount, trace)
         self.traffic = None if protocol is None else TrafficMonitor(protocol, traffic_lines)
         self.hub = LiveHub(mount, self.traffic, interval_s=update_interval_s)
@@ -236,6 +242,7 @@ class Dashboard:
             return web.json_response({"read_only": self.access.read_only})
 
         app.router.add_get("/", page)
+        add_panel_routes(app, self.mount, self.hub, self.site_store)  # and /api/setup
         app.router.add_get("/api/access", access)
         app.router.add_get("/pair", self._pair)
         app.router.add_get("/ws", self.hub.handle)

@@ -2,7 +2,8 @@
 
 While at least one page is connected, one task holds ``mount.watching()`` (so the state cache is
 polled; each update is a read that raises the poll rate, see docs/mount-api.md), and every
-``interval_s`` sends all pages the same update: the mount's state, the chart's
+``interval_s`` sends all pages the same update: the mount's state (with what the panel shows
+beside it, :class:`~scopelink.web.view_state.PanelView`), the chart's
 objects (every ``sky_every`` updates: they cost ERFA time) and the new traffic lines. A page that
 cannot take an update within ``send_timeout_s`` is closed rather than allowed to stall the others.
 When the last page goes, polling stops.
@@ -22,6 +23,7 @@ from scopelink.mount.deadman import MotionClient
 from scopelink.web.sky import SkyPositions, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
+from scopelink.web.view_state import PanelView
 
 __all__ = ["LiveHub"]
 
@@ -50,6 +52,8 @@ class LiveHub:
         self._sky: SkyPositions | None = None
         self._traffic_seq = 0
         self._described: dict[str, object] | None = None
+        self.panel = PanelView(mount)
+        """What the panel shows beside the state (slew progress, health, clock, push-to...)."""
 
     @property
     def clients(self) -> int:
@@ -82,6 +86,7 @@ class LiveHub:
         traffic, _ = self._traffic_json(0)
         hello = {
             "type": "hello",
+            "panel": await self.panel.as_json(with_clock=True),
             "mount": describe_mount(self._mount),
             "traffic_enabled": self._traffic is not None,
             "traffic": traffic,
@@ -131,6 +136,7 @@ class LiveHub:
         traffic, self._traffic_seq = self._traffic_json(self._traffic_seq)
         update: dict[str, object] = {
             "type": "update",
+            "panel": await self.panel.as_json(with_clock=with_sky),
             "state": state_json(self._mount, self._mount.state),
             "traffic": traffic,
         }

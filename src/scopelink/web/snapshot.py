@@ -7,6 +7,7 @@ from scopelink.astro.catalog import EphemerisRangeError
 from scopelink.mount import Limits, Mount, MountState, SlewTarget, TrackingMode
 from scopelink.mount.meridian import meridian_status
 from scopelink.mount.sun import SunZone
+from scopelink.web.pad import rates_json
 
 __all__ = ["describe_mount", "horizon_outline", "meridian_json", "state_json", "sun_json"]
 
@@ -172,6 +173,7 @@ def describe_mount(mount: Mount) -> dict[str, object]:
             "can_set_time": caps.can_set_time,
         },
         "sidereal_rate_deg_s": SIDEREAL_RATE_DEG_S,  # the unit of the pad's "8x" speeds
+        "rates": rates_json(mount),  # the pad's speeds, named as the hand control names them
         "site": {
             "latitude_deg": site.latitude_deg,
             "longitude_deg": site.longitude_deg,

@@ -349,6 +349,8 @@ function renderState() {
   problems.classList.toggle("bad", s.problems.length > 0);
   $("status").dataset.slewing = String(s.slewing);
   renderSunWarning();
+  // The panel's scripts (static/panel/) follow the state from here.
+  document.dispatchEvent(new CustomEvent("scopelink:state", { detail: s }));
 }
 
 function targetText(t) {
@@ -371,13 +373,15 @@ function renderMount() {
     option.value = mode; option.textContent = mode;
     select.append(option);
   }
-  if (current) select.value = current;
-  else if (m.capabilities.tracking_modes.includes("sidereal")) select.value = "sidereal";
+  // The menu shows the mount's real mode (panel/motion.js keeps it so); never a guess.
+  const real = view.state && view.state.connected ? view.state.tracking : current;
+  if (real) select.value = real;
   const site = m.site;
   for (const [inputId, value] of [["site-lat", site.latitude_deg], ["site-lon", site.longitude_deg], ["site-elev", site.elevation_m]]) {
     const input = $(inputId);
     if (document.activeElement !== input) input.value = String(value);
   }
+  document.dispatchEvent(new CustomEvent("scopelink:mount", { detail: m }));
 }
 
 const traffic = { paused: false, rows: 200 };
@@ -416,6 +420,9 @@ function appendTraffic(lines) {
   }
   while (body.rows.length > traffic.rows) body.deleteRow(0);
   $("traffic-empty").hidden = body.rows.length > 0;
+  // A mount without a wire shows one line until some program talks to a server.
+  $("traffic-panel").hidden = false;
+  $("traffic-nowire").hidden = true;
   if (atBottom) scroller.scrollTop = scroller.scrollHeight;
 }
 
@@ -428,6 +435,8 @@ function setLinkStatus(ok, text) {
   const badge = $("link-status");
   badge.dataset.ok = String(ok);
   badge.textContent = text;
+  // The pad lets go when the link drops: the server's dead-man stopped this page's motions.
+  document.dispatchEvent(new CustomEvent("scopelink:link", { detail: ok }));
 }
 
 function connect() {
@@ -437,6 +446,8 @@ function connect() {
   socket.addEventListener("message", (event) => {
     let message;
     try { message = JSON.parse(event.data); } catch (_) { return; }
+    // What the panel shows beside the state (web/view_state.py) is read as part of it.
+    if (message.panel && message.state) Object.assign(message.state, message.panel);
     if (message.type === "hello") {
       view.mount = message.mount;
       view.session = message.session; // the pad's moves name it: they stop if this page goes
@@ -469,7 +480,7 @@ async function applyAccess() {
   document.body.dataset.readOnly = "true";
   $("read-only-note").hidden = false;
   const controls = document.querySelectorAll(
-    'section[aria-label="Controls"] :is(button, input, select), #go-selected, #sync-selected');
+    'section[aria-label="Controls"] :is(button, input, select), #go-selected, #sync-selected, #abort');
   for (const control of controls) control.disabled = true;
 }
 
@@ -516,7 +527,9 @@ function debounce(fn, ms) {
 }
 
 let searchSerial = 0;
+let suggesting = false; // typing opens the list; Go and a chosen suggestion close it
 async function searchNames(prefix) {
+  if (!suggesting) return;
   const serial = ++searchSerial;
   const list = $("goto-suggestions");
   if (!prefix.trim()) { list.replaceChildren(); return; }
@@ -528,7 +541,7 @@ async function searchNames(prefix) {
   } catch (error) {
     return;
   }
-  if (serial !== searchSerial) return; // a later keystroke already asked again
+  if (serial !== searchSerial || !suggesting) return; // asked again since, or closed
   list.replaceChildren();
   for (const match of reply.matches) {
     const item = document.createElement("li");
@@ -543,6 +556,7 @@ async function searchNames(prefix) {
     button.append(name, kind);
     button.addEventListener("click", () => {
       $("goto-name").value = match.name;
+      suggesting = false;
       list.replaceChildren();
       $("goto-name").focus();
     });
@@ -564,62 +578,23 @@ async function gotoSelection() {
   if (reply) showMessage(`slewing to alt ${fmtAngle(sel.alt)} az ${fmtAngle(sel.az)}`, "info");
 }
 
-function rateDegS() {
-  if (!view.mount) return 0;
-  const choice = $("rate").value;
-  const max = view.mount.capabilities.max_axis_rate_deg_s;
-  if (choice === "max") return max;
-  return Math.min(max, Number(choice) * view.mount.sidereal_rate_deg_s); // the server's constant
+// The pad, the keyboard and the gamepad: static/panel/motion.js and gamepad.js.
+function setupPad() {
+  Motion.setup();
+  Gamepads.setup();
 }
 
-const KEYS = { ArrowUp: "pad-up", ArrowDown: "pad-down", ArrowLeft: "pad-left", ArrowRight: "pad-right" };
-
-function setupPad() {
-  const holds = new Map(); // class name -> {start, stop}
-  for (const button of document.querySelectorAll("#pad button[data-axis]")) {
-    let held = false;
-    const start = async (event) => {
-      if (event) event.preventDefault();
-      if (held) return;
-      held = true;
-      button.classList.add("held");
-      if (event && event.pointerId !== undefined) {
-        try { button.setPointerCapture(event.pointerId); } catch (_) { /* not a pointer */ }
-      }
-      const rate = Number(button.dataset.sign) * rateDegS();
-      const ok = await api("/api/move", {
-        axis: button.dataset.axis, rate_deg_s: rate, session: view.session,
-      });
-      if (!ok) stop();
-    };
-    const stop = () => {
-      if (!held) return;
-      held = false;
-      button.classList.remove("held");
-      api("/api/move", { axis: button.dataset.axis, rate_deg_s: 0, session: view.session });
-    };
-    button.addEventListener("pointerdown", start);
-    button.addEventListener("pointerup", stop);
-    button.addEventListener("pointercancel", stop);
-    button.addEventListener("lostpointercapture", stop);
-    button.addEventListener("contextmenu", (event) => event.preventDefault());
-    holds.set(button.className.split(" ")[0], { start, stop });
-  }
-  $("pad-stop").addEventListener("click", () => api("/api/abort"));
-  // Arrow keys move while held, Escape stops everything; not while typing in a field.
-  const typing = (event) => ["INPUT", "SELECT", "TEXTAREA"].includes(event.target.tagName);
-  document.addEventListener("keydown", (event) => {
-    if (typing(event)) return;
-    if (event.key === "Escape") { api("/api/abort"); return; }
-    const hold = holds.get(KEYS[event.key]);
-    if (hold) { event.preventDefault(); if (!event.repeat) hold.start(null); }
-  });
-  document.addEventListener("keyup", (event) => {
-    const hold = holds.get(KEYS[event.key]);
-    if (hold) hold.stop();
-  });
-  // A key released while the window had no focus never sends keyup: stop on losing focus.
-  window.addEventListener("blur", () => { for (const hold of holds.values()) hold.stop(); });
+// This device's location (the browser's geolocation) into a site form's three fields.
+function fillDeviceLocation(latId, lonId, elevId) {
+  if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
+  navigator.geolocation.getCurrentPosition(
+    (position) => {
+      $(latId).value = position.coords.latitude.toFixed(5);
+      $(lonId).value = position.coords.longitude.toFixed(5);
+      if (position.coords.altitude != null) $(elevId).value = position.coords.altitude.toFixed(0);
+    },
+    (error) => showMessage(`no location: ${error.message}`),
+  );
 }
 
 function setupNight() {
@@ -658,17 +633,25 @@ function setup() {
   $("clear-selected").addEventListener("click", () => select(null));
 
   const nameInput = $("goto-name");
-  nameInput.addEventListener("input", debounce(() => searchNames(nameInput.value), 120));
+  const search = debounce(() => searchNames(nameInput.value), 120);
+  nameInput.addEventListener("input", () => { suggesting = true; search(); });
   $("goto-form").addEventListener("submit", (event) => {
     event.preventDefault();
+    suggesting = false; // an answer still on its way must not reopen the list
     $("goto-suggestions").replaceChildren();
     const name = nameInput.value.trim();
     if (name) gotoName(name);
   });
 
-  $("abort").addEventListener("click", () => api("/api/abort"));
-  $("tracking-apply").addEventListener("click", () => api("/api/tracking", { mode: $("tracking-mode").value }));
-  $("park").addEventListener("click", async () => { if (await api("/api/park")) showMessage("parking", "info"); });
+  $("abort").addEventListener("click", () => Motion.stop());
+  $("tracking-apply").addEventListener("click", async () => {
+    const mode = $("tracking-mode").value;
+    const reply = await api("/api/tracking", { mode });
+    if (reply) showMessage(`tracking set: ${reply.state.tracking}`, "info");
+  });
+  $("park").addEventListener("click", async () => {
+    if (await api("/api/park")) showMessage("parking: the mount is on its way to the park position", "info");
+  });
   $("unpark").addEventListener("click", async () => {
     const reply = await api("/api/unpark");
     if (reply) showMessage(reply.resume ? `unparked: ${reply.resume}` : "unparked", "info");
@@ -682,21 +665,16 @@ function setup() {
     };
     if ($("site-elev").value !== "") body.elevation_m = Number($("site-elev").value);
     const reply = await api("/api/site", body);
-    if (reply) { view.mount = reply.mount; renderMount(); showMessage("site set", "info"); }
+    if (reply) {
+      view.mount = reply.mount; renderMount();
+      const site = reply.mount.site;
+      showMessage(`site set: ${site.latitude_deg.toFixed(4)}°, ${site.longitude_deg.toFixed(4)}°, ${site.elevation_m.toFixed(0)} m`, "info");
+    }
   });
-  $("site-here").addEventListener("click", () => {
-    if (!navigator.geolocation) { showMessage("this browser cannot tell its location"); return; }
-    navigator.geolocation.getCurrentPosition(
-      (position) => {
-        $("site-lat").value = position.coords.latitude.toFixed(5);
-        $("site-lon").value = position.coords.longitude.toFixed(5);
-        if (position.coords.altitude != null) $("site-elev").value = position.coords.altitude.toFixed(0);
-      },
-      (error) => showMessage(`no location: ${error.message}`),
-    );
-  });
+  $("site-here").addEventListener("click", () => fillDeviceLocation("site-lat", "site-lon", "site-elev"));
   $("time-push").addEventListener("click", async () => {
-    if (await api("/api/time", { utc: new Date().toISOString() })) showMessage("time sent", "info");
+    const sent = new Date().toISOString();
+    if (await api("/api/time", { utc: sent })) showMessage(`mount clock set to ${sent.slice(0, 19).replace("T", " ")} UTC`, "info");
   });
   $("traffic-pause").addEventListener("change", (event) => { traffic.paused = event.target.checked; });
 

@@ -1,35 +1,37 @@
 "use strict";
 // The "Sky Commander memory" and push-to panel (docs/dashboard.md). Uses app.js's $, api,
-// showMessage, fmtHours and fmtDeg. Push-to figures come from /api/pushto twice a second.
+// showMessage, fmtHours and fmtDeg. The push-to target is set with POST /api/pushto; its figures
+// ride on every WebSocket update (state.pushto), for every page: one telescope, one target.
 
-const PUSHTO_INTERVAL_MS = 500;
-const pushto = { target: null, timer: null };
-
-async function refreshPushTo() {
-  if (!pushto.target) return;
-  let reply = null;
-  try {
-    const response = await fetch(`/api/pushto?name=${encodeURIComponent(pushto.target)}`);
-    reply = await response.json();
-    if (!response.ok) { $("pushto-figures").textContent = reply.error || response.statusText; return; }
-  } catch (error) {
-    $("pushto-figures").textContent = `cannot reach scopelink: ${error.message}`;
+function renderPushTo(figures) {
+  const box = $("pushto-view");
+  if (!figures) {
+    box.hidden = true;
+    if ($("pushto-figures").textContent !== "—") $("pushto-figures").textContent = "—";
     return;
   }
-  $("pushto-figures").textContent = reply.text;
+  if (figures.error) {
+    box.hidden = true;
+    $("pushto-figures").textContent = `${figures.target}: ${figures.error}`;
+    return;
+  }
+  $("pushto-figures").textContent = figures.text;
+  box.hidden = false;
+  box.dataset.onTarget = String(figures.on_target);
+  const up = figures.up_deg, right = figures.right_deg;
+  $("pushto-vertical-arrow").textContent = up >= 0 ? "▲" : "▼";
+  $("pushto-vertical").textContent = `${up >= 0 ? "up" : "down"} ${Math.abs(up).toFixed(1)}°`;
+  $("pushto-horizontal-arrow").textContent = right >= 0 ? "▶" : "◀";
+  $("pushto-horizontal").textContent = `${right >= 0 ? "right" : "left"} ${Math.abs(right).toFixed(1)}°`;
 }
 
-function startPushTo(name) {
-  clearInterval(pushto.timer);
-  pushto.target = name;
-  refreshPushTo();
-  pushto.timer = setInterval(refreshPushTo, PUSHTO_INTERVAL_MS);
+async function startPushTo(name) {
+  const reply = await api("/api/pushto", { name });
+  if (reply) showMessage(`push-to: ${reply.target}`, "info");
 }
 
-function stopPushTo() {
-  clearInterval(pushto.timer);
-  pushto.target = null;
-  $("pushto-figures").textContent = "—";
+async function stopPushTo() {
+  if (await api("/api/pushto", {})) renderPushTo(null);
 }
 
 function renderSlots(slots) {
@@ -91,6 +93,7 @@ function setupSkyCommander() {
     }
   });
   $("slots-clear").addEventListener("click", () => clearSlots({}));
+  document.addEventListener("scopelink:state", (event) => renderPushTo(event.detail.pushto));
   loadSlots();
 }
 
