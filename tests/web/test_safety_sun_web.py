@@ -37,9 +37,9 @@ async def redness(page: Page, alt: float, az: float) -> float:
     return float(
         await page.evaluate(
             """([alt, az]) => {
-                const [x, y] = chart.project(alt, az);
+                const [x, y] = Chart.debug.project(alt, az);
                 const ratio = window.devicePixelRatio || 1;
-                const data = chart.ctx.getImageData(
+                const data = Chart.debug.ctx.getImageData(
                     Math.round(x * ratio) - 2, Math.round(y * ratio) - 2, 5, 5).data;
                 let sum = 0;
                 for (let i = 0; i < data.length; i += 4) sum += data[i] - data[i + 2];

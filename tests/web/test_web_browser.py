@@ -23,16 +23,15 @@ pytestmark = pytest.mark.asyncio(loop_scope="module")
 async def click_object(page: Page, name: str) -> None:
     """Click where the chart draws ``name`` (computed by the page's own projection)."""
     await page.wait_for_function(
-        "(name) => view.sky.some((o) => o.name === name)", arg=name, timeout=TIMEOUT_MS
+        "(name) => Chart.debug.find(name) !== null", arg=name, timeout=TIMEOUT_MS
     )
     x, y = await page.evaluate(
-        "(name) => { const o = view.sky.find((s) => s.name === name);"
-        " return chart.project(o.alt, o.az); }",
+        "(name) => { const o = Chart.debug.find(name); return Chart.debug.project(o.alt, o.az); }",
         name,
     )
     box = await page.locator("#sky").bounding_box()
     assert box is not None
-    scale = box["width"] / await page.evaluate("chart.size")
+    scale = box["width"] / await page.evaluate("Chart.debug.size")
     await page.mouse.click(box["x"] + x * scale, box["y"] + y * scale)
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from hatchling.builders.wheel import WheelBuilder
 
 ROOT = Path(__file__).resolve().parents[2]
-STATIC = ("index.html", "app.js", "skycommander.js", "style.css")
+STATIC = ("index.html", "app.js", "chart.js", "skycommander.js", "style.css")
 
 SERVE_FROM_INSTALLED_COPY = """
 import asyncio, sys
