@@ -32,6 +32,7 @@ from scopelink.servers.access import AccessControl, AccessPolicy, retry_after
 from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList, machine_addresses
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
+from scopelink.web.deepsky import add_deep_sky_route
 from scopelink.web.live import LiveHub
 from scopelink.web.skycommander import add_skycommander_routes
 from scopelink.web.traffic import DEFAULT_CAPACITY, ProtocolChooser, TrafficMonitor
@@ -241,6 +242,7 @@ class Dashboard:
         app.router.add_get("/ws", self.hub.handle)
         add_api_routes(app, self.mount)
         add_skycommander_routes(app, self.mount)
+        add_deep_sky_route(app)
         app.router.add_static("/static/", static_dir(), follow_symlinks=False)
         return app
 

@@ -237,7 +237,7 @@ function connect() {
     }
     if (message.type === "update" && message.mount) { view.mount = message.mount; renderMount(); }
     if (message.state) { view.state = message.state; renderState(); }
-    Chart.update({ mount: view.mount, state: view.state, sky: message.sky });
+    Chart.update({ mount: view.mount, state: view.state, sky: message.sky, frame: message.sky_frame });
     if (message.sky) renderSelection();
     appendTraffic(message.traffic);
   });

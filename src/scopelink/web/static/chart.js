@@ -1,250 +1,264 @@
-// scopelink sky chart: draws the sky, the limits, the Sun's zone and the mount on the page's
-// canvas. app.js talks to it only through the small interface at the end (window.Chart); the
-// chart draws only when something changes (new data, an interaction), never in a loop.
-"use strict";
+// scopelink sky chart (docs/dashboard.md, "Sky chart"): a stereographic view of the sky
+// (d3-geo) that zooms from the whole sky to a 1° field. app.js talks to it only through the
+// small interface at the end (window.Chart). The chart draws only when something it shows has
+// changed (new data it would draw differently, an interaction, the night mode), at most once per
+// animation frame, never in a loop.
+import "./vendor/d3-array.min.js";
+import "./vendor/d3-geo.min.js";
+import { RAD, altAz, lonLatVector, makeFrame, skyPoint } from "./chart/sphere.js";
+import { loadSky, loadTrack, sky } from "./chart/data.js";
+import { placeLabels } from "./chart/labels.js";
+import {
+  drawBackground, drawConstellations, drawDeepSky, drawGrid, drawGround, drawMilkyWay,
+  drawNamedObjects, drawStars, palettes, twilightName,
+} from "./chart/layers.js";
+import { drawLimits, drawMarkers, drawPaths, drawSunZone } from "./chart/overlay.js";
+import { attachControls, buildToolbar, loadField, view } from "./chart/view.js";
 
-const Chart = (() => {
-  const LOWEST_ALT = -10; // the chart shows a little below the horizon, where limits may lie
-  const data = { mount: null, state: null, sky: [], selected: null };
-  const hooks = { onSelect: () => {} };
+const CLICK_RADIUS_PX = 18; // a finger-sized target
+const LABEL_AREA_PX2 = 7000; // at most one label per this much canvas
+const SCREEN_MARGIN_PX = 20;
 
-  const palettes = {
-    day: {
-      sky: "#06101f", grid: "#22324d", horizon: "#5b6b86", limit: "rgba(217,83,79,0.22)",
-      limitEdge: "#d9534f", star: "#e8eefc", below: "#3a4458", label: "#9fb0cc",
-      planet: "#ffd27f", moon: "#f4f4f4", sun: "#ffb000", mount: "#5fa8ff", target: "#4caf50",
-      selected: "#ff7ad9",
+const data = { mount: null, state: null, sky: [], selected: null, frame: null, track: null };
+const hooks = { onSelect: () => {} };
+const chart = { canvas: null, ctx: null, width: 0, height: 0, field: loadField() };
+let cache = null; // the J2000 layers turned into the sky of data.frame
+let drawnKey = null; // what the last drawing showed (see baseKey and overlayKey)
+let pending = false;
+let report = { clickable: [] };
+let setFovText = () => {};
+
+const palette = () => (document.body.classList.contains("night") ? palettes.night : palettes.day);
+
+// The J2000 layers in the current frame, rebuilt when a new frame or new data arrives.
+function skyCache() {
+  if (!data.frame) return null;
+  if (cache && cache.frame === data.frame && cache.counts === countData()) return cache;
+  const f = makeFrame(data.frame);
+  const to = ([ra, dec]) => f.toSky(ra, dec);
+  cache = {
+    frame: data.frame,
+    counts: countData(),
+    toSky: f.toSky,
+    stars: sky.stars.map(([ra, dec, mag]) => { const p = f.toSky(ra, dec); return [p, mag, lonLatVector(p)]; }),
+    lines: sky.lines.map(([abbr, lines]) => [abbr, lines.map((line) => line.map(to))]),
+    names: sky.names.map(([abbr, name, ra, dec, rank]) => [abbr, name, f.toSky(ra, dec), rank]),
+    milkyway: sky.milkyway.map((polygons) => polygons.map((polygon) => polygon.map((ring) => ring.map(to)))),
+    deepsky: sky.deepsky.map((obj) => { const p = f.toSky(obj.ra, obj.dec); return { ...obj, p, v: lonLatVector(p) }; }),
+  };
+  return cache;
+}
+const countData = () => `${sky.stars.length}/${sky.lines.length}/${sky.milkyway.length}/${sky.deepsky.length}`;
+
+function resize() {
+  const canvas = chart.canvas;
+  const width = canvas.clientWidth || 600;
+  const height = canvas.clientHeight || width;
+  const ratio = window.devicePixelRatio || 1;
+  if (canvas.width !== Math.round(width * ratio) || canvas.height !== Math.round(height * ratio)) {
+    canvas.width = Math.round(width * ratio); canvas.height = Math.round(height * ratio);
+  }
+  chart.ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
+  chart.width = width; chart.height = height;
+  schedule(true);
+}
+
+// The projection and helpers of the current view.
+function scene() {
+  const { width, height } = chart;
+  const k = width / 2 / Math.tan((view.fov / 4) * RAD); // d3's stereographic: r = k·tan(θ/2)
+  const clip = Math.min(100, view.fov * 0.75 + 1);
+  const make = (precision) => d3.geoStereographic().reflectX(true).rotate([view.az, -view.alt, 0])
+    .scale(k).translate([width / 2, height / 2]).clipAngle(clip)
+    .clipExtent([[-2, -2], [width + 2, height + 2]]).precision(precision);
+  const projection = make(0.4);
+  const centre = skyPoint(view.alt, view.az);
+  const centreVector = lonLatVector(centre);
+  const cosLimit = Math.cos(clip * RAD);
+  const c = palette();
+  const s = {
+    ctx: chart.ctx, width, height, projection, c, fov: view.fov, pxPerDeg: (k * RAD) / 2,
+    path: d3.geoPath(projection, chart.ctx),
+    // Without adaptive resampling, for dense outlines (the Milky Way): twice as fast.
+    rough: make(0),
+    // Screen position of a [lon, lat] point (v: its unit vector, if known), or null when off the view.
+    screen(p, v = null) {
+      const u = v || lonLatVector(p);
+      if (u[0] * centreVector[0] + u[1] * centreVector[1] + u[2] * centreVector[2] < cosLimit) return null;
+      const xy = projection(p);
+      if (!xy || xy[0] < -SCREEN_MARGIN_PX || xy[1] < -SCREEN_MARGIN_PX
+        || xy[0] > width + SCREEN_MARGIN_PX || xy[1] > height + SCREEN_MARGIN_PX) return null;
+      return xy;
     },
-    night: {
-      sky: "#000000", grid: "#2a0000", horizon: "#5a0a0a", limit: "rgba(120,0,0,0.35)",
-      limitEdge: "#7a1010", star: "#d02020", below: "#3a0505", label: "#8a1515",
-      planet: "#e03030", moon: "#e03030", sun: "#e03030", mount: "#ff3030", target: "#b01a1a",
-      selected: "#ff5050",
+    // The screen angle of celestial north at a J2000 object (for galaxies' position angles).
+    northAngle(obj) {
+      const a = projection(obj.p), b = projection(cache.toSky(obj.ra, Math.min(obj.dec + 0.05, 89.99)));
+      return Math.atan2(b[1] - a[1], b[0] - a[0]);
     },
   };
-  const palette = () => (document.body.classList.contains("night") ? palettes.night : palettes.day);
+  return s;
+}
 
-  const chart = {
-    canvas: null, ctx: null, size: 0, cx: 0, cy: 0, radius: 0,
-    // Stereographic: zenith at the centre, the horizon at `radius`; north up, east left (the
-    // sky seen from below, as on a planisphere).
-    project(alt, az) {
-      const r = this.radius * Math.tan(((90 - alt) * Math.PI) / 360);
-      const a = (az * Math.PI) / 180;
-      return [this.cx - r * Math.sin(a), this.cy - r * Math.cos(a)];
-    },
-    unproject(x, y) {
-      const dx = this.cx - x, dy = this.cy - y;
-      const r = Math.hypot(dx, dy) / this.radius;
-      const alt = 90 - (360 / Math.PI) * Math.atan(r);
-      let az = (Math.atan2(dx, dy) * 180) / Math.PI;
-      if (az < 0) az += 360;
-      return [alt, az];
-    },
+// What the base layers (the sky, its objects, the ground, the limits, the Sun's zone) depend
+// on, rounded to what would move a pixel: they are drawn again only when this changes, into an
+// off-screen canvas that every drawing copies before the markers and labels.
+function baseKey(s) {
+  const step = 0.3 / s.pxPerDeg; // degrees per third of a pixel
+  const r = (v) => (v == null ? "-" : Math.round(v / step));
+  const sun = (data.state && data.state.sun) || {};
+  const zenith = data.frame ? data.frame.zenith : [null, null];
+  const limits = data.mount && data.mount.limits;
+  return [
+    view.alt, view.az, view.fov, chart.width, chart.height, s.c === palettes.night, r(zenith[0]), r(zenith[1]),
+    Math.round((sun.alt || 0) * 4), r(sun.alt), r(sun.az), sun.radius_deg, countData(), data.sky.length,
+    limits ? JSON.stringify(limits.horizon) + limits.max_altitude_deg : "",
+  ].join("|");
+}
+
+// ... and what the markers depend on: a 4 Hz update of a mount standing still draws nothing.
+function overlayKey(s) {
+  const step = 0.3 / s.pxPerDeg;
+  const r = (v) => (v == null ? "-" : Math.round(v / step));
+  const st = data.state || {};
+  const t = st.target_altaz || {};
+  return [
+    r(st.alt_deg), r(st.az_deg), r(t.alt), r(t.az), st.slewing, JSON.stringify(data.selected),
+    JSON.stringify(chart.field), data.track ? data.track.path.length + String(data.track.error_arcsec) : "",
+  ].join("|");
+}
+
+function schedule(force = false) {
+  if (force) { drawnKey = null; base.key = null; }
+  if (pending || !chart.ctx) return;
+  pending = true;
+  requestAnimationFrame(() => { pending = false; draw(); });
+}
+
+const base = { key: null, canvas: document.createElement("canvas"), labels: [], clickable: [], drawn: {} };
+
+function drawBase(s) {
+  const ratio = window.devicePixelRatio || 1;
+  const canvas = base.canvas;
+  canvas.width = chart.canvas.width; canvas.height = chart.canvas.height;
+  const ctx = canvas.getContext("2d");
+  ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
+  const b = { ...s, ctx, path: d3.geoPath(s.projection, ctx), roughPath: d3.geoPath(s.rough, ctx) };
+  const layers = skyCache();
+  drawBackground(b);
+  const drawn = { milkyway: 0, constellations: 0, stars: 0, deepsky: 0, named: 0 };
+  let labels = drawGrid(b), clickable = [];
+  if (layers) {
+    drawn.milkyway = drawMilkyWay(b, layers.milkyway);
+    const constellations = drawConstellations(b, layers.lines, layers.names);
+    drawn.constellations = constellations.count;
+    labels = labels.concat(constellations.labels);
+    drawn.stars = drawStars(b, layers.stars);
+    const dso = drawDeepSky(b, layers.deepsky);
+    drawn.deepsky = dso.count; labels = labels.concat(dso.labels); clickable = clickable.concat(dso.clickable);
+  }
+  drawGround(b);
+  drawLimits(b, data.mount && data.mount.limits);
+  drawn.sunZone = drawSunZone(b, data.state && data.state.sun);
+  const named = drawNamedObjects(b, data.sky);
+  drawn.named = named.count; labels = labels.concat(named.labels); clickable = clickable.concat(named.clickable);
+  Object.assign(base, { labels, clickable, drawn });
+}
+
+function draw() {
+  const s = scene();
+  const keys = [baseKey(s), overlayKey(s)];
+  const key = keys.join("#");
+  if (key === drawnKey) return;
+  drawnKey = key;
+  const started = performance.now();
+  const { ctx, width, height } = s;
+  if (base.key !== keys[0]) { drawBase(s); base.key = keys[0]; }
+  ctx.save(); ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.drawImage(base.canvas, 0, 0); ctx.restore();
+  const paths = drawPaths(s, data.state, data.mount, data.track, skyCache());
+  const markers = drawMarkers(s, data.state, where(), chart.field, data.track);
+  const budget = Math.max(8, Math.round((width * height) / LABEL_AREA_PX2));
+  const placed = placeLabels(ctx, base.labels, markers.keepOut, width, height, budget);
+  const fovText = view.fov >= 10 ? `${view.fov.toFixed(0)}°` : `${view.fov.toFixed(1)}°`;
+  setFovText(`${fovText}${s.sunAlt == null ? "" : ` · ${twilightName(s.sunAlt)}`}`);
+  report = {
+    ...base.drawn, ...paths, ...markers.result, labels: placed, clickable: base.clickable, fov: view.fov,
+    view: { alt: view.alt, az: view.az }, twilight: twilightName(s.sunAlt), ms: performance.now() - started,
   };
+}
 
-  function resizeChart() {
-    const canvas = chart.canvas;
-    const cssSize = canvas.clientWidth || 600;
-    const ratio = window.devicePixelRatio || 1;
-    const pixels = Math.round(cssSize * ratio);
-    if (canvas.width !== pixels) { canvas.width = pixels; canvas.height = pixels; }
-    chart.ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
-    chart.size = cssSize;
-    chart.cx = chart.cy = cssSize / 2;
-    // Leave room for the band below the horizon down to LOWEST_ALT and the compass letters.
-    chart.radius = (cssSize / 2 - 16) / Math.tan(((90 - LOWEST_ALT) * Math.PI) / 360);
-    drawChart();
+// Where a selection is: {alt, az} (observed), or null when its object is not on the chart.
+function where(selection = data.selected) {
+  if (!selection) return null;
+  if (!selection.name) return selection;
+  const obj = data.sky.find((o) => o.name === selection.name);
+  if (obj) return { alt: obj.alt, az: obj.az };
+  const layers = skyCache();
+  const dso = layers && layers.deepsky.find((o) => o.name === selection.name);
+  return dso ? altAz(dso.p) : null;
+}
+
+// A click at (x, y) in CSS pixels: the nearest object within reach, or that point of the sky.
+function selectAt(x, y) {
+  let best = null, bestDistance = CLICK_RADIUS_PX;
+  for (const obj of report.clickable) {
+    const d = Math.hypot(obj.x - x, obj.y - y);
+    if (d < bestDistance) { best = obj; bestDistance = d; }
   }
+  if (best) { hooks.onSelect({ name: best.name }); return; }
+  const p = scene().projection.invert([x, y]);
+  if (!p || !Number.isFinite(p[0])) return;
+  const point = altAz(p);
+  if (point.alt < -10) return;
+  hooks.onSelect(point);
+}
 
-  function starRadius(mag) {
-    if (mag == null) return 3;
-    return Math.max(0.8, Math.min(4.5, 3.6 - 0.75 * mag));
-  }
+let trackSerial = 0;
+async function refreshTrack() {
+  const serial = ++trackSerial;
+  const track = await loadTrack();
+  if (serial !== trackSerial) return;
+  data.track = track;
+  schedule();
+}
+const targetKey = (state) => (state && state.target ? JSON.stringify(state.target) : "");
 
-  function objectStyle(obj, colours) {
-    switch (obj.kind) {
-      case "sun": return { colour: colours.sun, radius: 7, label: true };
-      case "moon": return { colour: colours.moon, radius: 6, label: true };
-      case "planet":
-      case "dwarf planet": return { colour: colours.planet, radius: 3.5, label: obj.kind === "planet" };
-      default: return { colour: colours.star, radius: starRadius(obj.mag), label: obj.mag != null && obj.mag < 1.0 };
-    }
-  }
-
-  function drawChart() {
-    const ctx = chart.ctx;
-    if (!ctx) return;
-    const c = palette();
-    const { cx, cy, radius, size } = chart;
-    ctx.clearRect(0, 0, size, size);
-    const outer = chart.project(LOWEST_ALT, 0)[1];
-    const edge = cy - outer;
-    ctx.fillStyle = c.sky;
-    ctx.beginPath(); ctx.arc(cx, cy, edge, 0, 2 * Math.PI); ctx.fill();
-
-    // Forbidden sky: below the horizon limit (profile by azimuth) and above the maximum altitude.
-    const limits = data.mount && data.mount.limits;
-    if (limits) {
-      ctx.fillStyle = c.limit;
-      ctx.beginPath();
-      ctx.arc(cx, cy, edge, 0, 2 * Math.PI);
-      const outline = limits.horizon.concat([limits.horizon[0]]);
-      outline.forEach(([az, alt], i) => {
-        const [x, y] = chart.project(Math.max(alt, LOWEST_ALT), az);
-        if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
-      });
-      ctx.fill("evenodd");
-      ctx.strokeStyle = c.limitEdge; ctx.lineWidth = 1.2; ctx.stroke();
-      if (limits.max_altitude_deg < 90) {
-        const r = cy - chart.project(limits.max_altitude_deg, 0)[1];
-        ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
-      }
-    }
-
-    drawSunZone(ctx, c);
-
-    // Altitude circles every 30°, the horizon, azimuth spokes every 45°.
-    ctx.strokeStyle = c.grid; ctx.lineWidth = 1;
-    for (const alt of [30, 60]) {
-      const r = cy - chart.project(alt, 0)[1];
-      ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.stroke();
-    }
-    for (let az = 0; az < 360; az += 45) {
-      const [x, y] = chart.project(0, az);
-      ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(x, y); ctx.stroke();
-    }
-    ctx.strokeStyle = c.horizon; ctx.lineWidth = 1.5;
-    ctx.beginPath(); ctx.arc(cx, cy, radius, 0, 2 * Math.PI); ctx.stroke();
-    ctx.fillStyle = c.label; ctx.font = "bold 13px system-ui, sans-serif";
-    ctx.textAlign = "center"; ctx.textBaseline = "middle";
-    for (const [letter, az] of [["N", 0], ["E", 90], ["S", 180], ["W", 270]]) {
-      const r = edge + 9;
-      const a = (az * Math.PI) / 180;
-      ctx.fillText(letter, cx - r * Math.sin(a), cy - r * Math.cos(a));
-    }
-
-    // Objects: dim below the horizon, labels for the brightest.
-    ctx.font = "11px system-ui, sans-serif"; ctx.textAlign = "left";
-    for (const obj of data.sky) {
-      if (obj.alt < LOWEST_ALT) continue;
-      const [x, y] = chart.project(obj.alt, obj.az);
-      const style = objectStyle(obj, c);
-      ctx.fillStyle = obj.alt < 0 ? c.below : style.colour;
-      ctx.beginPath(); ctx.arc(x, y, style.radius, 0, 2 * Math.PI); ctx.fill();
-      if (style.label && obj.alt >= 0) {
-        ctx.fillStyle = c.label;
-        ctx.fillText(obj.name, x + style.radius + 3, y);
-      }
-    }
-
-    // The selection, the target and where the mount points.
-    const sel = selectedPosition();
-    if (sel) {
-      const [x, y] = chart.project(sel.alt, sel.az);
-      ctx.strokeStyle = c.selected; ctx.lineWidth = 2;
-      ctx.beginPath(); ctx.arc(x, y, 10, 0, 2 * Math.PI); ctx.stroke();
-    }
-    const state = data.state;
-    if (state && state.target_altaz && state.target_altaz.alt >= LOWEST_ALT) {
-      const [x, y] = chart.project(state.target_altaz.alt, state.target_altaz.az);
-      ctx.strokeStyle = c.target; ctx.lineWidth = 2;
-      ctx.strokeRect(x - 7, y - 7, 14, 14);
-    }
-    if (state && state.alt_deg != null && state.alt_deg >= LOWEST_ALT) {
-      const [x, y] = chart.project(state.alt_deg, state.az_deg);
-      ctx.strokeStyle = c.mount; ctx.lineWidth = 2;
-      ctx.beginPath(); ctx.arc(x, y, 9, 0, 2 * Math.PI); ctx.stroke();
-      ctx.beginPath();
-      ctx.moveTo(x - 15, y); ctx.lineTo(x - 5, y); ctx.moveTo(x + 5, y); ctx.lineTo(x + 15, y);
-      ctx.moveTo(x, y - 15); ctx.lineTo(x, y - 5); ctx.moveTo(x, y + 5); ctx.lineTo(x, y + 15);
-      ctx.stroke();
-    }
-  }
-
-  // The Sun avoidance zone: the small circle `radius_deg` around the Sun, filled like the limits.
-  function drawSunZone(ctx, c) {
-    const sun = data.state && data.state.sun;
-    if (!sun || !(sun.radius_deg > 0)) return;
-    const rad = Math.PI / 180;
-    const d = sun.radius_deg * rad, alt0 = sun.alt * rad, az0 = sun.az * rad;
-    ctx.fillStyle = c.limit; ctx.strokeStyle = c.limitEdge; ctx.lineWidth = 1.2;
-    ctx.beginPath();
-    for (let bearing = 0; bearing <= 360; bearing += 5) {
-      const b = bearing * rad;
-      const alt = Math.asin(Math.sin(alt0) * Math.cos(d) + Math.cos(alt0) * Math.sin(d) * Math.cos(b));
-      const az = az0 + Math.atan2(Math.sin(b) * Math.sin(d) * Math.cos(alt0),
-        Math.cos(d) - Math.sin(alt0) * Math.sin(alt));
-      const [x, y] = chart.project(Math.max(alt / rad, LOWEST_ALT), az / rad);
-      if (bearing === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
-    }
-    ctx.closePath(); ctx.fill(); ctx.stroke();
-  }
-
-  function selectedPosition() {
-    const sel = data.selected;
-    if (!sel) return null;
-    if (sel.name) {
-      const obj = data.sky.find((o) => o.name === sel.name);
-      return obj ? { alt: obj.alt, az: obj.az } : null;
-    }
-    return sel;
-  }
-
-  function objectAt(x, y) {
-    let best = null, bestDistance = 18; // px: a finger-sized target
-    for (const obj of data.sky) {
-      if (obj.alt < LOWEST_ALT) continue;
-      const [ox, oy] = chart.project(obj.alt, obj.az);
-      const d = Math.hypot(ox - x, oy - y);
-      if (d < bestDistance) { best = obj; bestDistance = d; }
-    }
-    return best;
-  }
-
-  function onChartClick(event) {
-    const rect = chart.canvas.getBoundingClientRect();
-    const x = ((event.clientX - rect.left) / rect.width) * chart.size;
-    const y = ((event.clientY - rect.top) / rect.height) * chart.size;
-    const obj = objectAt(x, y);
-    if (obj) {
-      hooks.onSelect({ name: obj.name });
-      return;
-    }
-    const [alt, az] = chart.unproject(x, y);
-    if (alt < LOWEST_ALT) return;
-    hooks.onSelect({ alt, az });
-  }
-
-  return {
-    // canvas: the <canvas>; options.onSelect(selection) is called with {name} or {alt, az}.
-    init(canvas, options = {}) {
-      chart.canvas = canvas;
-      chart.ctx = canvas.getContext("2d");
-      if (options.onSelect) hooks.onSelect = options.onSelect;
-      window.addEventListener("resize", resizeChart);
-      canvas.addEventListener("click", onChartClick);
-      resizeChart();
-    },
-    // Any of {mount, state, sky} from the live connection; redraws once.
-    update(changes) {
-      for (const key of ["mount", "state", "sky"]) if (changes[key] !== undefined) data[key] = changes[key];
-      drawChart();
-    },
-    // The selection to ring (null for none).
-    select(selection) { data.selected = selection; drawChart(); },
-    // Where a selection is now ({alt, az}), or null when its object is not on the chart.
-    where: selectedPosition,
-    // Draw again (after the night mode changed the palette).
-    redraw: drawChart,
-    // For tests and debugging: the projection (CSS pixels on the canvas), the context, and
-    // the objects the chart knows.
-    debug: {
-      project: (alt, az) => chart.project(alt, az),
-      get ctx() { return chart.ctx; },
-      get size() { return chart.size; },
-      find: (name) => data.sky.find((o) => o.name === name) || null,
-    },
-  };
-})();
+const Chart = {
+  // canvas: the <canvas>; options.onSelect(selection) gets {name} or {alt, az}.
+  init(canvas, options = {}) {
+    chart.canvas = canvas;
+    chart.ctx = canvas.getContext("2d");
+    if (options.onSelect) hooks.onSelect = options.onSelect;
+    const actions = attachControls({
+      canvas, redraw: () => schedule(), scene, select: selectAt,
+      mountAltAz: () => (data.state && data.state.alt_deg != null ? { alt: data.state.alt_deg, az: data.state.az_deg } : null),
+    });
+    setFovText = buildToolbar(canvas, actions, chart.field, () => schedule());
+    window.addEventListener("resize", resize);
+    resize();
+    loadSky(() => schedule());
+    refreshTrack();
+  },
+  // Any of {mount, state, sky, frame} from the live connection; draws if that changes the view.
+  update(changes) {
+    const before = targetKey(data.state);
+    for (const key of ["mount", "state", "sky", "frame"]) if (changes[key] !== undefined) data[key] = changes[key];
+    if (targetKey(data.state) !== before) refreshTrack(); // a new target may have a new track
+    schedule();
+  },
+  // The selection to ring (null for none).
+  select(selection) { data.selected = selection; schedule(); },
+  where,
+  // Draw again (after the night mode changed the palette).
+  redraw: () => schedule(true),
+  // For tests and debugging: the projection (CSS pixels on the canvas), the context, what the
+  // last drawing showed (counts, label boxes, the frame, the time it took) and the objects.
+  debug: {
+    project: (alt, az) => scene().projection(skyPoint(alt, az)),
+    get ctx() { return chart.ctx; },
+    get size() { return chart.width; },
+    report: () => report,
+    view,
+    find: (name) => data.sky.find((o) => o.name === name) || null,
+  },
+};
 window.Chart = Chart;
