@@ -56,6 +56,7 @@ async def test_zone_drawn_warning_shown_and_goto_sun_refused(browser: Browser) -
         await expect(warning).to_be_visible(timeout=TIMEOUT_MS)
         await expect(warning).to_contain_text("The Sun is up")
         await expect(warning).to_contain_text("within 15° of it are refused")
+        await page.wait_for_function("Chart.debug.report().sunZone === true", timeout=TIMEOUT_MS)
         sun = await page.evaluate("view.state.sun")
         assert sun["up"] is True
         assert sun["radius_deg"] == 15.0

@@ -81,6 +81,8 @@ function scene() {
     path: d3.geoPath(projection, chart.ctx),
     // Without adaptive resampling, for dense outlines (the Milky Way): twice as fast.
     rough: make(0),
+    sunAlt: data.state && data.state.sun ? data.state.sun.alt : null,
+    project: (p) => projection(p),
     // Screen position of a [lon, lat] point (v: its unit vector, if known), or null when off the view.
     screen(p, v = null) {
       const u = v || lonLatVector(p);
@@ -257,6 +259,12 @@ const Chart = {
     get ctx() { return chart.ctx; },
     get size() { return chart.width; },
     report: () => report,
+    // The mean time of `n` full drawings (sky layers included), in milliseconds.
+    benchmark(n = 5) {
+      const started = performance.now();
+      for (let i = 0; i < n; i++) { drawnKey = null; base.key = null; draw(); }
+      return (performance.now() - started) / n;
+    },
     view,
     find: (name) => data.sky.find((o) => o.name === name) || null,
   },
