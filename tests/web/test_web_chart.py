@@ -71,7 +71,8 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
     async with served(sim_mount(rate=1.0)) as s, open_page(browser, s) as page:
         await page.wait_for_function(DRAWN, timeout=TIMEOUT_MS)
         drawn = await report(page)
-        assert drawn["fov"] == 200 and drawn["twilight"] == "night"  # 21 h UTC in March
+        assert drawn["fov"] == 200
+        assert drawn["twilight"] == "night"  # 21 h UTC in March
         assert drawn["mount"] is not None  # the crosshair is on the chart
         assert_labels_apart(drawn["labels"])
         print(f"desktop chart: {await page.evaluate('Chart.debug.benchmark(5)'):.1f} ms a drawing")
@@ -108,10 +109,18 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         await page.mouse.click(box["x"] + messier["x"], box["y"] + messier["y"])
         await expect(page.locator("#selection-name")).to_have_text(messier["name"])
 
-        # While the mount slews, its planned path is drawn.
+        # While the mount slews, its planned path is drawn, and the track GET /api/track gives
+        # (an endpoint of another branch, answered here by the browser: without it, a 404, the
+        # chart draws no track) with its error beside the target.
+        assert (await report(page))["track"] is False
+        await page.route("**/api/track", lambda route: route.fulfill(json=TRACK))
         status, _ = await s.post("/api/goto", {"name": HIGH_UP})
         assert status == 200
-        await page.wait_for_function("() => Chart.debug.report().path === true", timeout=TIMEOUT_MS)
+        await page.wait_for_function(
+            "() => { const r = Chart.debug.report();"
+            " return r.path && r.track && r.error === '12″'; }",
+            timeout=TIMEOUT_MS,
+        )
         await shot(page, "slewing")
         await s.post("/api/abort")
 
@@ -131,6 +140,13 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         await page.wait_for_function("() => Chart.debug.report().fov === 200", timeout=TIMEOUT_MS)
         await shot(page, "night")
 
+
+TRACK = {
+    "target": HIGH_UP,
+    "kind": "star",
+    "error_arcsec": 12.3,
+    "path": [[79.17, 45.99], [79.5, 46.2], [80.0, 46.4], "junk", [80.5]],
+}
 
 POINTER = """([type, id, x, y]) => {
     const rect = document.getElementById("sky").getBoundingClientRect();

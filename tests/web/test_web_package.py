@@ -12,7 +12,18 @@ from pathlib import Path
 from hatchling.builders.wheel import WheelBuilder
 
 ROOT = Path(__file__).resolve().parents[2]
-STATIC = ("index.html", "app.js", "chart.js", "skycommander.js", "style.css")
+STATIC = (
+    "index.html",
+    "app.js",
+    "chart.js",
+    "chart.css",
+    "chart/sphere.js",
+    "vendor/d3-geo.min.js",
+    "vendor/LICENSES",
+    "sky/milkyway.json",
+    "skycommander.js",
+    "style.css",
+)
 
 SERVE_FROM_INSTALLED_COPY = """
 import asyncio, sys
