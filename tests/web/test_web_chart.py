@@ -102,6 +102,8 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         await page.keyboard.press("0")  # the whole sky again
         await wait_for_change(page, keyed)
         assert_labels_apart((await report(page))["labels"])
+        # Outside the sky's disc nothing is left of the zoomed drawings.
+        assert await page.evaluate("Chart.debug.ctx.getImageData(3, 3, 1, 1).data[3]") == 0
 
         # A click on a Messier object selects it by name.
         await page.wait_for_function(DRAWN, timeout=TIMEOUT_MS)

@@ -175,7 +175,9 @@ function draw() {
   const started = performance.now();
   const { ctx, width, height } = s;
   if (base.key !== keys[0]) { drawBase(s); base.key = keys[0]; }
-  ctx.save(); ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.drawImage(base.canvas, 0, 0); ctx.restore();
+  ctx.save(); ctx.setTransform(1, 0, 0, 1, 0, 0);
+  ctx.clearRect(0, 0, chart.canvas.width, chart.canvas.height); ctx.drawImage(base.canvas, 0, 0);
+  ctx.restore();
   const paths = drawPaths(s, data.state, data.mount, data.track, skyCache());
   const markers = drawMarkers(s, data.state, where(), chart.field, data.track);
   const budget = Math.max(8, Math.round((width * height) / LABEL_AREA_PX2));
