@@ -8,14 +8,20 @@ from __future__ import annotations
 import json
 import math
 import re
+from pathlib import Path
 
 from scopelink.astro import angular_separation_deg, lst_hours
 from scopelink.astro.catalog.deepsky import load_deep_sky
 from scopelink.astro.catalog.entries import Prominence
 from scopelink.web.dashboard import static_dir
-from scopelink.web.deepsky import CHART_DEEP_SKY_MAGNITUDE, deep_sky_json
+from scopelink.web.deepsky import (
+    CHART_DEEP_SKY_CACHE_S,
+    CHART_DEEP_SKY_MAGNITUDE,
+    deep_sky_json,
+)
 from tests.support.web import served
 
+DOC = Path(__file__).resolve().parents[2] / "docs" / "dashboard.md"
 ASSET_BUDGET_BYTES = 2 * 1024 * 1024  # issue #17: the page within 2 MB
 URL = re.compile(r"""(?:https?:)?//[a-z0-9.-]+\.[a-z]{2,}|url\(\s*['"]?(?:https?:)?//""", re.I)
 COMMENT = re.compile(r"^\s*(?://|/\*|\*|<!--).*$|/\*.*?\*/", re.M)
@@ -26,7 +32,7 @@ async def test_deep_sky_list_and_sky_frame() -> None:
         async with s.http.get("/api/sky/deepsky", headers={"Accept-Encoding": "gzip"}) as response:
             assert response.status == 200
             assert response.headers["Content-Encoding"] == "gzip"
-            assert response.headers["Cache-Control"] == "max-age=86400"
+            assert response.headers["Cache-Control"] == f"max-age={CHART_DEEP_SKY_CACHE_S}"
             reply = await response.json()
         at = {field: i for i, field in enumerate(reply["fields"])}
         rows = {row[at["name"]]: row for row in reply["objects"]}
@@ -80,3 +86,24 @@ def test_page_assets_fit_the_budget_and_name_no_other_host() -> None:
             continue
         code = COMMENT.sub("", path.read_text(encoding="utf-8"))
         assert URL.findall(code) == [], path.name
+
+
+def js_constant(text: str, name: str) -> str:
+    match = re.search(rf"export const {name} = ([^;]+);", text)
+    assert match is not None, name
+    return match.group(1)
+
+
+def test_the_charts_defaults_are_the_documented_ones() -> None:
+    doc = " ".join(DOC.read_text(encoding="utf-8").split())
+    view = (static_dir() / "chart" / "view.js").read_text(encoding="utf-8")
+    fov_min, fov_max = js_constant(view, "FOV_MIN"), js_constant(view, "FOV_MAX")
+    assert (
+        f"The field (across the canvas) goes from {fov_max}° (the whole sky) to {fov_min}°" in doc
+    )
+    field = js_constant(view, "DEFAULT_FIELD")
+    width = re.search(r"width: ([0-9.]+)", field)
+    assert width is not None
+    assert f"width only (default {width.group(1)}°)" in doc
+    assert f"of magnitude {CHART_DEEP_SKY_MAGNITUDE:g} or brighter" in doc
+    assert f"`Cache-Control: max-age={CHART_DEEP_SKY_CACHE_S}`" in doc

@@ -21,10 +21,18 @@ from aiohttp import web
 from scopelink.astro.catalog.deepsky import load_deep_sky, load_deep_sky_shapes
 from scopelink.astro.catalog.entries import CatalogEntry, FixedPosition, Prominence
 
-__all__ = ["CHART_DEEP_SKY_MAGNITUDE", "add_deep_sky_route", "deep_sky_json"]
+__all__ = [
+    "CHART_DEEP_SKY_CACHE_S",
+    "CHART_DEEP_SKY_MAGNITUDE",
+    "add_deep_sky_route",
+    "deep_sky_json",
+]
 
 CHART_DEEP_SKY_MAGNITUDE = 13.0
 """The faintest deep-sky object the chart draws unless it is named (Messier, Caldwell, common)."""
+
+CHART_DEEP_SKY_CACHE_S = 86400
+"""How long a browser may keep the list (``Cache-Control: max-age``)."""
 
 _FIELDS = ["name", "type", "ra_deg", "dec_deg", "mag", "major_arcmin", "minor_arcmin", "pa_deg"]
 
@@ -47,7 +55,6 @@ _SYMBOLS = {
     "Supernova remnant": "nebula",
     "Star cluster + Nebula": "cluster-nebula",
 }
-_CACHE_SECONDS = 86400
 
 
 def _drawn(entry: CatalogEntry) -> bool:
@@ -96,7 +103,7 @@ async def _deep_sky(request: web.Request) -> web.Response:
     response = web.Response(
         body=body,
         content_type="application/json",
-        headers={"Cache-Control": f"max-age={_CACHE_SECONDS}"},
+        headers={"Cache-Control": f"max-age={CHART_DEEP_SKY_CACHE_S}"},
     )
     response.enable_compression()
     return response

@@ -1,7 +1,7 @@
 // Labels that never overlap: a greedy placement. Candidates come with a priority (lower first:
-// the Sun, Moon and planets, then by magnitude); each tries four places around its symbol
-// (right, left, above, below) and takes the first whose box hits no box already taken and
-// stays on the canvas; one that fits nowhere is not drawn. Boxes of symbols that must stay
+// the Sun, Moon and planets, then by magnitude); each tries eight places around its symbol
+// (right, left, above, below, then the diagonals) and takes the first whose box hits no box
+// already taken and stays on the canvas; one that fits nowhere is not drawn. Boxes of symbols that must stay
 // readable (the mount, the target) are taken before any label.
 "use strict";
 
@@ -56,6 +56,10 @@ export function placeLabels(ctx, candidates, keepOut, width, height, budget) {
       [label.x - gap - w, label.y - h / 2], // left
       [label.x - w / 2, label.y - gap - h], // above
       [label.x - w / 2, label.y + gap], // below
+      [label.x + gap * 0.8, label.y - gap * 0.8 - h], // above right
+      [label.x + gap * 0.8, label.y + gap * 0.8], // below right
+      [label.x - gap * 0.8 - w, label.y - gap * 0.8 - h], // above left
+      [label.x - gap * 0.8 - w, label.y + gap * 0.8], // below left
     ];
     for (const [x, y] of spots) {
       const box = [x - PAD, y - PAD, x + w + PAD, y + h + PAD];
