@@ -1,6 +1,6 @@
 // Reduce d3-celestial's data to what the dashboard's sky chart draws, at the precision it needs
 // (scripts/vendor_web.sh runs this; docs/dashboard.md, "Sky chart"):
-//   stars.json           [[ra, dec, mag], ...] to magnitude 6.0, 0.001° (3.6″)
+//   stars.json           [ra, dec, mag, ra, dec, mag, ...] to magnitude 7.5, 0.001° (3.6″)
 //   constellations.json  {lines: [[abbr, [[[ra, dec], ...], ...]], ...],
 //                         names: [[abbr, name, ra, dec, rank], ...]}, 0.01°
 //   milkyway.json        {levels: [MultiPolygon coordinates, ...]} from faint to bright, 0.1°,
@@ -24,6 +24,7 @@ for (const file of ["d3-array/package/dist/d3-array.min.js", "d3-geo/package/dis
 }
 const d3 = context.d3;
 
+const STAR_LIMIT = 7.5; // the faintest star kept (magnitude)
 const round = (value, decimals) => Number(value.toFixed(decimals));
 const ra360 = (ra) => (ra < 0 ? ra + 360 : ra);
 const point = ([ra, dec], decimals) => [round(ra360(ra), decimals), round(dec, decimals)];
@@ -34,12 +35,12 @@ function write(name, value) {
   console.log(`${name}: ${text.length} bytes`);
 }
 
-// Stars: brightest first, so that the chart can stop early when zoomed out.
-const stars = data("stars.6.json").features
-  .filter((f) => f.properties.mag <= 6.0)
+// Stars: brightest first, so that the chart can stop early when zoomed out; one flat array.
+const stars = data("stars.8.json").features
+  .filter((f) => f.properties.mag <= STAR_LIMIT)
   .map((f) => [...point(f.geometry.coordinates, 3), round(Number(f.properties.mag), 2)])
   .sort((a, b) => a[2] - b[2]);
-write("stars.json", stars);
+write("stars.json", stars.flat());
 
 const lines = data("constellations.lines.json").features.map((f) => [
   f.id,

@@ -40,11 +40,10 @@ function skyCache() {
     frame: data.frame,
     counts: countData(),
     toSky: f.toSky,
-    stars: sky.stars.map(([ra, dec, mag]) => { const p = f.toSky(ra, dec); return [p, mag, lonLatVector(p)]; }),
+    toJ2000Vector: f.toJ2000Vector,
     lines: sky.lines.map(([abbr, lines]) => [abbr, lines.map((line) => line.map(to))]),
     names: sky.names.map(([abbr, name, ra, dec, rank]) => [abbr, name, f.toSky(ra, dec), rank]),
     milkyway: sky.milkyway.map((polygons) => polygons.map((polygon) => polygon.map((ring) => ring.map(to)))),
-    deepsky: sky.deepsky.map((obj) => { const p = f.toSky(obj.ra, obj.dec); return { ...obj, p, v: lonLatVector(p) }; }),
   };
   return cache;
 }
@@ -77,7 +76,7 @@ function scene() {
   const cosLimit = Math.cos(clip * RAD);
   const c = palette();
   const s = {
-    ctx: chart.ctx, width, height, projection, c, fov: view.fov, pxPerDeg: (k * RAD) / 2,
+    ctx: chart.ctx, width, height, projection, c, fov: view.fov, pxPerDeg: (k * RAD) / 2, centre, clip,
     path: d3.geoPath(projection, chart.ctx),
     // Without adaptive resampling, for dense outlines (the Milky Way): twice as fast.
     rough: make(0),
@@ -93,8 +92,8 @@ function scene() {
       return xy;
     },
     // The screen angle of celestial north at a J2000 object (for galaxies' position angles).
-    northAngle(obj) {
-      const a = projection(obj.p), b = projection(cache.toSky(obj.ra, Math.min(obj.dec + 0.05, 89.99)));
+    northAngle(obj, p) {
+      const a = projection(p), b = projection(cache.toSky(obj.ra, Math.min(obj.dec + 0.05, 89.99)));
       return Math.atan2(b[1] - a[1], b[0] - a[0]);
     },
   };
@@ -154,8 +153,10 @@ function drawBase(s) {
     const constellations = drawConstellations(b, layers.lines, layers.names);
     drawn.constellations = constellations.count;
     labels = labels.concat(constellations.labels);
-    drawn.stars = drawStars(b, layers.stars);
-    const dso = drawDeepSky(b, layers.deepsky);
+    // Stars and deep-sky objects: only those near the view are turned into the sky of now.
+    const near = { centre: layers.toJ2000Vector(s.centre), cos: Math.cos(s.clip * RAD + RAD), toSky: layers.toSky };
+    drawn.stars = drawStars(b, sky.stars, sky.starVectors, near);
+    const dso = drawDeepSky(b, sky.deepsky, near);
     drawn.deepsky = dso.count; labels = labels.concat(dso.labels); clickable = clickable.concat(dso.clickable);
   }
   drawGround(b);
@@ -197,8 +198,8 @@ function where(selection = data.selected) {
   const obj = data.sky.find((o) => o.name === selection.name);
   if (obj) return { alt: obj.alt, az: obj.az };
   const layers = skyCache();
-  const dso = layers && layers.deepsky.find((o) => o.name === selection.name);
-  return dso ? altAz(dso.p) : null;
+  const dso = layers && sky.deepsky.find((o) => o.name === selection.name);
+  return dso ? altAz(layers.toSky(dso.ra, dso.dec)) : null;
 }
 
 // A click at (x, y) in CSS pixels: the nearest object within reach, or that point of the sky.

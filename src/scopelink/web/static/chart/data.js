@@ -14,17 +14,31 @@ async function getJson(url) {
   }
 }
 
+import { unit } from "./sphere.js";
+
+// J2000 unit vectors of a flat [ra, dec, ...] list taken every `stride` numbers.
+function vectors(flat, stride) {
+  const n = flat.length / stride;
+  const out = new Float64Array(3 * n);
+  for (let i = 0; i < n; i++) out.set(unit(flat[stride * i], flat[stride * i + 1]), 3 * i);
+  return out;
+}
+
 export const sky = {
-  stars: [], // [[ra, dec, mag], ...] brightest first
+  stars: [], // [ra, dec, mag, ra, dec, mag, ...] brightest first
+  starVectors: new Float64Array(0), // their J2000 unit vectors, for culling
   lines: [], // [[abbr, [[[ra, dec], ...], ...]], ...]
   names: [], // [[abbr, name, ra, dec, rank], ...]
   milkyway: [], // MultiPolygon coordinates per level, faint to bright
-  deepsky: [], // [{name, type, ra, dec, mag, major, minor, pa}, ...] brightest first
+  deepsky: [], // [{name, type, ra, dec, mag, major, minor, pa, v}, ...] brightest first
 };
 
 // Calls `changed` after each piece arrives.
 export function loadSky(changed) {
-  getJson("/static/sky/stars.json").then((stars) => { if (stars) { sky.stars = stars; changed(); } });
+  getJson("/static/sky/stars.json").then((stars) => {
+    if (!stars) return;
+    sky.stars = stars; sky.starVectors = vectors(stars, 3); changed();
+  });
   getJson("/static/sky/constellations.json").then((c) => {
     if (c) { sky.lines = c.lines; sky.names = c.names; changed(); }
   });
@@ -35,6 +49,7 @@ export function loadSky(changed) {
     sky.deepsky = d.objects.map((row) => ({
       name: row[at.name], type: row[at.type], ra: row[at.ra_deg], dec: row[at.dec_deg],
       mag: row[at.mag], major: row[at.major_arcmin], minor: row[at.minor_arcmin], pa: row[at.pa_deg],
+      v: unit(row[at.ra_deg], row[at.dec_deg]),
     }));
     changed();
   });

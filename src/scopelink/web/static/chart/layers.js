@@ -56,6 +56,15 @@ export function twilightName(sunAlt) {
   return "night";
 }
 
+// The faintest magnitude the sky's brightness lets through: none by day, 8 by night, linear in
+// the Sun's depth in between (about 3.8 at the end of civil twilight, 5.9 of nautical).
+export function skyLimit(sunAlt) {
+  if (sunAlt == null) return 99;
+  if (sunAlt > -0.833) return -99;
+  return 2 + ((Math.min(18, -sunAlt) - 0.833) / (18 - 0.833)) * 6;
+}
+const DEEP_SKY_DARKNESS = 6; // deep-sky objects and the Milky Way only once the Sun is 6° down
+
 export function drawBackground(scene) {
   const { ctx, path, c } = scene;
   ctx.fillStyle = skyColour(scene.sunAlt, c);
@@ -64,6 +73,7 @@ export function drawBackground(scene) {
 
 export function drawMilkyWay(scene, levels) {
   const { ctx, roughPath, c } = scene;
+  if (scene.sunAlt != null && scene.sunAlt > -DEEP_SKY_DARKNESS) return 0;
   ctx.fillStyle = c.milkyway;
   for (const coordinates of levels) {
     ctx.beginPath(); roughPath({ type: "MultiPolygon", coordinates }); ctx.fill();
@@ -104,9 +114,11 @@ export function drawGrid(scene) {
 export function drawConstellations(scene, lines, names) {
   const { ctx, path, c } = scene;
   ctx.strokeStyle = c.constellation; ctx.lineWidth = 1;
+  ctx.globalAlpha = skyLimit(scene.sunAlt) < 0 ? 0.4 : 1; // faint by day
   ctx.beginPath();
   for (const [, coordinates] of lines) path({ type: "MultiLineString", coordinates });
   ctx.stroke();
+  ctx.globalAlpha = 1;
   const labels = [];
   const maxRank = scene.fov > 150 ? 1 : scene.fov > 90 ? 2 : 3;
   for (const [, name, p, rank] of names) {
@@ -117,29 +129,39 @@ export function drawConstellations(scene, lines, names) {
   return { count: lines.length, labels };
 }
 
-// Fainter stars only as the field narrows: magnitude 4.5 for the whole sky, 6 from 70° down.
+// Fainter stars only as the field narrows: magnitude 4.5 for the whole sky, 7.5 from 20° down.
 export function starLimit(fov) {
-  return Math.min(6.0, 4.5 + 1.5 * Math.log2(200 / fov) / Math.log2(200 / 70));
+  return Math.min(7.5, 4.5 + 3 * Math.log2(200 / fov) / Math.log2(200 / 20));
 }
 
 function starRadius(mag, fov) {
-  const zoom = 1 + 0.25 * Math.log2(200 / fov);
   if (mag == null) return 3;
-  return Math.max(0.6, Math.min(5, (3.6 - 0.55 * mag) * zoom));
+  const zoom = 1 + 0.25 * Math.log2(200 / fov);
+  return Math.max(0.7, Math.min(6, Math.max(0.5, 3.6 - 0.55 * mag) * zoom));
 }
 
-export function drawStars(scene, stars) {
+// A J2000 object near the view (`near`: the view's centre as a J2000 vector, the cosine of
+// the culling radius, the J2000 -> sky conversion): its [lon, lat], or null.
+function nearby(near, vectors, i, ra, dec) {
+  const c = near.centre;
+  if (vectors[3 * i] * c[0] + vectors[3 * i + 1] * c[1] + vectors[3 * i + 2] * c[2] < near.cos) return null;
+  return near.toSky(ra, dec);
+}
+
+// stars: a flat [ra, dec, mag, ...] list, brightest first; vectors: their J2000 unit vectors.
+export function drawStars(scene, stars, vectors, near) {
   const { ctx, c } = scene;
-  const limit = starLimit(scene.fov);
+  const limit = Math.min(starLimit(scene.fov), skyLimit(scene.sunAlt));
   ctx.fillStyle = c.star;
   let count = 0;
-  for (const [p, mag, v] of stars) {
+  for (let i = 0; 3 * i < stars.length; i++) {
+    const mag = stars[3 * i + 2];
     if (mag > limit) break; // brightest first
-    const xy = scene.screen(p, v);
+    const p = nearby(near, vectors, i, stars[3 * i], stars[3 * i + 1]);
+    const xy = p && scene.screen(p);
     if (!xy) continue;
-    const r = starRadius(mag, scene.fov);
     ctx.globalAlpha = p[1] < 0 ? 0.35 : 1;
-    ctx.beginPath(); ctx.arc(xy[0], xy[1], r, 0, 2 * Math.PI); ctx.fill();
+    ctx.beginPath(); ctx.arc(xy[0], xy[1], starRadius(mag, scene.fov), 0, 2 * Math.PI); ctx.fill();
     count++;
   }
   ctx.globalAlpha = 1;
@@ -181,10 +203,11 @@ function deepSkySymbol(ctx, type, x, y, rx, ry, angle) {
   ctx.setLineDash([]);
 }
 
-// objects: [{name, type, mag, major, minor, pa, p: [lon, lat], north: angle or null}]
-export function drawDeepSky(scene, objects) {
+// objects: [{name, type, ra, dec, mag, major, minor, pa, v}] (data.js), brightest first.
+export function drawDeepSky(scene, objects, near) {
   const { ctx, c } = scene;
   const limit = deepSkyLimit(scene.fov);
+  if (scene.sunAlt != null && scene.sunAlt > -DEEP_SKY_DARKNESS) return { count: 0, clickable: [], labels: [] };
   const pxPerDeg = scene.pxPerDeg;
   const clickable = [], labels = [];
   ctx.lineWidth = 1.1;
@@ -192,17 +215,20 @@ export function drawDeepSky(scene, objects) {
     const named = obj.name.startsWith("M ") || obj.name.startsWith("C ");
     const mag = obj.mag == null ? 14 : obj.mag;
     if (mag > limit && !(named && scene.fov <= 120)) continue;
-    const xy = scene.screen(obj.p, obj.v);
+    const c0 = near.centre;
+    if (obj.v[0] * c0[0] + obj.v[1] * c0[1] + obj.v[2] * c0[2] < near.cos) continue;
+    const p = near.toSky(obj.ra, obj.dec);
+    const xy = scene.screen(p);
     if (!xy) continue;
     const major = obj.major || 1;
     const rx = Math.max(3.5, (major / 120) * pxPerDeg);
     const ry = obj.minor ? Math.max(2, (obj.minor / 120) * pxPerDeg) : rx;
-    const angle = obj.pa != null && rx > 6 ? scene.northAngle(obj) - obj.pa * RAD : 0;
+    const angle = obj.pa != null && rx > 6 ? scene.northAngle(obj, p) - obj.pa * RAD : 0;
     ctx.strokeStyle = c[obj.type] || c.nebula;
-    ctx.globalAlpha = obj.p[1] < 0 ? 0.35 : 1;
+    ctx.globalAlpha = p[1] < 0 ? 0.35 : 1;
     deepSkySymbol(ctx, obj.type, xy[0], xy[1], rx, obj.type === "galaxy" ? ry : rx, angle);
     clickable.push({ name: obj.name, x: xy[0], y: xy[1] });
-    if (obj.p[1] >= 0) labels.push({ text: obj.name, x: xy[0], y: xy[1], r: Math.min(rx, 12), priority: 10 + mag, font: "10px system-ui, sans-serif", size: 10, colour: c[obj.type] || c.nebula });
+    if (p[1] >= 0) labels.push({ text: obj.name, x: xy[0], y: xy[1], r: Math.min(rx, 12), priority: 10 + mag, font: "10px system-ui, sans-serif", size: 10, colour: c[obj.type] || c.nebula });
   }
   ctx.globalAlpha = 1;
   return { count: clickable.length, clickable, labels };

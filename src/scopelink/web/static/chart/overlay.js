@@ -118,7 +118,7 @@ export function drawMarkers(scene, state, selected, field, track) {
       result.frame = drawField(scene, centre, field);
       ctx.strokeStyle = c.mount; ctx.lineWidth = 2;
       crosshair(ctx, xy[0], xy[1]);
-      keepOut.push([xy[0] - 15, xy[1] - 15, xy[0] + 15, xy[1] + 15]);
+      keepOut.push([xy[0] - 10, xy[1] - 10, xy[0] + 10, xy[1] + 10]); // the ring; ticks may be crossed
       result.mount = xy;
     }
   }

@@ -36,6 +36,11 @@ export function makeFrame(frame) {
   const north = normalise([meridian[0] - along * up[0], meridian[1] - along * up[1], meridian[2] - along * up[2]]);
   const west = cross(up, north);
   return {
+    // A horizontal [lon, lat] -> its J2000 unit vector (refraction left aside: for culling).
+    toJ2000Vector(p) {
+      const [x, y, z] = unit(p[0], p[1]);
+      return [0, 1, 2].map((i) => x * north[i] + y * west[i] + z * up[i]);
+    },
     // J2000 RA, Dec (degrees) -> [lon, lat] seen from the site, refracted.
     toSky(raDeg, decDeg) {
       const v = unit(raDeg, decDeg);
