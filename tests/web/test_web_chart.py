@@ -75,6 +75,12 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         assert drawn["twilight"] == "night"  # 21 h UTC in March
         assert drawn["mount"] is not None  # the crosshair is on the chart
         assert_labels_apart(drawn["labels"])
+        # The J2000 layers sit where the server puts the same stars (its frame, its refraction).
+        for name, ra, dec in (("Capella", 79.1723, 45.998), ("Sirius", 101.2872, -16.7161)):
+            server = await page.evaluate("(name) => Chart.debug.find(name)", name)
+            chart = await page.evaluate("([ra, dec]) => Chart.debug.toSky(ra, dec)", [ra, dec])
+            assert abs(chart["alt"] - server["alt"]) < 0.03, name
+            assert abs((chart["az"] - server["az"] + 180) % 360 - 180) < 0.05, name
         print(f"desktop chart: {await page.evaluate('Chart.debug.benchmark(5)'):.1f} ms a drawing")
         await assert_only_own_host(page, s.dashboard.url.rstrip("/"))
         await shot(page, "desktop")

@@ -270,6 +270,8 @@ const Chart = {
     },
     view,
     find: (name) => data.sky.find((o) => o.name === name) || null,
+    // A J2000 position as the chart places it now ({alt, az}), or null without a frame.
+    toSky: (ra, dec) => { const layers = skyCache(); return layers ? altAz(layers.toSky(ra, dec)) : null; },
   },
 };
 window.Chart = Chart;
