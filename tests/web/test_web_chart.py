@@ -133,7 +133,7 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         await s.post("/api/abort")
 
         # Centred on the mount and zoomed in all the way: a 1° field with the eyepiece frame.
-        await page.get_by_role("button", name="Centre on the mount (M)").click()
+        await page.get_by_role("button", name="Centre on the mount and follow it (M)").click()
         await page.locator("#sky").focus()
         for _ in range(14):
             await page.keyboard.press("+")
@@ -141,7 +141,10 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
             "() => Chart.debug.report().fov === 1 && Chart.debug.report().frame === true",
             timeout=TIMEOUT_MS,
         )
+        assert await page.evaluate("Chart.debug.view.follow") is True
         await shot(page, "zoomed-frame")
+        await page.keyboard.press("ArrowUp")  # any pan ends the following
+        assert await page.evaluate("Chart.debug.view.follow") is False
 
         await page.click("#night-toggle")
         await page.locator("#sky").press("0")

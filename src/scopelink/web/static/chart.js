@@ -13,11 +13,12 @@ import {
   drawNamedObjects, drawStars, palettes, twilightName,
 } from "./chart/layers.js";
 import { drawLimits, drawMarkers, drawPaths, drawSunZone } from "./chart/overlay.js";
-import { attachControls, buildToolbar, loadField, view } from "./chart/view.js";
+import { attachControls, buildToolbar, followMount, loadField, view } from "./chart/view.js";
 
 const CLICK_RADIUS_PX = 18; // a finger-sized target
 const LABEL_AREA_PX2 = 7000; // at most one label per this much canvas
 const SCREEN_MARGIN_PX = 20;
+const FOLLOW_STEP_PX = 2; // a followed mount is re-centred once it is this far off the centre
 
 const data = { mount: null, state: null, sky: [], selected: null, frame: null, track: null };
 const hooks = { onSelect: () => {} };
@@ -225,6 +226,7 @@ async function refreshTrack() {
   data.track = track;
   schedule();
 }
+const mountAltAz = () => (data.state && data.state.alt_deg != null ? { alt: data.state.alt_deg, az: data.state.az_deg } : null);
 const targetKey = (state) => (state && state.target ? JSON.stringify(state.target) : "");
 
 const Chart = {
@@ -235,7 +237,7 @@ const Chart = {
     if (options.onSelect) hooks.onSelect = options.onSelect;
     const actions = attachControls({
       canvas, redraw: () => schedule(), scene, select: selectAt,
-      mountAltAz: () => (data.state && data.state.alt_deg != null ? { alt: data.state.alt_deg, az: data.state.az_deg } : null),
+      mountAltAz,
     });
     setFovText = buildToolbar(canvas, actions, chart.field, () => schedule());
     window.addEventListener("resize", resize);
@@ -248,6 +250,7 @@ const Chart = {
     const before = targetKey(data.state);
     for (const key of ["mount", "state", "sky", "frame"]) if (changes[key] !== undefined) data[key] = changes[key];
     if (targetKey(data.state) !== before) refreshTrack(); // a new target may have a new track
+    if (chart.ctx) followMount(mountAltAz(), FOLLOW_STEP_PX / scene().pxPerDeg);
     schedule();
   },
   // The selection to ring (null for none).

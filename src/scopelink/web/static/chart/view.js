@@ -11,7 +11,8 @@ const CLICK_SLOP_PX = 6; // a press that moves less than this is a click, not a 
 const FIELD_KEY = "scopelink.chart.field";
 export const DEFAULT_FIELD = { width: 0.7, height: null }; // an eyepiece's round field, degrees
 
-export const view = { ...WHOLE_SKY };
+// follow: keep the mount at the centre (set by "Mount", ended by any pan or "Sky").
+export const view = { ...WHOLE_SKY, follow: false };
 
 const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
 
@@ -37,6 +38,7 @@ export function attachControls(chart) {
 
   const degPerPx = () => 1 / chart.scene().pxPerDeg;
   function pan(dx, dy) {
+    view.follow = false;
     view.az = (view.az - (dx * degPerPx()) / Math.max(Math.cos((view.alt * Math.PI) / 180), 0.2) + 360) % 360;
     view.alt = clamp(view.alt + dy * degPerPx(), -30, 90);
     chart.redraw();
@@ -53,11 +55,10 @@ export function attachControls(chart) {
     }
     chart.redraw();
   }
-  function reset() { Object.assign(view, WHOLE_SKY); chart.redraw(); }
+  function reset() { Object.assign(view, WHOLE_SKY, { follow: false }); chart.redraw(); }
   function centreOnMount() {
-    const where = chart.mountAltAz();
-    if (!where) return;
-    view.alt = clamp(where.alt, -30, 90); view.az = where.az;
+    view.follow = true;
+    followMount(chart.mountAltAz());
     chart.redraw();
   }
   const local = (event) => {
@@ -129,6 +130,16 @@ export function attachControls(chart) {
   return { zoom, pan, reset, centreOnMount };
 }
 
+// While following, the view's centre is where the mount points (called on every state); it
+// moves once the mount is `minDeg` away, so that a tracking mount redraws the sky now and
+// then, not at every update.
+export function followMount(where, minDeg = 0) {
+  if (!view.follow || !where) return;
+  const d = d3.geoDistance([-view.az, view.alt], [-where.az, where.alt]) * (180 / Math.PI);
+  if (d < minDeg) return;
+  view.alt = clamp(where.alt, -30, 90); view.az = where.az;
+}
+
 function button(text, label, onClick) {
   const b = document.createElement("button");
   b.type = "button"; b.textContent = text; b.setAttribute("aria-label", label); b.title = label;
@@ -169,7 +180,7 @@ export function buildToolbar(canvas, actions, field, changed) {
     button("−", "Zoom out (−)", () => actions.zoom(1.5)),
     button("+", "Zoom in (+)", () => actions.zoom(1 / 1.5)),
     button("Sky", "Whole sky (0)", actions.reset),
-    button("Mount", "Centre on the mount (M)", actions.centreOnMount),
+    button("Mount", "Centre on the mount and follow it (M)", actions.centreOnMount),
     fov, fieldLabel,
   );
   canvas.after(bar);
