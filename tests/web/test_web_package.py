@@ -11,7 +11,18 @@ from pathlib import Path
 
 from tests.support.wheel import scopelink_wheel
 
-STATIC = ("index.html", "app.js", "skycommander.js", "style.css")
+STATIC = (
+    "index.html",
+    "app.js",
+    "chart.js",
+    "chart.css",
+    "chart/sphere.js",
+    "vendor/d3-geo.min.js",
+    "vendor/LICENSES",
+    "sky/milkyway.json",
+    "skycommander.js",
+    "style.css",
+)
 
 SERVE_FROM_INSTALLED_COPY = """
 import asyncio, sys

@@ -32,6 +32,7 @@ from scopelink.servers.access import AccessControl, AccessPolicy, retry_after
 from scopelink.servers.hosts import WARNED_MISDIRECTED, HostAllowList, machine_addresses
 from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpGuard
 from scopelink.web.api import Handler, add_api_routes, error_middleware
+from scopelink.web.deepsky import add_deep_sky_route
 from scopelink.web.live import LiveHub
 from scopelink.web.panel_api import add_panel_routes
 from scopelink.web.site_check import SiteStore
@@ -248,6 +249,7 @@ class Dashboard:
         app.router.add_get("/ws", self.hub.handle)
         add_api_routes(app, self.mount)
         add_skycommander_routes(app, self.mount)
+        add_deep_sky_route(app)
         app.router.add_static("/static/", static_dir(), follow_symlinks=False)
         return app
 

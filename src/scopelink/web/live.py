@@ -20,7 +20,7 @@ from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
 from scopelink.mount.deadman import MotionClient
-from scopelink.web.sky import SkyPositions, sky_positions
+from scopelink.web.sky import SkyPositions, sky_frame, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
 from scopelink.web.view_state import PanelView
@@ -59,12 +59,15 @@ class LiveHub:
     def clients(self) -> int:
         return len(self._sockets)
 
-    def sky_json(self) -> list[dict[str, object]]:
-        """The chart's objects now, at the mount's site."""
+    def sky_json(self) -> dict[str, object]:
+        """The chart's objects now, at the mount's site, and the frame that turns its J2000
+        data into altitude and azimuth (``sky`` and ``sky_frame`` of a message)."""
         now = self._mount.now()
+        site = self._mount.site
         if self._sky is None:
             self._sky = sky_positions(now)
-        return [obj.as_json() for obj in self._sky.at(now, self._mount.site)]
+        objects = [obj.as_json() for obj in self._sky.at(now, site)]
+        return {"sky": objects, "sky_frame": sky_frame(now, site)}
 
     def _traffic_json(self, since: int) -> tuple[list[dict[str, object]], int]:
         if self._traffic is None:
@@ -91,10 +94,10 @@ class LiveHub:
             "traffic_enabled": self._traffic is not None,
             "traffic": traffic,
             "state": state_json(self._mount, self._mount.state),
-            "sky": await asyncio.to_thread(self.sky_json),
             "interval_s": self.interval_s,
             "session": client.token,
         }
+        hello.update(await asyncio.to_thread(self.sky_json))
         await ws.send_str(json.dumps(hello))
         self._sockets.add(ws)
         self._ensure_running()
@@ -147,7 +150,7 @@ class LiveHub:
                 self._described = described
                 update["mount"] = described
             try:
-                update["sky"] = await asyncio.to_thread(self.sky_json)
+                update.update(await asyncio.to_thread(self.sky_json))
             except Exception:  # a chart without objects beats a dead dashboard
                 logger.exception("cannot compute the sky chart's objects")
         return json.dumps(update)

@@ -14,13 +14,13 @@ from functools import cache
 
 import numpy as np
 
-from scopelink.astro import Site, j2000_to_observed
+from scopelink.astro import Site, j2000_to_observed, observed_to_j2000
 from scopelink.astro.catalog import EphemerisRangeError, ObjectKind
 from scopelink.astro.catalog.entries import CatalogEntry
 from scopelink.astro.catalog.solar_system import load_solar_system
 from scopelink.astro.catalog.stars import load_named_stars
 
-__all__ = ["SkyObject", "SkyPositions", "sky_positions"]
+__all__ = ["SkyObject", "SkyPositions", "sky_frame", "sky_positions"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -95,6 +95,20 @@ class SkyPositions:
             SkyObject(name, kind, magnitude, float(a), float(z))
             for (name, kind, magnitude), a, z in zip(names, alts, azs, strict=True)
         ]
+
+
+def sky_frame(t: datetime, site: Site) -> dict[str, list[float]]:
+    """Where the zenith and a point of the meridian above the north horizon (altitude 45°,
+    azimuth 0°) are in J2000 (RA, Dec in degrees) at ``t``: the chart turns its J2000 data
+    (constellations, Milky Way, deep-sky objects) into altitude and azimuth with the rotation
+    these two directions define, so precession, nutation and aberration are the server's
+    (ERFA's). Refraction is not in the rotation: the chart adds it (docs/dashboard.md)."""
+    ra, dec = observed_to_j2000(np.array([90.0, 45.0]), np.array([0.0, 0.0]), t, site)
+    ras, decs = np.atleast_1d(ra) * 15.0, np.atleast_1d(dec)
+    return {
+        "zenith": [round(float(ras[0]), 5), round(float(decs[0]), 5)],
+        "north": [round(float(ras[1]), 5), round(float(decs[1]), 5)],
+    }
 
 
 def sky_positions(epoch: datetime) -> SkyPositions:

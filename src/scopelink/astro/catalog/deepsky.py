@@ -10,6 +10,7 @@ import math
 import re
 import sqlite3
 from collections import defaultdict
+from typing import Any
 
 import pyongc
 
@@ -21,7 +22,7 @@ from scopelink.astro.catalog.entries import (
 )
 from scopelink.astro.catalog.objects import ObjectKind
 
-__all__ = ["load_deep_sky"]
+__all__ = ["load_deep_sky", "load_deep_sky_shapes"]
 
 # Identifiers that name a position rather than an object ("2MASX J00424433+4116074") or that
 # nobody types at a telescope; they would only crowd the search.
@@ -36,6 +37,17 @@ FROM objects JOIN objTypes ON objects.type = objTypes.type
 """
 
 
+_SHAPE_QUERY = "SELECT name, majax, minax, pa FROM objects WHERE majax IS NOT NULL"
+
+
+def _rows(query: str) -> list[tuple[Any, ...]]:
+    connection = sqlite3.connect(f"file:{pyongc.DBPATH}?mode=ro", uri=True)
+    try:
+        return connection.execute(query).fetchall()
+    finally:
+        connection.close()
+
+
 def _split(field: str | None) -> list[str]:
     return [item.strip() for item in (field or "").split(",") if item.strip()]
 
@@ -46,12 +58,7 @@ def _cross_ids(ngc: str | None, ic: str | None) -> list[str]:
 
 def load_deep_sky() -> list[CatalogEntry]:
     """Every OpenNGC object with a position, duplicates folded into their main record."""
-    connection = sqlite3.connect(f"file:{pyongc.DBPATH}?mode=ro", uri=True)
-    try:
-        rows = connection.execute(_QUERY).fetchall()
-    finally:
-        connection.close()
-
+    rows = _rows(_QUERY)
     duplicate_names: defaultdict[str, list[str]] = defaultdict(list)
     messier_owner: dict[str, str] = {}
     for name, kind, _, _, _, _, _, _, messier, ngc, ic, *_ in rows:
@@ -127,3 +134,17 @@ def load_deep_sky() -> list[CatalogEntry]:
             )
         )
     return entries
+
+
+def load_deep_sky_shapes() -> dict[str, tuple[float, float | None, float | None]]:
+    """The apparent size of every OpenNGC object that has one, by designation (``"NGC 224"``,
+    as an alias of :func:`load_deep_sky`'s entries): major and minor axis in arcminutes and the
+    position angle of the major axis in degrees east of north (None where unknown)."""
+    return {
+        pretty_designation(name): (float(major), _float(minor), _float(angle))
+        for name, major, minor, angle in _rows(_SHAPE_QUERY)
+    }
+
+
+def _float(value: float | None) -> float | None:
+    return None if value is None else float(value)
