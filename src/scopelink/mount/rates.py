@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from datetime import datetime
 from typing import Protocol
 
 from scopelink.astro import (
@@ -33,7 +34,9 @@ from scopelink.mount.types import Capabilities, MountState, TrackingMode
 
 __all__ = [
     "SI_SECONDS_PER_SIDEREAL_SECOND",
+    "GuideShifts",
     "RateKeeper",
+    "RateLoopStatistics",
     "RatesSetter",
     "TrackingRates",
     "check_tracking_rates",
@@ -150,3 +153,52 @@ class RateKeeper:
         if self.owner is client and not self.rates.zero and self._mount.state.connected:
             logger.warning("%s went away with custom tracking rates: back to zero", client.name)
             await self._mount.set_tracking_rates(0.0, 0.0)
+
+
+@dataclass
+class RateLoopStatistics:
+    """A driver's closed rate loop (docs/tracking.md): the pointing error of every reading it
+    used (arcsec on the sky), where and when it started, how many commands it sent."""
+
+    errors_arcsec: list[float] = field(default_factory=list)
+    started_at: datetime | None = None
+    anchor: tuple[float, float] | None = None
+    """The J2000 RA (h) and Dec (°) read at ``started_at``: the target is integrated from it."""
+    commands: int = 0
+    pulses: int = 0
+    """Guide pulses added to the loop's rate (instead of ending it)."""
+
+    def rms_after(self, skip: int) -> float:
+        tail = self.errors_arcsec[skip:]
+        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
+
+
+@dataclass
+class GuideShifts:
+    """The guide pulses given while a rate loop runs, as a shift of its target: a pulse of
+    ``duration_s`` at (RA, Dec) rates moves the target by rate x time, growing while the
+    pulse runs, so the loop keeps the guider's correction instead of undoing it."""
+
+    _pulses: list[tuple[float, float, float, float]] = field(default_factory=list)
+    """(start, duration) on the loop's clock (s), RA rate (h/s), Dec rate (°/s)."""
+
+    def add(self, start_s: float, duration_s: float, ra_h_s: float, dec_deg_s: float) -> None:
+        self._pulses.append((start_s, duration_s, ra_h_s, dec_deg_s))
+
+    def at(self, t_s: float) -> tuple[float, float]:
+        """The target's shift (RA hours, Dec degrees) at ``t_s`` on the loop's clock."""
+        ra = dec = 0.0
+        for start, duration, ra_rate, dec_rate in self._pulses:
+            done = max(0.0, min(duration, t_s - start))
+            ra += ra_rate * done
+            dec += dec_rate * done
+        return ra, dec
+
+    def rates_at(self, t_s: float) -> tuple[float, float]:
+        """The pulses' (RA h/s, Dec °/s) rate at ``t_s`` (those still running)."""
+        ra = dec = 0.0
+        for start, duration, ra_rate, dec_rate in self._pulses:
+            if start <= t_s < start + duration:
+                ra += ra_rate
+                dec += dec_rate
+        return ra, dec

@@ -49,7 +49,7 @@ from scopelink.protocol.skytracker import (
 )
 
 from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, BusOptions, SkyTrackerLine
-from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion
+from .motion import MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S, UTILITY_ARROW_ARCSEC_S, AxisMotion
 
 __all__ = ["SkyTrackerBase"]
 
@@ -62,6 +62,10 @@ STOP_BITS = 2
 
 TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
 """Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
+
+LOOP_TRACKING_MODES = (TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING)
+"""Sidereal plus an RA offset, by the custom-rate loop (rates.py): it needs the Sky Commander's
+positions."""
 
 BOX_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
 
@@ -117,6 +121,11 @@ class SkyTrackerBase(Mount):
         """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
         self._pulse_speeds = (120, 120)
         self._held: dict[MountAxis, AxisMotion] = {}
+        self._loop_presses: dict[MountAxis, AxisMotion] = {}
+        """The custom-rate loop's arrows now (rates.py): tracking, not slewing."""
+        self._loop_on = False
+        """The custom-rate loop runs: the arrows it presses (even those a status read catches
+        on their way to being released) are tracking, not a slew."""
         self._pulses: dict[MountAxis, tuple[Direction, asyncio.Task[None]]] = {}
         self._rest_mode: TrackerMode | None = None
         """The mode to return to when the last arrow is released."""
@@ -145,7 +154,12 @@ class SkyTrackerBase(Mount):
             can_pulse_guide=True,
             can_move_axis=(True, True),
             max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
-            tracking_modes=frozenset({TrackingMode.OFF, *TRACKING_MODES}),
+            tracking_modes=frozenset(
+                {TrackingMode.OFF, *TRACKING_MODES, *(LOOP_TRACKING_MODES if commander else ())}
+            ),
+            max_tracking_offset_arcsec_s=MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S
+            if commander
+            else 0.0,
             can_set_site=True,
             can_set_time=False,
             can_report_pier_side=False,
@@ -237,6 +251,8 @@ class SkyTrackerBase(Mount):
         pulsing = Direction(0)
         for direction, _ in self._pulses.values():
             pulsing |= direction
+        if self._loop_on and not self._held:  # arrows pressed now are the loop's (or pulses)
+            pulsing = ~Direction(0)
         pressed = status.directions if status is not None else Direction(0)
         line = self._line
         read_at, received_s = self._status_at

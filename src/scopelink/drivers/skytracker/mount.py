@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, Self
 
@@ -47,7 +48,7 @@ from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
 from .memory import stored_object
 from .motion import axis_motion, guide_button, plan_buttons
-from .polling import SkyTrackerPolling
+from .rates import SkyTrackerRates
 from .realign import realign_on
 
 __all__ = ["SkyTrackerMount", "SlewInProgressError"]
@@ -63,7 +64,7 @@ def _other(axis: MountAxis) -> MountAxis:
     return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY
 
 
-class SkyTrackerMount(SkyTrackerPolling):
+class SkyTrackerMount(SkyTrackerRates):
     """A Sky Tracker box (with its Sky Commander) on a link.
 
     ``link`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
@@ -115,6 +116,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         if line is None:
             self._publish_now()
             return
+        await self._end_rate_loop()
         self._cancel_pulses()
         self._held.clear()
         try:
@@ -222,6 +224,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         line = self._require_line()
         self._cancel_pulses()
         self._held.clear()
+        self._loop_presses.clear()
         at_once: list[TrackerCommand] = [ReleaseDirections()]
         if self._mode is TrackerMode.GOTO:
             at_once.append(SelectMode(TrackerMode.UTILITY))
@@ -253,15 +256,18 @@ class SkyTrackerMount(SkyTrackerPolling):
             )
         if self._held or self._pulses:
             raise InvalidValueError("stop moving the axes before changing tracking")
+        await self._end_rate_loop()  # custom rates, lunar, solar, King: a PC loop (rates.py)
         target = TrackerMode.UTILITY if mode is TrackingMode.OFF else TrackerMode.TRACK
         if mode is not TrackingMode.OFF:
             self._tracking_choice = mode
         await self._send_confirmed([SelectMode(target)], mode=target)
         self._publish_now()
+        await self._start_rate_loop()
 
     async def standby(self) -> None:
         """``B``: cut the motor drive to save battery (a GOTO is aborted first with ``U``)."""
         self._require_line()
+        await self._end_rate_loop()
         self._cancel_pulses()
         self._held.clear()
         commands: list[TrackerCommand] = [ReleaseDirections()]
@@ -355,19 +361,26 @@ class SkyTrackerMount(SkyTrackerPolling):
 
     async def _release_all_buttons(self) -> None:
         self._cancel_pulses()
-        if self._held:
+        if self._held or self._loop_presses:
             self._held.clear()
+            self._loop_presses.clear()
             await self._apply_buttons()
 
-    async def _apply_buttons(self) -> None:
-        """Send the mode, ``K`` and arrows that the held motions and pulses call for, in one turn.
+    async def _apply_buttons(self, still: Callable[[], bool] | None = None) -> bool:
+        """Send the mode, ``K`` and arrows that the held motions, the custom-rate loop's presses
+        and pulses call for, in one turn; with ``still``, only if it holds once the turn is ours
+        (False: nothing sent).
 
-        ``b`` releases every arrow, so the arrows still wanted are pressed again after it.
+        ``b`` releases every arrow, so the arrows still wanted are pressed again after it. A
+        pulse on an axis takes it over from the loop for its duration.
         """
         async with self._buttons:
             self._require_line()
+            if still is not None and not still():
+                return False
+            loop = {a: m for a, m in self._loop_presses.items() if a not in self._pulses}
             plan = plan_buttons(
-                self._held,
+                {**loop, **self._held},
                 {axis: button for axis, (button, _) in self._pulses.items()},
                 pulse_speeds_arcsec_s=self._pulse_speeds,
                 mode=self._mode,
@@ -389,3 +402,4 @@ class SkyTrackerMount(SkyTrackerPolling):
                 speeds=plan.guide_speeds_arcsec_s if change_speeds else None,
             )
             self._publish_now()
+            return True

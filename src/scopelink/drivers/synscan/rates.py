@@ -18,15 +18,13 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import dataclass, field
-from datetime import datetime
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
 from scopelink.drivers.synscan.base import AXES
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import MountAxis, MountError, MountState, Priority, TrackingMode
-from scopelink.mount.rates import TrackingRates
+from scopelink.mount.rates import RateLoopStatistics, TrackingRates
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
 __all__ = [
@@ -67,21 +65,6 @@ LOOP_MODES = frozenset(
 
 HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
 """The equatorial modes the hand control tracks in by itself."""
-
-
-@dataclass
-class RateLoopStatistics:
-    """The pointing error of every poll the loop saw (arcsec on the sky), for tests and status."""
-
-    errors_arcsec: list[float] = field(default_factory=list)
-    started_at: datetime | None = None
-    anchor: tuple[float, float] | None = None
-    """The J2000 RA (h) and Dec (°) read at ``started_at``: the target is integrated from it."""
-    commands: int = 0
-
-    def rms_after(self, skip: int) -> float:
-        tail = self.errors_arcsec[skip:]
-        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
 
 
 def _quantised(arcsec_per_s: float) -> float:
