@@ -179,16 +179,27 @@ class GuideShifts:
     ``duration_s`` at (RA, Dec) rates moves the target by rate x time, growing while the
     pulse runs, so the loop keeps the guider's correction instead of undoing it."""
 
-    _pulses: list[tuple[float, float, float, float]] = field(default_factory=list)
-    """(start, duration) on the loop's clock (s), RA rate (h/s), Dec rate (°/s)."""
+    _pulses: list[list[float]] = field(default_factory=list)
+    """[key, start, duration] on the loop's clock (s), RA rate (h/s), Dec rate (°/s)."""
 
-    def add(self, start_s: float, duration_s: float, ra_h_s: float, dec_deg_s: float) -> None:
-        self._pulses.append((start_s, duration_s, ra_h_s, dec_deg_s))
+    def add(
+        self, key: int, start_s: float, duration_s: float, ra_h_s: float, dec_deg_s: float
+    ) -> None:
+        """A pulse from ``start_s``; one still running with the same ``key`` (its axis) is
+        cut short there, as the new pulse replaces it."""
+        self.cut(key, start_s)
+        self._pulses.append([float(key), start_s, duration_s, ra_h_s, dec_deg_s])
+
+    def cut(self, key: int, at_s: float) -> None:
+        """End the pulses of ``key`` at ``at_s`` (a pulse stopped early)."""
+        for pulse in self._pulses:
+            if pulse[0] == key and pulse[1] + pulse[2] > at_s:
+                pulse[2] = max(0.0, at_s - pulse[1])
 
     def at(self, t_s: float) -> tuple[float, float]:
         """The target's shift (RA hours, Dec degrees) at ``t_s`` on the loop's clock."""
         ra = dec = 0.0
-        for start, duration, ra_rate, dec_rate in self._pulses:
+        for _, start, duration, ra_rate, dec_rate in self._pulses:
             done = max(0.0, min(duration, t_s - start))
             ra += ra_rate * done
             dec += dec_rate * done
@@ -197,7 +208,7 @@ class GuideShifts:
     def rates_at(self, t_s: float) -> tuple[float, float]:
         """The pulses' (RA h/s, Dec °/s) rate at ``t_s`` (those still running)."""
         ra = dec = 0.0
-        for start, duration, ra_rate, dec_rate in self._pulses:
+        for _, start, duration, ra_rate, dec_rate in self._pulses:
             if start <= t_s < start + duration:
                 ra += ra_rate
                 dec += dec_rate

@@ -215,7 +215,9 @@ class SkyTrackerRates(SkyTrackerPolling):
         ra1, dec1 = observed_to_j2000(moved[0], moved[1], now, self.site)
         ra_rate = wrap_signed_degrees((float(ra1) - float(ra0)) * 15.0) / 15.0
         t = (now - start).total_seconds()
-        shifts.add(t, duration_s * self._clock_ratio(), ra_rate, float(dec1) - float(dec0))
+        shifts.add(
+            axis.value, t, duration_s * self._clock_ratio(), ra_rate, float(dec1) - float(dec0)
+        )
         if self.rate_loop_statistics is not None:
             self.rate_loop_statistics.pulses += 1
 

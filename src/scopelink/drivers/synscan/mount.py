@@ -320,6 +320,10 @@ class SynScanMount(SynScanRates):
                 "directions on an alt-az mount)"
             )
         axis, sign = self._guide_axis(direction)
+        if self._loop_joining:  # custom rates: the pulse is added to the loop (rates.py)
+            if duration_ms > 0:
+                await self._pulse_into_loop(axis, sign * self.guide_rate_deg_s, duration_ms)
+            return
         self._cancel_pulse(axis)
         if duration_ms == 0:
             return
