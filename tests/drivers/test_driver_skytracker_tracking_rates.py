@@ -7,8 +7,10 @@ import asyncio
 import math
 from pathlib import Path
 
+import pytest
+
 from scopelink.drivers.skytracker import SkyTrackerMount
-from scopelink.mount import TrackingMode
+from scopelink.mount import GuideDirection, TrackingMode
 from scopelink.protocol.skytracker import TrackerMode
 from tests.support.skytracker_driver import Rig, box_mode, eventually, rig, separation_deg
 
@@ -29,7 +31,7 @@ async def _track_at(r: Rig, alt_deg: float, az_deg: float) -> None:
 
 
 async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None:
-    async with rig(tmp_path, "tcp", clock_rate=SPEED_UP) as r:
+    async with rig(tmp_path, "tcp", clock_rate=SPEED_UP, guide_speed_arcsec_s=10) as r:
         await _track_at(r, 45.0, 120.0)
         ra_rate, dec_rate = 20.0, -6.0  # arcsec/s of RA and Dec: a fast comet
         async with r.driver.watching():
@@ -59,6 +61,30 @@ async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None
             f"in all"
         )
         assert rms <= 30.0, f"RMS {rms:.1f}″ against the integrated target (errors {settled})"
+        # A guide pulse joins the loop: up at the pulse speed (10″/s) for 1 s of the PC's time,
+        # and the loop keeps it (its target moves along) instead of undoing it.
+        async with r.driver.watching():
+            alt_before = r.sim.observed_at(r.sim.elapsed())[0]
+            mount_start, real_start = r.sim.elapsed(), asyncio.get_running_loop().time()
+            await r.driver.pulse_guide(GuideDirection.NORTH, 1000)
+            assert r.driver.state.pulse_guiding
+            await r.driver.wait_for(lambda s: not s.pulse_guiding, 5.0)
+            ratio = (r.sim.elapsed() - mount_start) / (
+                asyncio.get_running_loop().time() - real_start
+            )
+            await asyncio.sleep(3.0)  # 30 s of the mount's: it would have undone the pulse
+            assert _running(r.driver), "the pulse ended the loop"
+            t = r.sim.elapsed()
+            ideal = (ra0 + ra_rate * (t - t0) / 54000.0, dec0 + dec_rate * (t - t0) / 3600.0)
+            offset = 3600.0 * separation_deg(r.sim.j2000_at(t), ideal)
+        expected = 10.0 * ratio
+        print(
+            f"pulse north 1000 ms in the loop: {offset:.0f}″ off the unpulsed target "
+            f"(pulse speed x time {expected:.0f}″)"
+        )
+        assert loop.pulses == 1
+        assert offset == pytest.approx(expected, abs=30.0)
+        assert r.sim.observed_at(r.sim.elapsed())[0] != alt_before
         # Back to zero: the box tracks by itself again, nothing pressed.
         await r.driver.set_tracking_rates(0.0, 0.0)
         assert not _running(r.driver)

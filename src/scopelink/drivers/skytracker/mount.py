@@ -379,9 +379,16 @@ class SkyTrackerMount(SkyTrackerRates):
             if still is not None and not still():
                 return False
             loop = {a: m for a, m in self._loop_presses.items() if a not in self._pulses}
+            pulses = {axis: button for axis, (button, _) in self._pulses.items()}
+            if self._loop_on:  # a pulse adds the loop's rate on its axis (rates.py)
+                for axis, button in list(pulses.items()):
+                    del pulses[axis]
+                    combined = self._pulse_with_loop(axis, button)
+                    if combined is not None:
+                        loop[axis] = combined
             plan = plan_buttons(
                 {**loop, **self._held},
-                {axis: button for axis, (button, _) in self._pulses.items()},
+                pulses,
                 pulse_speeds_arcsec_s=self._pulse_speeds,
                 mode=self._mode,
                 rest_mode=self._rest_mode,

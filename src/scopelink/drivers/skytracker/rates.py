@@ -21,6 +21,7 @@ import logging
 import math
 from collections.abc import Callable
 from contextlib import aclosing
+from dataclasses import replace
 from datetime import datetime, timedelta
 
 from scopelink.astro import Site, j2000_to_observed, observed_to_j2000, wrap_signed_degrees
@@ -32,7 +33,7 @@ from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import Direction
 
 from .base import BOX_TRACKING, LOOP_TRACKING_MODES
-from .motion import GUIDE_SPEED_MAX_ARCSEC_S, guide_button
+from .motion import GUIDE_SPEED_MAX_ARCSEC_S, AxisMotion, guide_button
 from .polling import SkyTrackerPolling
 from .presses import PRESS_PERIOD_S, AxisPress, plan_press
 
@@ -90,6 +91,7 @@ class SkyTrackerRates(SkyTrackerPolling):
     """Mount seconds per real second, measured while the loop runs (pulses are timed on the PC)."""
     _loop_corrections: dict[MountAxis, float] = {}  # noqa: RUF012 - replaced, never mutated
     _loop_guarded: dict[MountAxis, float] = {}  # noqa: RUF012 - what the guard was told
+    _loop_offsets_now: dict[MountAxis, float] = {}  # noqa: RUF012 - replaced every period
     _loop_integral: dict[MountAxis, float] = {}  # noqa: RUF012 - per loop, replaced at start
     _loop_integrated_at: datetime | None = None
     rate_loop_statistics: RateLoopStatistics | None = None
@@ -143,6 +145,7 @@ class SkyTrackerRates(SkyTrackerPolling):
         self._loop_guarded = {}
         self._loop_integral = {}
         self._loop_integrated_at = None
+        self._loop_offsets_now = {}
         self._loop_clock_ratio = 1.0
         statistics = RateLoopStatistics(
             started_at=position.read_at,
@@ -196,6 +199,18 @@ class SkyTrackerRates(SkyTrackerPolling):
         finally:
             self._loop_joining = False
         self._shift_for_pulse(direction, duration_ms / 1000.0)
+
+    def _pulse_with_loop(self, axis: MountAxis, button: Direction) -> AxisMotion | None:
+        """A pulse on an axis the loop drives: one press at the pulse speed plus the loop's own
+        rate there (whole arcsec/s; the other way if the sum is negative); None: no press."""
+        speeds = self._pulse_speeds
+        speed = speeds[0] if axis is MountAxis.PRIMARY else speeds[1]
+        sign = 1.0 if button in _POSITIVE_BUTTONS else -1.0
+        press = plan_press(axis, sign * speed + self._loop_offsets_now.get(axis, 0.0), speed)
+        if press is None:
+            return None
+        combined = max(1, min(GUIDE_SPEED_MAX_ARCSEC_S, round(press.speed_arcsec_s * press.duty)))
+        return replace(press, speed_arcsec_s=combined, duty=1.0).motion
 
     def _shift_for_pulse(self, direction: GuideDirection, duration_s: float) -> None:
         """Move the loop's target by the pulse: its axis rate at the scope's position, in J2000."""
@@ -351,6 +366,7 @@ class SkyTrackerRates(SkyTrackerPolling):
             self._publish_now()
 
     def _plan_period(self, offsets: dict[MountAxis, float]) -> list[AxisPress]:
+        self._loop_offsets_now = dict(offsets)
         presses = []
         for index, axis in enumerate((MountAxis.PRIMARY, MountAxis.SECONDARY)):
             current = self._guide_speeds[index]
