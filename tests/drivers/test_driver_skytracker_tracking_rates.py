@@ -24,6 +24,10 @@ def _running(mount: SkyTrackerMount) -> bool:
     return mount.custom_rates_running
 
 
+def _tracking(mount: SkyTrackerMount) -> TrackingMode:
+    return mount.state.tracking
+
+
 async def _track_at(r: Rig, alt_deg: float, az_deg: float) -> None:
     r.point(alt_deg, az_deg)
     await r.driver.set_tracking(TrackingMode.ALT_AZ)
@@ -90,4 +94,32 @@ async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None
         assert not _running(r.driver)
         assert r.emulator.tracker.remote_pressed == 0
         assert box_mode(r) is TrackerMode.TRACK
+        assert not r.driver.guard.rate_motions
+
+
+async def test_lunar_tracking_a_leaving_client_and_a_goto(tmp_path: Path) -> None:
+    async with rig(tmp_path, "tcp") as r:
+        await _track_at(r, 40.0, 200.0)
+        assert TrackingMode.LUNAR in r.driver.capabilities.tracking_modes
+        assert r.driver.capabilities.max_tracking_offset_arcsec_s == 120.0
+        async with r.driver.watching():
+            await r.driver.set_tracking(TrackingMode.LUNAR)  # sidereal + 0.356″/s of RA: a loop
+            assert _running(r.driver)
+            assert _tracking(r.driver) is TrackingMode.LUNAR
+            async with r.driver.motion_client("phone"):
+                await r.driver.set_tracking_rates(10.0, 5.0)
+                assert _running(r.driver)
+            # The client left: its rates went back to zero; lunar tracking goes on.
+            assert r.driver.tracking_rates.zero
+            assert _running(r.driver)
+            await asyncio.sleep(0.6)  # at least one period of presses
+            target = r.sim_j2000()
+            await r.driver.goto_equatorial(target[0] + 0.2, target[1])  # ends the loop
+            assert not _running(r.driver)
+            await r.driver.wait_for_slew(timeout_s=15.0)
+            await r.driver.refresh()
+        # Nothing the loop pressed survives the GOTO: the box tracks by itself.
+        assert r.emulator.tracker.remote_pressed == 0
+        assert box_mode(r) is TrackerMode.TRACK
+        assert _tracking(r.driver) is TrackingMode.SIDEREAL
         assert not r.driver.guard.rate_motions

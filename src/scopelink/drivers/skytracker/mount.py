@@ -379,6 +379,8 @@ class SkyTrackerMount(SkyTrackerRates):
             if still is not None and not still():
                 return False
             loop = {a: m for a, m in self._loop_presses.items() if a not in self._pulses}
+            if self._loop_taken:  # another command took over: the loop's arrows go
+                loop.clear()
             pulses = {axis: button for axis, (button, _) in self._pulses.items()}
             if self._loop_on:  # a pulse adds the loop's rate on its axis (rates.py)
                 for axis, button in list(pulses.items()):

@@ -107,13 +107,14 @@ class SkyTrackerRates(SkyTrackerPolling):
     @property
     def custom_rates_running(self) -> bool:
         """Whether the PC loop presses the arrows now."""
-        return self._rate_loop is not None and not self._rate_loop.done()
+        task = self._rate_loop
+        return task is not None and not task.done() and not self._loop_taken
 
     def _motion_commanded(self) -> None:
         super()._motion_commanded()
         if self._rate_loop is not None and not self._loop_joining:
+            # Its arrows stay in _loop_presses: the command taking over releases them ('b').
             self._loop_taken = True
-            self._loop_presses.clear()
 
     async def _set_tracking_rates(self, rates: TrackingRates) -> None:
         await self._end_rate_loop()
@@ -180,10 +181,10 @@ class SkyTrackerRates(SkyTrackerPolling):
         if not self._loop_presses:
             return
         self._loop_presses.clear()
-        if self._line is None or self._line.link.closed:
-            return
+        if self._line is None or self._line.link.closed or self._held or self._pulses:
+            return  # a command that holds arrows now has released the loop's ('b') first
         with contextlib.suppress(MountError, LinkError):
-            await self._apply_buttons()
+            await self._apply_buttons()  # 'b' (harmless during a GOTO: it ignores arrows)
 
     # --- guide pulses join the loop -------------------------------------------------------------
 
@@ -396,12 +397,14 @@ class SkyTrackerRates(SkyTrackerPolling):
                 if not await self._first_press(press):
                     return False
         else:
+            if not self._loop_still_ours():
+                return False
             for press in presses:
                 self._loop_presses[press.axis] = press.motion
             for axis in (MountAxis.PRIMARY, MountAxis.SECONDARY):
                 if axis not in pressed_axes:
                     self._loop_presses.pop(axis, None)
-            if not await self._apply_buttons(self._loop_still_ours):
+            if not await asyncio.shield(self._apply_buttons(self._loop_still_ours)):
                 return False
             for axis in (MountAxis.PRIMARY, MountAxis.SECONDARY):  # the guard watches them
                 rate = next((p.rate_deg_s for p in presses if p.axis is axis), 0.0)
@@ -415,7 +418,8 @@ class SkyTrackerRates(SkyTrackerPolling):
             if not self._loop_still_ours():
                 return False
             self._loop_presses.pop(press.axis, None)
-            if not await self._apply_buttons(self._loop_still_ours):
+            # Shielded: cancelling the loop never cuts an exchange short (a resync).
+            if not await asyncio.shield(self._apply_buttons(self._loop_still_ours)):
                 return False
             statistics.commands += 1
         return True
@@ -426,7 +430,7 @@ class SkyTrackerRates(SkyTrackerPolling):
         async def start() -> None:
             self._loop_presses[press.axis] = press.motion
             self._loop_guarded[press.axis] = press.rate_deg_s
-            await self._apply_buttons(self._loop_still_ours)
+            await asyncio.shield(self._apply_buttons(self._loop_still_ours))
 
         self._loop_joining = True
         try:
