@@ -20,7 +20,7 @@ def _running(mount: SkyTrackerMount) -> bool:
 async def test_custom_rates_towards_the_horizon_are_stopped_by_the_guard(tmp_path: Path) -> None:
     limits = Limits(horizon_deg=HORIZON_DEG)
     async with rig(tmp_path, "tcp", clock_rate=10.0, limits=limits) as r:
-        r.point(30.6, 180.0)
+        r.point(30.45, 180.0)
         await r.driver.set_tracking(TrackingMode.ALT_AZ)
         await eventually(lambda: all(axis.rate != 0.0 for axis in r.sim.axes))
         async with r.driver.watching():
@@ -38,6 +38,6 @@ async def test_custom_rates_towards_the_horizon_are_stopped_by_the_guard(tmp_pat
                 lowest = min(lowest, r.sim.observed_at(r.sim.elapsed())[0])
             assert r.emulator.tracker.remote_pressed == 0
         assert lowest >= HORIZON_DEG - 0.05, f"went down to {lowest:.3f}°"
-        assert lowest < 30.5, f"stopped at {lowest:.3f}°: did it move at all?"
+        assert lowest < 30.4, f"stopped at {lowest:.3f}°: did it move at all?"
         assert not r.driver.guard.rate_motions
         print(f"Sky Tracker custom rate towards the horizon: lowest {lowest:.3f}°")

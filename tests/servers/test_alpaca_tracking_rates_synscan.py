@@ -1,6 +1,7 @@
 """Tracking rates through Alpaca in front of the SynScan driver and the real emulator (issue
 #16): alpyca sets a lunar rate and custom RA/Dec rates, the driver's PC loop drives the hand
-control, and the simulator behind the emulator is the truth."""
+control, and the simulator behind the emulator is the truth; guide rates are set and a pulse
+joins the loop."""
 
 from __future__ import annotations
 
@@ -8,7 +9,9 @@ import asyncio
 import math
 from pathlib import Path
 
-from alpaca.telescope import DriveRates, Telescope
+import pytest
+from alpaca.exceptions import InvalidValueException
+from alpaca.telescope import DriveRates, GuideDirections, Telescope
 
 from scopelink.astro import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
@@ -79,6 +82,21 @@ async def test_lunar_and_custom_rates_through_alpaca_on_synscan(tmp_path: Path) 
             )
             assert lunar_rms < 5.0, f"lunar rate {lunar_rms:.2f}″ RMS against the ideal"
             assert custom_rms < 5.0, f"custom rates {custom_rms:.2f}″ RMS against the ideal"
+
+            # Guide rates: stored on the driver, used by PulseGuide, which joins the loop.
+            assert await blocking(lambda: telescope.CanSetGuideRates) is True
+            await blocking(lambda: setattr(telescope, "GuideRateDeclination", 0.003))
+            assert r.mount.guide_rates_deg_s == (r.mount.guide_rate_deg_s, 0.003)
+            assert await blocking(lambda: telescope.GuideRateDeclination) == 0.003
+            with pytest.raises(InvalidValueException, match="10x sidereal"):
+                await blocking(lambda: setattr(telescope, "GuideRateRightAscension", 1.0))
+            assert r.mount.guide_rates_deg_s[1] == 0.003  # nothing changed
+            await blocking(lambda: telescope.PulseGuide(GuideDirections.guideSouth, 200))
+            await r.mount.wait_for(lambda s: not s.pulse_guiding, 5.0)
+            assert r.mount.custom_rates_running, "the pulse ended the loop"
+            loop = r.mount.rate_loop_statistics
+            assert loop is not None
+            assert loop.pulses == 1
 
             await blocking(lambda: setattr(telescope, "Tracking", False))
             assert r.sim.tracking is TrackingMode.OFF

@@ -19,7 +19,7 @@ import logging
 import math
 from dataclasses import dataclass, field
 from datetime import datetime
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 from scopelink.astro import (
     KING_RATE_DEG_S,
@@ -34,6 +34,7 @@ from scopelink.mount.types import Capabilities, MountState, TrackingMode
 
 __all__ = [
     "SI_SECONDS_PER_SIDEREAL_SECOND",
+    "GuideRates",
     "GuideShifts",
     "RateKeeper",
     "RateLoopStatistics",
@@ -213,3 +214,16 @@ class GuideShifts:
                 ra += ra_rate
                 dec += dec_rate
         return ra, dec
+
+
+@runtime_checkable
+class GuideRates(Protocol):
+    """A mount whose pulse-guide rates can be set (ASCOM's GuideRateRightAscension and
+    GuideRateDeclination): the SynScan driver (its rate slews) and the Sky Tracker (``K``)."""
+
+    @property
+    def guide_rates_deg_s(self) -> tuple[float, float]:
+        """(RA, Dec) guide rates in degrees per second, as pulses use them."""
+
+    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
+        """Set both; a rate the mount cannot give raises ``InvalidValueError``, nothing set."""

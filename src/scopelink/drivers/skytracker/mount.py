@@ -278,16 +278,6 @@ class SkyTrackerMount(SkyTrackerRates):
         await self._send_confirmed(commands, mode=TrackerMode.STANDBY)
         self._publish_now()
 
-    async def set_guide_speed(self, azimuth_arcsec_s: int, elevation_arcsec_s: int) -> None:
-        """``K`` (confirmed with ``k``): the guide speed of pulses and GUIDE-mode arrows."""
-        for value in (azimuth_arcsec_s, elevation_arcsec_s):
-            if not 1 <= value <= 255:
-                raise InvalidValueError(f"guide speed {value} arcsec/s is not 1-255")
-        self._require_line()
-        self._pulse_speeds = (azimuth_arcsec_s, elevation_arcsec_s)
-        async with self._buttons:
-            await self._set_guide_speeds(self._pulse_speeds)
-
     async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Press the arrow of the nearest supported rate (see motion.py); 0 releases it."""
         self._refuse_during_goto("moving an axis")

@@ -22,11 +22,12 @@ from dataclasses import replace
 from datetime import datetime
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
-from scopelink.drivers.synscan.base import AXES
+from scopelink.drivers.synscan.base import AXES, MAX_GUIDE_RATE_DEG_S
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
     GuideDirection,
+    InvalidValueError,
     MountAxis,
     MountError,
     MountState,
@@ -125,6 +126,26 @@ class SynScanRates(SynScanParking):
         super()._motion_commanded()
         if self._loop_mode is not None and not (self._loop_starting or self._loop_joining):
             self._loop_taken = True
+
+    _guide_rate_dec_deg_s: float | None = None
+
+    @property
+    def guide_rates_deg_s(self) -> tuple[float, float]:
+        """(RA, Dec) pulse-guide rates (°/s): ``guide_rate_deg_s`` unless Dec's was set apart."""
+        dec = self._guide_rate_dec_deg_s
+        return self.guide_rate_deg_s, self.guide_rate_deg_s if dec is None else dec
+
+    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
+        """Pulse-guide rates (°/s) in RA and Dec, each within (0, 10x sidereal]: the hand
+        control's rate slews take ¼″/s steps (the PC times the pulses)."""
+        for name, value in (("RA", ra_deg_s), ("Dec", dec_deg_s)):
+            if not (isinstance(value, int | float) and 0.0 < value <= MAX_GUIDE_RATE_DEG_S):
+                raise InvalidValueError(
+                    f"{name} guide rate {value!r}°/s must lie in (0, {MAX_GUIDE_RATE_DEG_S:.5f}] "
+                    "(10x sidereal)"
+                )
+        self.guide_rate_deg_s = float(ra_deg_s)
+        self._guide_rate_dec_deg_s = float(dec_deg_s)
 
     @property
     def custom_rates_running(self) -> bool:
