@@ -351,7 +351,7 @@ class SkyTrackerMount(SkyTrackerRates):
 
     async def _release_all_buttons(self) -> None:
         self._cancel_pulses()
-        if self._held or self._loop_presses:
+        if self._held or self._loop_presses or self._loop_on:  # the loop's: even mid-release
             self._held.clear()
             self._loop_presses.clear()
             await self._apply_buttons()

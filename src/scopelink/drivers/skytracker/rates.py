@@ -178,8 +178,8 @@ class SkyTrackerRates(SkyTrackerPolling):
             if axis not in self._held and self._guard.rate_motions.get(axis) == rate:
                 self._guard.motion_commanded(axis, 0.0)
         self._loop_guarded = {}
-        if not self._loop_presses:
-            return
+        # 'b' even when no press is recorded: a release the loop was sending when it was stopped
+        # may not have gone out (its turn found the loop no longer in charge).
         self._loop_presses.clear()
         if self._line is None or self._line.link.closed or self._held or self._pulses:
             return  # a command that holds arrows now has released the loop's ('b') first
