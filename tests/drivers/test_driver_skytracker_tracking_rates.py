@@ -10,6 +10,7 @@ from pathlib import Path
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.mount import GuideDirection, TrackingMode
 from scopelink.protocol.skytracker import TrackerMode
+from tests.support.rates import loop_anchor
 from tests.support.skytracker_driver import Rig, box_mode, eventually, rig, separation_deg
 
 SPEED_UP = 10.0
@@ -38,13 +39,8 @@ async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None
         ra_rate, dec_rate = 20.0, -6.0  # arcsec/s of RA and Dec: a fast comet
         async with r.driver.watching():
             await r.driver.set_tracking_rates(ra_rate, dec_rate)
-            loop = r.driver.rate_loop_statistics
-            assert loop is not None
-            assert loop.started_at is not None
-            assert loop.anchor is not None
+            loop, t0, ra0, dec0 = loop_anchor(r.driver.rate_loop_statistics, r.sim.clock.epoch)
             assert _running(r.driver)
-            t0 = (loop.started_at - r.sim.clock.epoch).total_seconds()
-            ra0, dec0 = loop.anchor
             errors: list[float] = []
             for _ in range(32):  # 6.4 s of real time, 64 s of the mount's
                 await asyncio.sleep(0.2)

@@ -14,6 +14,7 @@ from scopelink.drivers.synscan.rates import RateLoopStatistics
 from scopelink.mount import GuideDirection, NotSupportedError, TrackingMode
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, SimClock
+from tests.support.rates import loop_anchor
 from tests.support.synscan_driver import START, rig
 
 SPEED_UP = 10.0
@@ -46,13 +47,8 @@ async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -
         ra_rate, dec_rate = 30.0, -8.0  # arcsec/s: a fast comet
         async with r.mount.watching():
             await r.mount.set_tracking_rates(ra_rate, dec_rate)
-            loop = r.mount.rate_loop_statistics
-            assert loop is not None
-            assert loop.started_at is not None
-            assert loop.anchor is not None
             # The target: integrated from where the loop read the mount when it started.
-            t0 = (loop.started_at - r.sim.clock.epoch).total_seconds()
-            ra0, dec0 = loop.anchor
+            _, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
             assert _running(r.mount)
             assert r.mount.state.tracking is TrackingMode.SIDEREAL  # ours, though 't' reads off
             errors: list[float] = []
@@ -86,12 +82,7 @@ async def test_a_guide_pulse_joins_the_loop_and_an_abort_ends_it() -> None:
         await r.mount.wait_for_slew(timeout_s=15.0)
         async with r.mount.watching():
             await r.mount.set_tracking_rates(15.0, 0.0)
-            loop = r.mount.rate_loop_statistics
-            assert loop is not None
-            assert loop.started_at is not None
-            assert loop.anchor is not None
-            t0 = (loop.started_at - r.sim.clock.epoch).total_seconds()
-            ra0, dec0 = loop.anchor
+            loop, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
             await asyncio.sleep(0.5)
             real_start = asyncio.get_running_loop().time()
             mount_start = r.sim.elapsed()

@@ -3,11 +3,11 @@ presses heading down are stopped above the configured horizon, through the real 
 
 from __future__ import annotations
 
-import asyncio
 from pathlib import Path
 
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.mount import Limits, TrackingMode
+from tests.support.rates import lowest_altitude
 from tests.support.skytracker_driver import eventually, rig
 
 HORIZON_DEG = 30.0
@@ -26,16 +26,9 @@ async def test_custom_rates_towards_the_horizon_are_stopped_by_the_guard(tmp_pat
         async with r.driver.watching():
             await r.driver.set_tracking_rates(0.0, -100.0)  # south, on the meridian: down
             assert _running(r.driver)
-            loop = asyncio.get_running_loop()
-            deadline = loop.time() + 10.0
-            lowest = 90.0
-            while _running(r.driver) and loop.time() < deadline:
-                await asyncio.sleep(0.05)
-                lowest = min(lowest, r.sim.observed_at(r.sim.elapsed())[0])
-            assert not _running(r.driver), "the guard did not stop the loop"
-            for _ in range(20):  # and it stays stopped: 10 s of the mount's time
-                await asyncio.sleep(0.05)
-                lowest = min(lowest, r.sim.observed_at(r.sim.elapsed())[0])
+            lowest = await lowest_altitude(
+                lambda: _running(r.driver), lambda: r.sim.observed_at(r.sim.elapsed())[0]
+            )
             assert r.emulator.tracker.remote_pressed == 0
         assert lowest >= HORIZON_DEG - 0.05, f"went down to {lowest:.3f}°"
         assert lowest < 30.4, f"stopped at {lowest:.3f}°: did it move at all?"

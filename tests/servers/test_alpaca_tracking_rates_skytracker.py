@@ -9,13 +9,13 @@ from pathlib import Path
 
 import pytest
 from alpaca.exceptions import InvalidValueException
-from alpaca.telescope import DriveRates, GuideDirections, Telescope
+from alpaca.telescope import DriveRates, GuideDirections
 
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.mount import TrackingMode
 from scopelink.protocol.skytracker import TrackerMode
-from scopelink.servers.alpaca import AlpacaServer
 from tests.support.alpaca import blocking
+from tests.support.rates import alpaca_telescope
 from tests.support.skytracker_driver import box_mode, eventually, rig
 
 
@@ -30,12 +30,7 @@ def _tracking(mount: SkyTrackerMount) -> TrackingMode:
 async def test_rates_and_guide_rates_through_alpaca_on_the_sky_tracker(tmp_path: Path) -> None:
     async with rig(tmp_path, "tcp") as r:
         r.point(40.0, 200.0)
-        server = AlpacaServer(
-            r.driver, host="127.0.0.1", port=0, discovery_port=None, state_dir=tmp_path
-        )
-        async with server, r.driver.watching():
-            telescope = Telescope(f"127.0.0.1:{server.port}", 0)
-            await blocking(lambda: setattr(telescope, "Connected", True))
+        async with alpaca_telescope(r.driver, tmp_path) as telescope:
             rates = await blocking(lambda: list(telescope.TrackingRates))
             assert set(rates) == {
                 DriveRates.driveSidereal,

@@ -11,15 +11,15 @@ from pathlib import Path
 
 import pytest
 from alpaca.exceptions import InvalidValueException
-from alpaca.telescope import DriveRates, GuideDirections, Telescope
+from alpaca.telescope import DriveRates, GuideDirections
 
 from scopelink.astro import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import TrackingMode
 from scopelink.mount.rates import ra_rate_from_ascom
-from scopelink.servers.alpaca import AlpacaServer
 from scopelink.sim import SimClock, SimulatedMount
 from tests.support.alpaca import blocking
+from tests.support.rates import alpaca_telescope
 from tests.support.synscan_driver import START, rig
 
 SPEED_UP = 10.0
@@ -53,12 +53,7 @@ async def test_lunar_and_custom_rates_through_alpaca_on_synscan(tmp_path: Path) 
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         await r.mount.wait_for_slew(timeout_s=15.0)
-        server = AlpacaServer(
-            r.mount, host="127.0.0.1", port=0, discovery_port=None, state_dir=tmp_path
-        )
-        async with server, r.mount.watching():
-            telescope = Telescope(f"127.0.0.1:{server.port}", 0)
-            await blocking(lambda: setattr(telescope, "Connected", True))
+        async with alpaca_telescope(r.mount, tmp_path) as telescope:
             rates = await blocking(lambda: list(telescope.TrackingRates))
             assert DriveRates.driveLunar in rates
             assert DriveRates.driveKing in rates

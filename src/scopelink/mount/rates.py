@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Protocol, runtime_checkable
@@ -30,12 +31,13 @@ from scopelink.astro import (
 )
 from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.errors import InvalidValueError, NotSupportedError
-from scopelink.mount.types import Capabilities, MountState, TrackingMode
+from scopelink.mount.types import Capabilities, GuideDirection, MountState, TrackingMode
 
 __all__ = [
     "SI_SECONDS_PER_SIDEREAL_SECOND",
     "GuideRates",
     "GuideShifts",
+    "LoopPulses",
     "RateKeeper",
     "RateLoopStatistics",
     "RatesSetter",
@@ -227,3 +229,33 @@ class GuideRates(Protocol):
 
     async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
         """Set both; a rate the mount cannot give raises ``InvalidValueError``, nothing set."""
+
+
+class LoopPulses(Protocol):
+    """A driver with a custom-rate loop that guide pulses join (docs/tracking.md)."""
+
+    _loop_taken: bool
+    _loop_joining: bool
+    """Set while a pulse goes out: its ``_motion_commanded`` must not end the loop."""
+
+    @property
+    def custom_rates_running(self) -> bool: ...
+
+
+async def pulse_joining_loop(
+    mount: LoopPulses,
+    pulse_guide: Callable[[GuideDirection, int], Awaitable[None]],
+    direction: GuideDirection,
+    duration_ms: int,
+) -> bool:
+    """``pulse_guide`` (the Mount's, checked) with the loop's joining flag set while the loop runs
+    and is in charge, so the pulse is added to the loop instead of ending it; whether it joined."""
+    if not mount.custom_rates_running or mount._loop_taken:
+        await pulse_guide(direction, duration_ms)
+        return False
+    mount._loop_joining = True
+    try:
+        await pulse_guide(direction, duration_ms)
+    finally:
+        mount._loop_joining = False
+    return True

@@ -28,7 +28,12 @@ from scopelink.astro import Site, j2000_to_observed, observed_to_j2000, wrap_sig
 from scopelink.drivers.common import Pointing
 from scopelink.links import LinkError
 from scopelink.mount import GuideDirection, InvalidValueError, MountAxis, MountError, TrackingMode
-from scopelink.mount.rates import GuideShifts, RateLoopStatistics, TrackingRates
+from scopelink.mount.rates import (
+    GuideShifts,
+    RateLoopStatistics,
+    TrackingRates,
+    pulse_joining_loop,
+)
 from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import Direction
 
@@ -222,15 +227,8 @@ class SkyTrackerRates(SkyTrackerPolling):
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it: its axis
         is pressed at the pulse speed for the duration, and the loop's target moves with it."""
-        if not self.custom_rates_running or self._loop_taken:
-            await super().pulse_guide(direction, duration_ms)
-            return
-        self._loop_joining = True
-        try:
-            await super().pulse_guide(direction, duration_ms)
-        finally:
-            self._loop_joining = False
-        self._shift_for_pulse(direction, duration_ms / 1000.0)
+        if await pulse_joining_loop(self, super().pulse_guide, direction, duration_ms):
+            self._shift_for_pulse(direction, duration_ms / 1000.0)
 
     def _pulse_with_loop(self, axis: MountAxis, button: Direction) -> AxisMotion | None:
         """A pulse on an axis the loop drives: one press at the pulse speed plus the loop's own

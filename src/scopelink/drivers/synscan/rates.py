@@ -34,7 +34,12 @@ from scopelink.mount import (
     Priority,
     TrackingMode,
 )
-from scopelink.mount.rates import GuideShifts, RateLoopStatistics, TrackingRates
+from scopelink.mount.rates import (
+    GuideShifts,
+    RateLoopStatistics,
+    TrackingRates,
+    pulse_joining_loop,
+)
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
 __all__ = [
@@ -331,14 +336,7 @@ class SynScanRates(SynScanParking):
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it (its
         guide rate on top of the loop's, the target moved along: docs/tracking.md)."""
-        if not self.custom_rates_running or self._loop_taken:
-            await super().pulse_guide(direction, duration_ms)
-            return
-        self._loop_joining = True
-        try:
-            await super().pulse_guide(direction, duration_ms)
-        finally:
-            self._loop_joining = False
+        await pulse_joining_loop(self, super().pulse_guide, direction, duration_ms)
 
     async def _pulse_into_loop(
         self, axis: MountAxis, axis_rate_deg_s: float, duration_ms: int
