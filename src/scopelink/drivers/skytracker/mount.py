@@ -22,6 +22,7 @@ from scopelink.mount import (
     DeviceError,
     GuideDirection,
     InvalidValueError,
+    LimitError,
     MountAxis,
     MountError,
     MountState,
@@ -262,7 +263,12 @@ class SkyTrackerMount(SkyTrackerRates):
             self._tracking_choice = mode
         await self._send_confirmed([SelectMode(target)], mode=target)
         self._publish_now()
-        await self._start_rate_loop()
+        try:
+            await self._start_rate_loop()
+        except LimitError as error:  # tracking is on; the recorded rates would head out
+            logger.warning("%s: custom tracking rates not started: %s", self.spec, error)
+            self._problems = (f"custom tracking rates not started: {error}",)
+            self._publish_now()
 
     async def standby(self) -> None:
         """``B``: cut the motor drive to save battery (a GOTO is aborted first with ``U``)."""

@@ -158,6 +158,10 @@ class SkyTrackerRates(SkyTrackerPolling):
             anchor=(position.ra_j2000_hours, position.dec_j2000_deg),
         )
         self.rate_loop_statistics = statistics
+        # The first presses are checked again (and watched) as they start, in the loop; a
+        # refusal here is the caller's one-line LimitError, and no loop starts.
+        for press in self._plan_period(self._feed_forward(wanted, position.read_at)):
+            self._guard.check_move(press.axis, press.rate_deg_s, self.state)
         self._loop_on = True
         self._rate_loop = asyncio.create_task(
             self._run(wanted, statistics), name="sky tracker custom tracking rates"
