@@ -29,7 +29,7 @@ from scopelink.drivers.skytracker.rates import (
     MAX_CORRECTION_ARCSEC_S,
 )
 from scopelink.mount import GuideDirection, MountAxis
-from scopelink.mount.rates import GuideShifts
+from scopelink.mount.rates import ERRORS_KEPT, GuideShifts, RateLoopStatistics
 from scopelink.protocol.skytracker import Direction, TrackerMode
 
 SUPPORTED_ABOVE_GUIDE = (GUIDE_SPEED_MAX_ARCSEC_S, TRACK_ARROW_ARCSEC_S, UTILITY_ARROW_ARCSEC_S)
@@ -179,3 +179,11 @@ def test_the_tracking_page_states_the_sky_tracker_loop_settings() -> None:
     assert f"`FEED_FORWARD_STEP_S` ({FEED_FORWARD_STEP_S:g} s)" in tracking
     assert LOOP_INTEGRAL_GAIN == LOOP_GAIN_PER_S**2 / 4.0  # "gain²/4"
     assert f"±{MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S:g}″/s of RA and Dec" in tracking
+
+
+def test_a_loop_keeps_the_errors_of_its_last_readings_only() -> None:
+    statistics = RateLoopStatistics()
+    for index in range(2 * ERRORS_KEPT + 1):
+        statistics.add_error(float(index))
+    assert len(statistics.errors_arcsec) == ERRORS_KEPT
+    assert statistics.errors_arcsec[-1] == 2 * ERRORS_KEPT

@@ -158,6 +158,10 @@ class RateKeeper:
             await self._mount.set_tracking_rates(0.0, 0.0)
 
 
+ERRORS_KEPT = 20_000
+"""A rate loop keeps the errors of its last 20 000 readings (about 15 minutes of polls)."""
+
+
 @dataclass
 class RateLoopStatistics:
     """A driver's closed rate loop (docs/tracking.md): the pointing error of every reading it
@@ -170,6 +174,12 @@ class RateLoopStatistics:
     commands: int = 0
     pulses: int = 0
     """Guide pulses added to the loop's rate (instead of ending it)."""
+
+    def add_error(self, arcsec: float) -> None:
+        """One reading's error; only the last ``ERRORS_KEPT`` are kept (a night's loop)."""
+        self.errors_arcsec.append(arcsec)
+        if len(self.errors_arcsec) > 2 * ERRORS_KEPT:
+            del self.errors_arcsec[:-ERRORS_KEPT]
 
     def rms_after(self, skip: int) -> float:
         tail = self.errors_arcsec[skip:]

@@ -330,7 +330,7 @@ class SkyTrackerRates(SkyTrackerPolling):
                 last = position.read_at
                 az_error, alt_error, sky = self._reading_error(rates, position)
                 sink.append((az_error, alt_error))
-                statistics.errors_arcsec.append(sky)
+                statistics.add_error(sky)
 
     def _wanted_offsets(
         self, rates: TrackingRates, errors: list[tuple[float, float]]

@@ -299,7 +299,7 @@ class SynScanRates(SynScanParking):
                     target_dec = dec0 + rates.dec_deg_per_s * dt + dec_shift
                     ra_error = wrap_signed_degrees((target_ra - state.ra_j2000_hours) * 15.0)
                     dec_error = target_dec - state.dec_j2000_deg
-                    statistics.errors_arcsec.append(_sky_error_arcsec(ra_error, dec_error, state))
+                    statistics.add_error(_sky_error_arcsec(ra_error, dec_error, state))
                     self._loop_drive = (rates, ra_error, dec_error)
                     await self._drive_now(statistics)
         except MountError as error:
