@@ -85,10 +85,8 @@ async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None
             f"(pulse speed x time {expected:.0f}″)"
         )
         assert loop.pulses == 1
-        # Kept, not undone (the loop would have pulled it back to 45″ by now): the box's presses
-        # land 80-85 % of it at once, the loop closes the rest within its time constant (188″
-        # after 40 s of the mount's).
-        assert 0.6 * expected <= offset <= 1.15 * expected
+        # Kept, not undone (the loop would have pulled it back to 45″ by now): 193-200″ in runs.
+        assert abs(offset - expected) <= 40.0  # the loop's own error is within ±30″
         assert r.sim.observed_at(r.sim.elapsed())[0] != alt_before
         # Back to zero: the box tracks by itself again, nothing pressed.
         await r.driver.set_tracking_rates(0.0, 0.0)

@@ -283,22 +283,26 @@ class SkyTrackerRates(SkyTrackerPolling):
             and self._mode in BOX_TRACKING
         )
 
-    def _target_at(self, rates: TrackingRates, when: datetime) -> tuple[float, float]:
+    def _target_at(
+        self, rates: TrackingRates, when: datetime, shifted_at: datetime | None = None
+    ) -> tuple[float, float]:
+        """The target at ``when``, moved by the guide pulses as at ``shifted_at`` (``when``)."""
         statistics, start, shifts = self.rate_loop_statistics, self._loop_start, self._loop_shifts
         assert statistics is not None
         assert statistics.anchor is not None
         assert start is not None
         t = (when - start).total_seconds()
-        ra_shift, dec_shift = shifts.at(t) if shifts is not None else (0.0, 0.0)
+        t_shift = t if shifted_at is None else (shifted_at - start).total_seconds()
+        ra_shift, dec_shift = shifts.at(t_shift) if shifts is not None else (0.0, 0.0)
         ra0, dec0 = statistics.anchor
         return ra0 + rates.ra_hours_per_s * t + ra_shift, dec0 + rates.dec_deg_per_s * t + dec_shift
 
     def _feed_forward(self, rates: TrackingRates, when: datetime) -> dict[MountAxis, float]:
         """Arcsec/s of each axis the target moves against a fixed point of the sky (which the
-        box's own tracking follows) at ``when``."""
+        box's own tracking follows) at ``when``; not a pulse's rate (its own press gives it)."""
         later = when + timedelta(seconds=FEED_FORWARD_STEP_S)
         alt_a, az_a = _altaz(*self._target_at(rates, when), later, self.site)
-        alt_b, az_b = _altaz(*self._target_at(rates, later), later, self.site)
+        alt_b, az_b = _altaz(*self._target_at(rates, later, when), later, self.site)
         return {
             MountAxis.PRIMARY: wrap_signed_degrees(az_b - az_a) * 3600.0 / FEED_FORWARD_STEP_S,
             MountAxis.SECONDARY: (alt_b - alt_a) * 3600.0 / FEED_FORWARD_STEP_S,
