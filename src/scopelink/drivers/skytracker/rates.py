@@ -339,8 +339,8 @@ class SkyTrackerRates(SkyTrackerPolling):
     def _wanted_offsets(
         self, rates: TrackingRates, errors: list[tuple[float, float]]
     ) -> dict[MountAxis, float]:
-        """Arcsec/s of each axis to add to the box's tracking: the feed-forward plus the gain
-        times the mean error of the readings since the last period (averaging the Sky
+        """Arcsec/s of each axis to add to the box's tracking: the feed-forward plus a PI
+        correction on the mean error of the readings since the last period (averaging the Sky
         Commander's 0.001 h steps and the presses' ripple); without a new reading, the last
         period's correction."""
         now = self.now()
