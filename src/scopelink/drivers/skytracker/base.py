@@ -132,6 +132,8 @@ class SkyTrackerBase(Mount):
         self._buttons = asyncio.Lock()
         self._tracking_choice = TrackingMode.ALT_AZ
         self._problems: tuple[str, ...] = ()
+        self._loop_problems: tuple[str, ...] = ()
+        """The custom-rate loop's (rates.py): kept across polls, until the loop starts again."""
         self._goto_status_at = -math.inf
         self._engaged = False
         """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
@@ -270,7 +272,7 @@ class SkyTrackerBase(Mount):
             parked=False,
             aligned=True,
             pulse_guiding=bool(self._pulses),
-            problems=self._problems,
+            problems=self._problems + self._loop_problems,
             received_s=received_s,
             position_received_s=position.received_s if position else None,
         )

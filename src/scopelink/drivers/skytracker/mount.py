@@ -267,7 +267,7 @@ class SkyTrackerMount(SkyTrackerRates):
             await self._start_rate_loop()
         except LimitError as error:  # tracking is on; the recorded rates would head out
             logger.warning("%s: custom tracking rates not started: %s", self.spec, error)
-            self._problems = (f"custom tracking rates not started: {error}",)
+            self._loop_problems = (f"custom tracking rates not started: {error}",)
             self._publish_now()
 
     async def standby(self) -> None:

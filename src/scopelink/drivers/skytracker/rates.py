@@ -144,6 +144,7 @@ class SkyTrackerRates(SkyTrackerPolling):
         )
         self._publish_now()
         self._loop_taken = False
+        self._loop_problems = ()
         self._loop_presses.clear()
         self._loop_shifts = GuideShifts()
         self._loop_start = position.read_at
@@ -170,6 +171,7 @@ class SkyTrackerRates(SkyTrackerPolling):
     async def _end_rate_loop(self) -> None:
         """Stop the loop (rates zeroed, a tracking change, a disconnect): its arrows released."""
         task, self._rate_loop = self._rate_loop, None
+        self._loop_problems = ()  # a command of the user's: what the loop said is over
         if task is None:
             return
         self._loop_taken = True
@@ -389,7 +391,7 @@ class SkyTrackerRates(SkyTrackerPolling):
         except (MountError, LinkError) as error:
             if not self._loop_taken:
                 logger.warning("%s: custom tracking rates: %s", self.spec, error)
-                self._problems = (f"custom tracking rates stopped: {error}",)
+                self._loop_problems = (f"custom tracking rates stopped: {error}",)
         finally:
             collector.cancel()
             with contextlib.suppress(asyncio.CancelledError, MountError, LinkError):
@@ -411,11 +413,15 @@ class SkyTrackerRates(SkyTrackerPolling):
             press = plan_press(axis, offsets[axis], current)
             if press is not None:
                 presses.append(press)
-        if any(press.saturated for press in presses):
-            self._problems = (
+        saturated = any(press.saturated for press in presses)
+        self._loop_problems = (
+            (
                 f"custom tracking rates need more than the box's {GUIDE_SPEED_MAX_ARCSEC_S}″/s "
                 "guide speed on an axis (near the zenith?): the scope falls behind",
             )
+            if saturated
+            else ()
+        )
         return presses
 
     async def _press_period(
