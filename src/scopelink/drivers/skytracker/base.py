@@ -2,8 +2,8 @@
 line, and what the box last said (status, position) published as the Mount's state.
 
 The driver is one class per concern, each building on the one before: ``base`` (this),
-``connection`` (open, identify, reconnect, calibration), ``polling`` (the state), ``mount`` (the
-commands).
+``connection`` (open, identify, reconnect, calibration), ``polling`` (the state), ``guiding``
+(guide speeds), ``rates`` (custom tracking rates), ``mount`` (the commands).
 """
 
 from __future__ import annotations

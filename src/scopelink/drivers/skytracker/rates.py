@@ -27,7 +27,7 @@ from datetime import datetime, timedelta
 from scopelink.astro import Site, j2000_to_observed, observed_to_j2000, wrap_signed_degrees
 from scopelink.drivers.common import Pointing
 from scopelink.links import LinkError
-from scopelink.mount import GuideDirection, InvalidValueError, MountAxis, MountError, TrackingMode
+from scopelink.mount import GuideDirection, MountAxis, MountError, TrackingMode
 from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
@@ -38,8 +38,8 @@ from scopelink.mount.scheduling import Priority
 from scopelink.protocol.skytracker import Direction
 
 from .base import BOX_TRACKING, LOOP_TRACKING_MODES
+from .guiding import SkyTrackerGuiding
 from .motion import GUIDE_SPEED_MAX_ARCSEC_S, AxisMotion, guide_button
-from .polling import SkyTrackerPolling
 from .presses import PRESS_PERIOD_S, AxisPress, plan_press
 
 __all__ = [
@@ -82,7 +82,7 @@ def _altaz(ra_hours: float, dec_deg: float, when: datetime, site: Site) -> tuple
     return float(alt), float(az)
 
 
-class SkyTrackerRates(SkyTrackerPolling):
+class SkyTrackerRates(SkyTrackerGuiding):
     """Custom tracking rates by timed presses (module docstring); the commands build on it."""
 
     _rate_loop: asyncio.Task[None] | None = None
@@ -196,37 +196,6 @@ class SkyTrackerRates(SkyTrackerPolling):
             return  # a command that holds arrows now has released the loop's ('b') first
         with contextlib.suppress(MountError, LinkError):
             await self._apply_buttons()  # 'b' (harmless during a GOTO: it ignores arrows)
-
-    async def set_guide_speed(self, azimuth_arcsec_s: int, elevation_arcsec_s: int) -> None:
-        """``K`` (confirmed with ``k``): the guide speed of pulses and GUIDE-mode arrows."""
-        for value in (azimuth_arcsec_s, elevation_arcsec_s):
-            if not 1 <= value <= GUIDE_SPEED_MAX_ARCSEC_S:
-                raise InvalidValueError(f"guide speed {value} arcsec/s is not 1-255")
-        self._require_line()
-        self._pulse_speeds = (azimuth_arcsec_s, elevation_arcsec_s)
-        async with self._buttons:
-            await self._set_guide_speeds(self._pulse_speeds)
-
-    @property
-    def guide_rates_deg_s(self) -> tuple[float, float]:
-        """(RA, Dec) pulse-guide rates (°/s): the ``K`` speeds of azimuth (east/west pulses)
-        and elevation (north/south), which the box takes in whole arcsec/s of the axis."""
-        azimuth, elevation = self._pulse_speeds
-        return azimuth / 3600.0, elevation / 3600.0
-
-    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
-        """``K``: the RA rate for azimuth, the Dec rate for elevation, rounded to whole arcsec/s
-        (1-255)."""
-        speeds = []
-        for name, value in (("RA", ra_deg_s), ("Dec", dec_deg_s)):
-            arcsec = value * 3600.0 if isinstance(value, int | float) else math.nan
-            if not 0.5 <= arcsec < GUIDE_SPEED_MAX_ARCSEC_S + 0.5:
-                raise InvalidValueError(
-                    f"{name} guide rate {value!r}°/s must lie within 1-{GUIDE_SPEED_MAX_ARCSEC_S}"
-                    "″/s on a Sky Tracker (its 'K' speed, whole arcsec/s)"
-                )
-            speeds.append(round(arcsec))
-        await self.set_guide_speed(speeds[0], speeds[1])
 
     # --- guide pulses join the loop -------------------------------------------------------------
 
