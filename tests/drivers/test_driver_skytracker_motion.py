@@ -52,7 +52,7 @@ async def test_tracking_on_and_off(tmp_path: Path, transport: str) -> None:
         await eventually(lambda: altitude.rate != 0.0)
         assert (await r.driver.refresh()).tracking is TrackingMode.SIDEREAL
         with pytest.raises(NotSupportedError):
-            await r.driver.set_tracking(TrackingMode.LUNAR)
+            await r.driver.set_tracking(TrackingMode.PEC)  # lunar, solar, King: the rate loop
 
 
 async def test_standby_cuts_the_drive(tmp_path: Path, transport: str) -> None:

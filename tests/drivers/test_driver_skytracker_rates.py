@@ -1,6 +1,9 @@
-"""The Sky Tracker driver's rate mapping (move_axis) and guide buttons: pure functions."""
+"""The Sky Tracker driver's rate mapping (move_axis), guide buttons and timed presses (custom
+rates), the loop's guide-pulse shifts: pure functions; and the docs state the loop's settings."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 from hypothesis import given
@@ -9,10 +12,24 @@ from hypothesis import strategies as st
 from scopelink.drivers.skytracker import axis_motion, guide_button, plan_buttons
 from scopelink.drivers.skytracker.motion import (
     GUIDE_SPEED_MAX_ARCSEC_S,
+    MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S,
     TRACK_ARROW_ARCSEC_S,
     UTILITY_ARROW_ARCSEC_S,
 )
+from scopelink.drivers.skytracker.presses import (
+    MIN_PRESS_ARCSEC_S,
+    PRESS_PERIOD_S,
+    SPEED_HEADROOM,
+    plan_press,
+)
+from scopelink.drivers.skytracker.rates import (
+    FEED_FORWARD_STEP_S,
+    LOOP_GAIN_PER_S,
+    LOOP_INTEGRAL_GAIN,
+    MAX_CORRECTION_ARCSEC_S,
+)
 from scopelink.mount import GuideDirection, MountAxis
+from scopelink.mount.rates import ERRORS_KEPT, GuideShifts, RateLoopStatistics
 from scopelink.protocol.skytracker import Direction, TrackerMode
 
 SUPPORTED_ABOVE_GUIDE = (GUIDE_SPEED_MAX_ARCSEC_S, TRACK_ARROW_ARCSEC_S, UTILITY_ARROW_ARCSEC_S)
@@ -119,3 +136,54 @@ def test_button_plan_guides_at_the_pulse_speed_beside_a_guide_rate_motion() -> N
     )
     assert pulses_only.mode is TrackerMode.GUIDE
     assert pulses_only.guide_speeds_arcsec_s == (60, 45)
+
+
+def test_timed_presses_give_the_mean_rate_with_a_kept_speed() -> None:
+    press = plan_press(MountAxis.SECONDARY, -12.4, 120)
+    assert press is not None
+    assert press.direction is Direction.DOWN
+    assert press.speed_arcsec_s == 15  # 12.4 x 1.15, rounded up: 120 does not fit
+    assert press.speed_arcsec_s * press.duty == pytest.approx(12.4)
+    kept = plan_press(MountAxis.SECONDARY, -13.0, press.speed_arcsec_s)
+    assert kept is not None
+    assert kept.speed_arcsec_s == 15  # still fits: K is not sent again
+    tiny = plan_press(MountAxis.PRIMARY, 0.3, 15)
+    assert tiny is not None
+    assert (tiny.speed_arcsec_s, tiny.direction) == (1, Direction.RIGHT)
+    assert tiny.duty == pytest.approx(0.3)
+    assert plan_press(MountAxis.PRIMARY, 0.01, 15) is None  # below MIN_PRESS_ARCSEC_S
+    fast = plan_press(MountAxis.PRIMARY, -400.0, 15)
+    assert fast is not None
+    assert fast.saturated
+    assert (fast.speed_arcsec_s, fast.duty) == (GUIDE_SPEED_MAX_ARCSEC_S, 1.0)
+
+
+def test_guide_shifts_grow_while_a_pulse_runs_and_a_new_one_cuts_it() -> None:
+    shifts = GuideShifts()
+    shifts.add(1, 10.0, 4.0, 0.0, 0.5)
+    assert shifts.at(9.0) == (0.0, 0.0)
+    assert shifts.at(12.0) == pytest.approx((0.0, 1.0))
+    assert shifts.rates_at(12.0) == (0.0, 0.5)
+    shifts.add(1, 13.0, 1.0, 0.0, -0.5)  # the same axis: the first ends at 13
+    assert shifts.at(20.0) == pytest.approx((0.0, 1.5 - 0.5))
+    assert shifts.rates_at(13.5) == (0.0, -0.5)
+
+
+def test_the_tracking_page_states_the_sky_tracker_loop_settings() -> None:
+    tracking = (Path(__file__).resolve().parents[2] / "docs" / "tracking.md").read_text("utf-8")
+    assert f"`LOOP_GAIN_PER_S` = {LOOP_GAIN_PER_S:g} /s" in tracking
+    assert f"±`MAX_CORRECTION_ARCSEC_S` ({MAX_CORRECTION_ARCSEC_S:g}″/s)" in tracking
+    assert f"`PRESS_PERIOD_S` ({PRESS_PERIOD_S:g} s" in tracking
+    assert f"`SPEED_HEADROOM` ({SPEED_HEADROOM:g})" in tracking
+    assert f"`MIN_PRESS_ARCSEC_S` ({MIN_PRESS_ARCSEC_S:g}″/s)" in tracking
+    assert f"`FEED_FORWARD_STEP_S` ({FEED_FORWARD_STEP_S:g} s)" in tracking
+    assert LOOP_INTEGRAL_GAIN == LOOP_GAIN_PER_S**2 / 4.0  # "gain²/4"
+    assert f"±{MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S:g}″/s of RA and Dec" in tracking
+
+
+def test_a_loop_keeps_the_errors_of_its_last_readings_only() -> None:
+    statistics = RateLoopStatistics()
+    for index in range(2 * ERRORS_KEPT + 1):
+        statistics.add_error(float(index))
+    assert len(statistics.errors_arcsec) == ERRORS_KEPT
+    assert statistics.errors_arcsec[-1] == 2 * ERRORS_KEPT

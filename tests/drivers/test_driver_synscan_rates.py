@@ -11,9 +11,10 @@ import pytest
 from scopelink.astro import angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.drivers.synscan.rates import RateLoopStatistics
-from scopelink.mount import NotSupportedError, TrackingMode
+from scopelink.mount import GuideDirection, NotSupportedError, TrackingMode
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, SimClock
+from tests.support.rates import loop_anchor
 from tests.support.synscan_driver import START, rig
 
 SPEED_UP = 10.0
@@ -47,13 +48,8 @@ async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -
         ra_rate, dec_rate = 30.0, -8.0  # arcsec/s: a fast comet
         async with r.mount.watching():
             await r.mount.set_tracking_rates(ra_rate, dec_rate)
-            loop = r.mount.rate_loop_statistics
-            assert loop is not None
-            assert loop.started_at is not None
-            assert loop.anchor is not None
             # The target: integrated from where the loop read the mount when it started.
-            t0 = (loop.started_at - r.sim.clock.epoch).total_seconds()
-            ra0, dec0 = loop.anchor
+            _, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
             assert _running(r.mount)
             assert r.mount.state.tracking is TrackingMode.SIDEREAL  # ours, though 't' reads off
             errors: list[float] = []
@@ -81,13 +77,35 @@ async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -
         assert not r.mount.guard.rate_motions
 
 
-async def test_an_abort_ends_the_loop_and_tracking_carries_on() -> None:
+async def test_a_guide_pulse_joins_the_loop_and_an_abort_ends_it() -> None:
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         await r.mount.wait_for_slew(timeout_s=15.0)
         async with r.mount.watching():
-            await r.mount.set_tracking_rates(0.0, 20.0)
+            await r.mount.set_tracking_rates(15.0, 0.0)
+            loop, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
             await asyncio.sleep(0.5)
+            real_start = asyncio.get_running_loop().time()
+            mount_start = r.sim.elapsed()
+            await r.mount.pulse_guide(GuideDirection.NORTH, 1000)
+            assert r.mount.state.pulse_guiding
+            await r.mount.wait_for(lambda s: not s.pulse_guiding, 5.0)
+            ratio = (r.sim.elapsed() - mount_start) / (
+                asyncio.get_running_loop().time() - real_start
+            )
+            await asyncio.sleep(1.5)  # three loop time constants: it would have undone the pulse
+            assert _running(r.mount), "the pulse ended the loop"
+            t = r.sim.elapsed()
+            ra, dec = r.sim.j2000_at(t)
+            expected = r.mount.guide_rate_deg_s * 3600.0 * ratio  # arcsec: 1 s of the PC's time
+            shift = (dec - dec0) * 3600.0
+            drift = (ra - (ra0 + 15.0 * (t - t0) / 54000.0)) * 54000.0
+            print(
+                f"pulse north 1000 ms: Dec moved {shift:.1f}″ (guide rate x time {expected:.1f}″)"
+            )
+            assert shift == pytest.approx(expected, abs=0.15 * expected + 3.0)
+            assert abs(drift) < 5.0  # RA still follows its rate
+            assert loop.pulses == 1
             await r.mount.abort()
             await r.mount.wait_for(lambda s: not r.mount.custom_rates_running, 5.0)
         assert r.sim.tracking is TrackingMode.SIDEREAL

@@ -1,6 +1,7 @@
 """Tracking rates through Alpaca in front of the SynScan driver and the real emulator (issue
 #16): alpyca sets a lunar rate and custom RA/Dec rates, the driver's PC loop drives the hand
-control, and the simulator behind the emulator is the truth."""
+control, and the simulator behind the emulator is the truth; guide rates are set and a pulse
+joins the loop."""
 
 from __future__ import annotations
 
@@ -9,15 +10,16 @@ import math
 from pathlib import Path
 
 import pytest
-from alpaca.telescope import DriveRates, Telescope
+from alpaca.exceptions import InvalidValueException
+from alpaca.telescope import DriveRates, GuideDirections
 
 from scopelink.astro import LUNAR_RATE_DEG_S, SIDEREAL_RATE_DEG_S, angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import TrackingMode
 from scopelink.mount.rates import ra_rate_from_ascom
-from scopelink.servers.alpaca import AlpacaServer
 from scopelink.sim import SimClock, SimulatedMount
 from tests.support.alpaca import blocking
+from tests.support.rates import alpaca_telescope
 from tests.support.synscan_driver import START, rig
 
 SPEED_UP = 10.0
@@ -52,12 +54,7 @@ async def test_lunar_and_custom_rates_through_alpaca_on_synscan(tmp_path: Path) 
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         await r.mount.wait_for_slew(timeout_s=15.0)
-        server = AlpacaServer(
-            r.mount, host="127.0.0.1", port=0, discovery_port=None, state_dir=tmp_path
-        )
-        async with server, r.mount.watching():
-            telescope = Telescope(f"127.0.0.1:{server.port}", 0)
-            await blocking(lambda: setattr(telescope, "Connected", True))
+        async with alpaca_telescope(r.mount, tmp_path) as telescope:
             rates = await blocking(lambda: list(telescope.TrackingRates))
             assert DriveRates.driveLunar in rates
             assert DriveRates.driveKing in rates
@@ -81,6 +78,21 @@ async def test_lunar_and_custom_rates_through_alpaca_on_synscan(tmp_path: Path) 
             )
             assert lunar_rms < 5.0, f"lunar rate {lunar_rms:.2f}″ RMS against the ideal"
             assert custom_rms < 5.0, f"custom rates {custom_rms:.2f}″ RMS against the ideal"
+
+            # Guide rates: stored on the driver, used by PulseGuide, which joins the loop.
+            assert await blocking(lambda: telescope.CanSetGuideRates) is True
+            await blocking(lambda: setattr(telescope, "GuideRateDeclination", 0.003))
+            assert r.mount.guide_rates_deg_s == (r.mount.guide_rate_deg_s, 0.003)
+            assert await blocking(lambda: telescope.GuideRateDeclination) == 0.003
+            with pytest.raises(InvalidValueException, match="10x sidereal"):
+                await blocking(lambda: setattr(telescope, "GuideRateRightAscension", 1.0))
+            assert r.mount.guide_rates_deg_s[1] == 0.003  # nothing changed
+            await blocking(lambda: telescope.PulseGuide(GuideDirections.guideSouth, 200))
+            await r.mount.wait_for(lambda s: not s.pulse_guiding, 5.0)
+            assert r.mount.custom_rates_running, "the pulse ended the loop"
+            loop = r.mount.rate_loop_statistics
+            assert loop is not None
+            assert loop.pulses == 1
 
             await blocking(lambda: setattr(telescope, "Tracking", False))
             assert r.sim.tracking is TrackingMode.OFF

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
-from typing import Protocol
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Protocol, runtime_checkable
 
 from scopelink.astro import (
     KING_RATE_DEG_S,
@@ -29,11 +31,15 @@ from scopelink.astro import (
 )
 from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.errors import InvalidValueError, NotSupportedError
-from scopelink.mount.types import Capabilities, MountState, TrackingMode
+from scopelink.mount.types import Capabilities, GuideDirection, MountState, TrackingMode
 
 __all__ = [
     "SI_SECONDS_PER_SIDEREAL_SECOND",
+    "GuideRates",
+    "GuideShifts",
+    "LoopPulses",
     "RateKeeper",
+    "RateLoopStatistics",
     "RatesSetter",
     "TrackingRates",
     "check_tracking_rates",
@@ -150,3 +156,116 @@ class RateKeeper:
         if self.owner is client and not self.rates.zero and self._mount.state.connected:
             logger.warning("%s went away with custom tracking rates: back to zero", client.name)
             await self._mount.set_tracking_rates(0.0, 0.0)
+
+
+ERRORS_KEPT = 20_000
+"""A rate loop keeps the errors of its last 20 000 readings (about 15 minutes of polls)."""
+
+
+@dataclass
+class RateLoopStatistics:
+    """A driver's closed rate loop (docs/tracking.md): the pointing error of every reading it
+    used (arcsec on the sky), where and when it started, how many commands it sent."""
+
+    errors_arcsec: list[float] = field(default_factory=list)
+    started_at: datetime | None = None
+    anchor: tuple[float, float] | None = None
+    """The J2000 RA (h) and Dec (°) read at ``started_at``: the target is integrated from it."""
+    commands: int = 0
+    pulses: int = 0
+    """Guide pulses added to the loop's rate (instead of ending it)."""
+
+    def add_error(self, arcsec: float) -> None:
+        """One reading's error; only the last ``ERRORS_KEPT`` are kept (a night's loop)."""
+        self.errors_arcsec.append(arcsec)
+        if len(self.errors_arcsec) > 2 * ERRORS_KEPT:
+            del self.errors_arcsec[:-ERRORS_KEPT]
+
+    def rms_after(self, skip: int) -> float:
+        tail = self.errors_arcsec[skip:]
+        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
+
+
+@dataclass
+class GuideShifts:
+    """The guide pulses given while a rate loop runs, as a shift of its target: a pulse of
+    ``duration_s`` at (RA, Dec) rates moves the target by rate x time, growing while the
+    pulse runs, so the loop keeps the guider's correction instead of undoing it."""
+
+    _pulses: list[list[float]] = field(default_factory=list)
+    """[key, start, duration] on the loop's clock (s), RA rate (h/s), Dec rate (°/s)."""
+
+    def add(
+        self, key: int, start_s: float, duration_s: float, ra_h_s: float, dec_deg_s: float
+    ) -> None:
+        """A pulse from ``start_s``; one still running with the same ``key`` (its axis) is
+        cut short there, as the new pulse replaces it."""
+        self.cut(key, start_s)
+        self._pulses.append([float(key), start_s, duration_s, ra_h_s, dec_deg_s])
+
+    def cut(self, key: int, at_s: float) -> None:
+        """End the pulses of ``key`` at ``at_s`` (a pulse stopped early)."""
+        for pulse in self._pulses:
+            if pulse[0] == key and pulse[1] + pulse[2] > at_s:
+                pulse[2] = max(0.0, at_s - pulse[1])
+
+    def at(self, t_s: float) -> tuple[float, float]:
+        """The target's shift (RA hours, Dec degrees) at ``t_s`` on the loop's clock."""
+        ra = dec = 0.0
+        for _, start, duration, ra_rate, dec_rate in self._pulses:
+            done = max(0.0, min(duration, t_s - start))
+            ra += ra_rate * done
+            dec += dec_rate * done
+        return ra, dec
+
+    def rates_at(self, t_s: float) -> tuple[float, float]:
+        """The pulses' (RA h/s, Dec °/s) rate at ``t_s`` (those still running)."""
+        ra = dec = 0.0
+        for _, start, duration, ra_rate, dec_rate in self._pulses:
+            if start <= t_s < start + duration:
+                ra += ra_rate
+                dec += dec_rate
+        return ra, dec
+
+
+@runtime_checkable
+class GuideRates(Protocol):
+    """A mount whose pulse-guide rates can be set (ASCOM's GuideRateRightAscension and
+    GuideRateDeclination): the SynScan driver (its rate slews) and the Sky Tracker (``K``)."""
+
+    @property
+    def guide_rates_deg_s(self) -> tuple[float, float]:
+        """(RA, Dec) guide rates in degrees per second, as pulses use them."""
+
+    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
+        """Set both; a rate the mount cannot give raises ``InvalidValueError``, nothing set."""
+
+
+class LoopPulses(Protocol):
+    """A driver with a custom-rate loop that guide pulses join (docs/tracking.md)."""
+
+    _loop_taken: bool
+    _loop_joining: bool
+    """Set while a pulse goes out: its ``_motion_commanded`` must not end the loop."""
+
+    @property
+    def custom_rates_running(self) -> bool: ...
+
+
+async def pulse_joining_loop(
+    mount: LoopPulses,
+    pulse_guide: Callable[[GuideDirection, int], Awaitable[None]],
+    direction: GuideDirection,
+    duration_ms: int,
+) -> bool:
+    """``pulse_guide`` (the Mount's, checked) with the loop's joining flag set while the loop runs
+    and is in charge, so the pulse is added to the loop instead of ending it; whether it joined."""
+    if not mount.custom_rates_running or mount._loop_taken:
+        await pulse_guide(direction, duration_ms)
+        return False
+    mount._loop_joining = True
+    try:
+        await pulse_guide(direction, duration_ms)
+    finally:
+        mount._loop_joining = False
+    return True

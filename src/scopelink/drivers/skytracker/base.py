@@ -2,8 +2,8 @@
 line, and what the box last said (status, position) published as the Mount's state.
 
 The driver is one class per concern, each building on the one before: ``base`` (this),
-``connection`` (open, identify, reconnect, calibration), ``polling`` (the state), ``mount`` (the
-commands).
+``connection`` (open, identify, reconnect, calibration), ``polling`` (the state), ``guiding``
+(guide speeds), ``rates`` (custom tracking rates), ``mount`` (the commands).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ from scopelink.protocol.skytracker import (
 )
 
 from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, BusOptions, SkyTrackerLine
-from .motion import UTILITY_ARROW_ARCSEC_S, AxisMotion
+from .motion import MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S, UTILITY_ARROW_ARCSEC_S, AxisMotion
 
 __all__ = ["SkyTrackerBase"]
 
@@ -62,6 +62,10 @@ STOP_BITS = 2
 
 TRACKING_MODES = (TrackingMode.ALT_AZ, TrackingMode.SIDEREAL)
 """Both mean TRACK mode: the Sky Commander's rates follow the sky on both alt-az axes."""
+
+LOOP_TRACKING_MODES = (TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING)
+"""Sidereal plus an RA offset, by the custom-rate loop (rates.py): it needs the Sky Commander's
+positions."""
 
 BOX_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
 
@@ -117,12 +121,19 @@ class SkyTrackerBase(Mount):
         """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
         self._pulse_speeds = (120, 120)
         self._held: dict[MountAxis, AxisMotion] = {}
+        self._loop_presses: dict[MountAxis, AxisMotion] = {}
+        """The custom-rate loop's arrows now (rates.py): tracking, not slewing."""
+        self._loop_on = False
+        """The custom-rate loop runs: the arrows it presses (even those a status read catches
+        on their way to being released) are tracking, not a slew."""
         self._pulses: dict[MountAxis, tuple[Direction, asyncio.Task[None]]] = {}
         self._rest_mode: TrackerMode | None = None
         """The mode to return to when the last arrow is released."""
         self._buttons = asyncio.Lock()
         self._tracking_choice = TrackingMode.ALT_AZ
         self._problems: tuple[str, ...] = ()
+        self._loop_problems: tuple[str, ...] = ()
+        """The custom-rate loop's (rates.py): kept across polls, until the loop starts again."""
         self._goto_status_at = -math.inf
         self._engaged = False
         """connect() succeeded and disconnect() was not called since: a lost link is reopened."""
@@ -145,7 +156,12 @@ class SkyTrackerBase(Mount):
             can_pulse_guide=True,
             can_move_axis=(True, True),
             max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
-            tracking_modes=frozenset({TrackingMode.OFF, *TRACKING_MODES}),
+            tracking_modes=frozenset(
+                {TrackingMode.OFF, *TRACKING_MODES, *(LOOP_TRACKING_MODES if commander else ())}
+            ),
+            max_tracking_offset_arcsec_s=MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S
+            if commander
+            else 0.0,
             can_set_site=True,
             can_set_time=False,
             can_report_pier_side=False,
@@ -237,6 +253,8 @@ class SkyTrackerBase(Mount):
         pulsing = Direction(0)
         for direction, _ in self._pulses.values():
             pulsing |= direction
+        if self._loop_on and not self._held:  # arrows pressed now are the loop's (or pulses)
+            pulsing = ~Direction(0)
         pressed = status.directions if status is not None else Direction(0)
         line = self._line
         read_at, received_s = self._status_at
@@ -254,7 +272,7 @@ class SkyTrackerBase(Mount):
             parked=False,
             aligned=True,
             pulse_guiding=bool(self._pulses),
-            problems=self._problems,
+            problems=self._problems + self._loop_problems,
             received_s=received_s,
             position_received_s=position.received_s if position else None,
         )

@@ -14,6 +14,7 @@ from scopelink.protocol.skytracker import Direction, TrackerMode
 
 __all__ = [
     "GUIDE_SPEED_MAX_ARCSEC_S",
+    "MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S",
     "TRACK_ARROW_ARCSEC_S",
     "UTILITY_ARROW_ARCSEC_S",
     "AxisMotion",
@@ -29,6 +30,11 @@ TRACK_ARROW_ARCSEC_S = 8.0 * 60.0
 """TRACK mode: an arrow adds or subtracts 8 arcmin/s to the track rate (spec)."""
 GUIDE_SPEED_MAX_ARCSEC_S = 255
 """GUIDE mode: an arrow adds the ``K`` speed, 1-255 arcsec/s per axis (spec)."""
+
+MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S = 120.0
+"""The largest custom rate on each of RA and Dec: both at once are 170″/s on the sky, so up to
+about 45° of altitude (where an azimuth rate on the sky needs 1/cos(alt) on the axis) the loop
+still has room for its corrections within the box's 255″/s guide speed."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, Self
 
@@ -21,6 +22,7 @@ from scopelink.mount import (
     DeviceError,
     GuideDirection,
     InvalidValueError,
+    LimitError,
     MountAxis,
     MountError,
     MountState,
@@ -47,7 +49,7 @@ from .base import BOX_TRACKING
 from .calibration import CalibrationFactors, CalibrationRuleError
 from .memory import stored_object
 from .motion import axis_motion, guide_button, plan_buttons
-from .polling import SkyTrackerPolling
+from .rates import SkyTrackerRates
 from .realign import realign_on
 
 __all__ = ["SkyTrackerMount", "SlewInProgressError"]
@@ -63,7 +65,7 @@ def _other(axis: MountAxis) -> MountAxis:
     return MountAxis.SECONDARY if axis is MountAxis.PRIMARY else MountAxis.PRIMARY
 
 
-class SkyTrackerMount(SkyTrackerPolling):
+class SkyTrackerMount(SkyTrackerRates):
     """A Sky Tracker box (with its Sky Commander) on a link.
 
     ``link`` is a link spec as for :func:`scopelink.links.open_link` (``/dev/ttyUSB0``,
@@ -115,6 +117,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         if line is None:
             self._publish_now()
             return
+        await self._end_rate_loop()
         self._cancel_pulses()
         self._held.clear()
         try:
@@ -222,6 +225,7 @@ class SkyTrackerMount(SkyTrackerPolling):
         line = self._require_line()
         self._cancel_pulses()
         self._held.clear()
+        self._loop_presses.clear()
         at_once: list[TrackerCommand] = [ReleaseDirections()]
         if self._mode is TrackerMode.GOTO:
             at_once.append(SelectMode(TrackerMode.UTILITY))
@@ -253,15 +257,23 @@ class SkyTrackerMount(SkyTrackerPolling):
             )
         if self._held or self._pulses:
             raise InvalidValueError("stop moving the axes before changing tracking")
+        await self._end_rate_loop()  # custom rates, lunar, solar, King: a PC loop (rates.py)
         target = TrackerMode.UTILITY if mode is TrackingMode.OFF else TrackerMode.TRACK
         if mode is not TrackingMode.OFF:
             self._tracking_choice = mode
         await self._send_confirmed([SelectMode(target)], mode=target)
         self._publish_now()
+        try:
+            await self._start_rate_loop()
+        except LimitError as error:  # tracking is on; the recorded rates would head out
+            logger.warning("%s: custom tracking rates not started: %s", self.spec, error)
+            self._loop_problems = (f"custom tracking rates not started: {error}",)
+            self._publish_now()
 
     async def standby(self) -> None:
         """``B``: cut the motor drive to save battery (a GOTO is aborted first with ``U``)."""
         self._require_line()
+        await self._end_rate_loop()
         self._cancel_pulses()
         self._held.clear()
         commands: list[TrackerCommand] = [ReleaseDirections()]
@@ -271,16 +283,6 @@ class SkyTrackerMount(SkyTrackerPolling):
         self._rest_mode = None
         await self._send_confirmed(commands, mode=TrackerMode.STANDBY)
         self._publish_now()
-
-    async def set_guide_speed(self, azimuth_arcsec_s: int, elevation_arcsec_s: int) -> None:
-        """``K`` (confirmed with ``k``): the guide speed of pulses and GUIDE-mode arrows."""
-        for value in (azimuth_arcsec_s, elevation_arcsec_s):
-            if not 1 <= value <= 255:
-                raise InvalidValueError(f"guide speed {value} arcsec/s is not 1-255")
-        self._require_line()
-        self._pulse_speeds = (azimuth_arcsec_s, elevation_arcsec_s)
-        async with self._buttons:
-            await self._set_guide_speeds(self._pulse_speeds)
 
     async def _move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
         """Press the arrow of the nearest supported rate (see motion.py); 0 releases it."""
@@ -355,20 +357,36 @@ class SkyTrackerMount(SkyTrackerPolling):
 
     async def _release_all_buttons(self) -> None:
         self._cancel_pulses()
-        if self._held:
+        if self._held or self._loop_presses or self._loop_on:  # the loop's: even mid-release
             self._held.clear()
+            self._loop_presses.clear()
             await self._apply_buttons()
 
-    async def _apply_buttons(self) -> None:
-        """Send the mode, ``K`` and arrows that the held motions and pulses call for, in one turn.
+    async def _apply_buttons(self, still: Callable[[], bool] | None = None) -> bool:
+        """Send the mode, ``K`` and arrows that the held motions, the custom-rate loop's presses
+        and pulses call for, in one turn; with ``still``, only if it holds once the turn is ours
+        (False: nothing sent).
 
-        ``b`` releases every arrow, so the arrows still wanted are pressed again after it.
+        ``b`` releases every arrow, so the arrows still wanted are pressed again after it. A
+        pulse on an axis takes it over from the loop for its duration.
         """
         async with self._buttons:
             self._require_line()
+            if still is not None and not still():
+                return False
+            loop = {a: m for a, m in self._loop_presses.items() if a not in self._pulses}
+            if self._loop_taken:  # another command took over: the loop's arrows go
+                loop.clear()
+            pulses = {axis: button for axis, (button, _) in self._pulses.items()}
+            if self._loop_on:  # a pulse adds the loop's rate on its axis (rates.py)
+                for axis, button in list(pulses.items()):
+                    del pulses[axis]
+                    combined = self._pulse_with_loop(axis, button)
+                    if combined is not None:
+                        loop[axis] = combined
             plan = plan_buttons(
-                self._held,
-                {axis: button for axis, (button, _) in self._pulses.items()},
+                {**loop, **self._held},
+                pulses,
                 pulse_speeds_arcsec_s=self._pulse_speeds,
                 mode=self._mode,
                 rest_mode=self._rest_mode,
@@ -389,3 +407,4 @@ class SkyTrackerMount(SkyTrackerPolling):
                 speeds=plan.guide_speeds_arcsec_s if change_speeds else None,
             )
             self._publish_now()
+            return True

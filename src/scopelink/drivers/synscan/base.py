@@ -62,6 +62,10 @@ def rate_zero(axis: MountAxis) -> FixedRateSlew:
     return FixedRateSlew(AXES[axis], positive=True, rate=0)
 
 
+MAX_GUIDE_RATE_DEG_S = 10.0 * SIDEREAL_RATE_DEG_S
+"""The fastest pulse-guide rate the driver takes (10x sidereal)."""
+
+
 class SynScanBase(Mount):
     """The SynScan driver's construction, identity and exchanges (see :class:`SynScanMount`)."""
 
@@ -85,7 +89,7 @@ class SynScanBase(Mount):
     ) -> None:
         super().__init__(site=site, limits=limits, clock=clock, park_position=park_position)
         factory, name = link_factory(link, name=name, unnamed="SynScan link")
-        if not 0 < guide_rate_deg_s <= 10 * SIDEREAL_RATE_DEG_S:
+        if not 0 < guide_rate_deg_s <= MAX_GUIDE_RATE_DEG_S:
             raise ValueError(f"guide rate {guide_rate_deg_s}°/s must lie in (0, 10x sidereal]")
         if not -12 <= utc_offset_hours <= 14:
             raise ValueError(f"UTC offset {utc_offset_hours} h must lie in [-12, 14]")

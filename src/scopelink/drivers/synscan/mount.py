@@ -320,10 +320,15 @@ class SynScanMount(SynScanRates):
                 "directions on an alt-az mount)"
             )
         axis, sign = self._guide_axis(direction)
+        guide_rate = self.guide_rates_deg_s[0 if axis is MountAxis.PRIMARY else 1]
+        if self._loop_joining:  # custom rates: the pulse is added to the loop (rates.py)
+            if duration_ms > 0:
+                await self._pulse_into_loop(axis, sign * guide_rate, duration_ms)
+            return
         self._cancel_pulse(axis)
         if duration_ms == 0:
             return
-        rate = sign * self.guide_rate_deg_s
+        rate = sign * guide_rate
         if axis is MountAxis.PRIMARY and self._tracking is not TrackingMode.OFF:
             # A rate slew replaces tracking on that axis: carry the tracking rate along.
             rate += math.copysign(SIDEREAL_RATE_DEG_S, self.site.latitude_deg)

@@ -18,15 +18,28 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import dataclass, field
+from dataclasses import replace
 from datetime import datetime
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
-from scopelink.drivers.synscan.base import AXES
+from scopelink.drivers.synscan.base import AXES, MAX_GUIDE_RATE_DEG_S
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SynScanParking
-from scopelink.mount import MountAxis, MountError, MountState, Priority, TrackingMode
-from scopelink.mount.rates import TrackingRates
+from scopelink.mount import (
+    GuideDirection,
+    InvalidValueError,
+    MountAxis,
+    MountError,
+    MountState,
+    Priority,
+    TrackingMode,
+)
+from scopelink.mount.rates import (
+    GuideShifts,
+    RateLoopStatistics,
+    TrackingRates,
+    pulse_joining_loop,
+)
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
 __all__ = [
@@ -69,21 +82,6 @@ HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
 """The equatorial modes the hand control tracks in by itself."""
 
 
-@dataclass
-class RateLoopStatistics:
-    """The pointing error of every poll the loop saw (arcsec on the sky), for tests and status."""
-
-    errors_arcsec: list[float] = field(default_factory=list)
-    started_at: datetime | None = None
-    anchor: tuple[float, float] | None = None
-    """The J2000 RA (h) and Dec (°) read at ``started_at``: the target is integrated from it."""
-    commands: int = 0
-
-    def rms_after(self, skip: int) -> float:
-        tail = self.errors_arcsec[skip:]
-        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
-
-
 def _quantised(arcsec_per_s: float) -> float:
     return round(arcsec_per_s / QUANTUM_ARCSEC_S) * QUANTUM_ARCSEC_S
 
@@ -102,6 +100,13 @@ class SynScanRates(SynScanParking):
     _loop_taken = False
     """Another motion command is on its way: no correction may follow it onto the wire."""
     _loop_starting = False
+    _loop_joining = False
+    """A guide pulse joins the loop (pulse_guide): it does not take the axes over."""
+    _loop_shifts: GuideShifts | None = None
+    _loop_drive: tuple[TrackingRates, float, float] | None = None
+    """The loop's rates in force and the last errors (RA, Dec degrees): to drive between polls."""
+    _loop_clock: tuple[datetime, float] | None = None
+    """The loop's start on the mount clock and on the PC's (``loop.time()``)."""
     rate_loop_statistics: RateLoopStatistics | None = None
     """The running (or last) loop's errors: None before the first."""
 
@@ -124,8 +129,28 @@ class SynScanRates(SynScanParking):
         """Called before any motion command is sent (goto, move, pulse, abort, park): from now
         on the loop sends no correction that could land after it."""
         super()._motion_commanded()
-        if self._loop_mode is not None and not self._loop_starting:
+        if self._loop_mode is not None and not (self._loop_starting or self._loop_joining):
             self._loop_taken = True
+
+    _guide_rate_dec_deg_s: float | None = None
+
+    @property
+    def guide_rates_deg_s(self) -> tuple[float, float]:
+        """(RA, Dec) pulse-guide rates (°/s): ``guide_rate_deg_s`` unless Dec's was set apart."""
+        dec = self._guide_rate_dec_deg_s
+        return self.guide_rate_deg_s, self.guide_rate_deg_s if dec is None else dec
+
+    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
+        """Pulse-guide rates (°/s) in RA and Dec, each within (0, 10x sidereal]: the hand
+        control's rate slews take ¼″/s steps (the PC times the pulses)."""
+        for name, value in (("RA", ra_deg_s), ("Dec", dec_deg_s)):
+            if not (isinstance(value, int | float) and 0.0 < value <= MAX_GUIDE_RATE_DEG_S):
+                raise InvalidValueError(
+                    f"{name} guide rate {value!r}°/s must lie in (0, {MAX_GUIDE_RATE_DEG_S:.5f}] "
+                    "(10x sidereal)"
+                )
+        self.guide_rate_deg_s = float(ra_deg_s)
+        self._guide_rate_dec_deg_s = float(dec_deg_s)
 
     @property
     def custom_rates_running(self) -> bool:
@@ -159,6 +184,9 @@ class SynScanRates(SynScanParking):
             started_at=state.read_at, anchor=(state.ra_j2000_hours, state.dec_j2000_deg)
         )
         self.rate_loop_statistics = statistics
+        self._loop_shifts = GuideShifts()
+        self._loop_drive = (rates, 0.0, 0.0)
+        self._loop_clock = (state.read_at, asyncio.get_running_loop().time())
         self._loop_starting = True
         try:
             await self._drive(self._axis_rates_for(rates, 0.0, 0.0), statistics, first=True)
@@ -265,12 +293,15 @@ class SynScanRates(SynScanParking):
                     assert state.dec_j2000_deg is not None
                     dt = (state.read_at - first.read_at).total_seconds()
                     dt -= self._reading_lag_s(first, state, dt)
-                    target_ra = ra0 + rates.ra_hours_per_s * dt
-                    target_dec = dec0 + rates.dec_deg_per_s * dt
+                    shifts = self._loop_shifts or GuideShifts()
+                    ra_shift, dec_shift = shifts.at(dt)
+                    target_ra = ra0 + rates.ra_hours_per_s * dt + ra_shift
+                    target_dec = dec0 + rates.dec_deg_per_s * dt + dec_shift
                     ra_error = wrap_signed_degrees((target_ra - state.ra_j2000_hours) * 15.0)
                     dec_error = target_dec - state.dec_j2000_deg
-                    statistics.errors_arcsec.append(_sky_error_arcsec(ra_error, dec_error, state))
-                    await self._drive(self._axis_rates_for(rates, ra_error, dec_error), statistics)
+                    statistics.add_error(_sky_error_arcsec(ra_error, dec_error, state))
+                    self._loop_drive = (rates, ra_error, dec_error)
+                    await self._drive_now(statistics)
         except MountError as error:
             logger.warning("%s: custom tracking rates: %s", self.wire.name, error)
             self._report_problem(f"custom tracking rates stopped: {error}")
@@ -281,6 +312,74 @@ class SynScanRates(SynScanParking):
                 # After the command that took over, which has the wire before the hand-back.
                 with contextlib.suppress(MountError):  # a failed stop is owed, sent later
                     await asyncio.shield(self._hand_back())
+
+    def _loop_time_s(self) -> tuple[float, float]:
+        """Seconds since the loop started on the mount's clock, and the mount clock's rate
+        against the PC's (a simulator's may run fast; pulses are timed on the PC)."""
+        assert self._loop_clock is not None
+        mount_start, real_start = self._loop_clock
+        t = (self.now() - mount_start).total_seconds()
+        real = asyncio.get_running_loop().time() - real_start
+        return t, (t / real if real > 0.5 and t > 0.0 else 1.0)
+
+    async def _drive_now(self, statistics: RateLoopStatistics) -> None:
+        """Drive at the rates in force, the running pulses and the last errors."""
+        assert self._loop_drive is not None
+        rates, ra_error, dec_error = self._loop_drive
+        t, _ = self._loop_time_s()
+        ra_pulse, dec_pulse = (self._loop_shifts or GuideShifts()).rates_at(t)
+        with_pulses = TrackingRates(
+            rates.ra_arcsec_per_s + ra_pulse * 54000.0, rates.dec_arcsec_per_s + dec_pulse * 3600.0
+        )
+        await self._drive(self._axis_rates_for(with_pulses, ra_error, dec_error), statistics)
+
+    async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
+        """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it (its
+        guide rate on top of the loop's, the target moved along: docs/tracking.md)."""
+        await pulse_joining_loop(self, super().pulse_guide, direction, duration_ms)
+
+    async def _pulse_into_loop(
+        self, axis: MountAxis, axis_rate_deg_s: float, duration_ms: int
+    ) -> None:
+        """The guide rate on ``axis`` added to the loop's for ``duration_ms`` (PC time), and the
+        loop's target moved along with it, so the loop keeps the correction."""
+        statistics, shifts = self.rate_loop_statistics, self._loop_shifts
+        assert statistics is not None
+        assert shifts is not None
+        hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
+        arcsec = axis_rate_deg_s * 3600.0
+        if axis is MountAxis.PRIMARY:  # the polar axis turning faster: RA decreasing
+            ra_rate, dec_rate = -hemisphere * arcsec / 54000.0, 0.0
+        else:
+            dec_sign = -hemisphere if self._pier_side is PierSide.WEST else hemisphere
+            ra_rate, dec_rate = 0.0, dec_sign * arcsec / 3600.0
+        previous = self._pulses.pop(axis, None)
+        if previous is not None:
+            previous.cancel()
+        t, ratio = self._loop_time_s()
+        shifts.add(axis.value, t, duration_ms / 1000.0 * ratio, ra_rate, dec_rate)
+        statistics.pulses += 1
+        await self._drive_now(statistics)
+        self._pulses[axis] = asyncio.create_task(
+            self._end_loop_pulse(axis, duration_ms / 1000.0), name=f"end guide pulse {axis.name}"
+        )
+        self._publish(replace(self.state, pulse_guiding=True))
+
+    async def _end_loop_pulse(self, axis: MountAxis, duration_s: float) -> None:
+        try:
+            await asyncio.sleep(duration_s)
+            statistics = self.rate_loop_statistics
+            if statistics is not None and self._loop_still_ours():
+                assert self._loop_shifts is not None
+                self._loop_shifts.cut(axis.value, self._loop_time_s()[0])
+                await self._drive_now(statistics)
+        except MountError as error:
+            logger.warning("%s: ending a guide pulse in the loop: %s", self.wire.name, error)
+        finally:
+            if self._pulses.get(axis) is asyncio.current_task():
+                del self._pulses[axis]
+            if not self._pulses:
+                self._publish(replace(self.state, pulse_guiding=False))
 
     async def _end_custom_rates(self, *, force: bool = False) -> None:
         """Stop the loop (rates zeroed, a tracking change, a disconnect): both axes stopped and

@@ -8,6 +8,7 @@ answer without a connection. CanMoveAxis and AxisRates are in ``motion``, Tracki
 from __future__ import annotations
 
 from scopelink.mount import AlignmentMode, TrackingMode
+from scopelink.mount.rates import GuideRates
 from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, fixed, not_implemented
 
 __all__ = ["CapabilityMembers"]
@@ -32,7 +33,7 @@ class CapabilityMembers(MemberGroup):
             "canpulseguide": fixed(caps.can_pulse_guide),
             "cansetdeclinationrate": fixed(caps.max_tracking_offset_arcsec_s > 0.0),
             "cansetrightascensionrate": fixed(caps.max_tracking_offset_arcsec_s > 0.0),
-            "cansetguiderates": fixed(False),
+            "cansetguiderates": fixed(isinstance(self.session.mount, GuideRates)),
             "cansetpierside": fixed(False),
             "cansettracking": fixed(len(caps.tracking_modes - {TrackingMode.OFF}) > 0),
             "canslew": fixed(caps.can_goto),

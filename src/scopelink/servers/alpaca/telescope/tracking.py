@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import enum
+from collections.abc import Awaitable, Callable
 
 from scopelink.mount import AlignmentMode, Mount, TrackingMode
-from scopelink.mount.rates import ra_rate_from_ascom, ra_rate_to_ascom
+from scopelink.mount.rates import GuideRates, ra_rate_from_ascom, ra_rate_to_ascom
 from scopelink.servers.alpaca.errors import AlpacaError, ErrorNumber
 from scopelink.servers.alpaca.params import Params
 from scopelink.servers.alpaca.telescope.member import Member, MemberGroup, not_implemented
@@ -88,9 +89,17 @@ class TrackingMembers(MemberGroup):
             "declinationrate": Member(
                 get=lambda _: mount.tracking_rates.dec_arcsec_per_s, put=self._put_dec_rate
             ),
-            "guideratedeclination": Member(get=self._guide_rate, put=ni("GuideRateDeclination")),
+            "guideratedeclination": Member(
+                get=lambda _: self._guide_rates()[1],
+                put=self._put_guide_rate("GuideRateDeclination", 1)
+                if isinstance(mount, GuideRates)
+                else ni("GuideRateDeclination"),
+            ),
             "guideraterightascension": Member(
-                get=self._guide_rate, put=ni("GuideRateRightAscension")
+                get=lambda _: self._guide_rates()[0],
+                put=self._put_guide_rate("GuideRateRightAscension", 0)
+                if isinstance(mount, GuideRates)
+                else ni("GuideRateRightAscension"),
             ),
         }
 
@@ -98,14 +107,31 @@ class TrackingMembers(MemberGroup):
         tracking = self.session.mount.state.tracking
         return int(_DRIVE_RATE_OF_MODE.get(tracking, self._drive_rate))
 
-    def _guide_rate(self, _: Params) -> float:
-        # The Mount API has no guide rate; a mount that knows its own (the simulator) says it.
-        rate = getattr(self.session.mount, "guide_rate_deg_s", None)
+    def _guide_rates(self) -> tuple[float, float]:
+        """(RA, Dec) in °/s: a driver whose guide rates can be set (GuideRates) says both; a
+        mount that knows one rate (the simulator) says it for both."""
+        mount = self.session.mount
+        if isinstance(mount, GuideRates):
+            return mount.guide_rates_deg_s
+        rate = getattr(mount, "guide_rate_deg_s", None)
         if not isinstance(rate, float):
             raise AlpacaError(
                 ErrorNumber.NOT_IMPLEMENTED, "this mount does not report a guide rate"
             )
-        return rate
+        return rate, rate
+
+    def _put_guide_rate(self, name: str, index: int) -> Callable[[Params], Awaitable[None]]:
+        """The setter of one guide rate (°/s), the other kept; stored on the mount and used by
+        PulseGuide."""
+
+        async def put(params: Params) -> None:
+            mount = self.session.mount
+            assert isinstance(mount, GuideRates)
+            rates = list(mount.guide_rates_deg_s)
+            rates[index] = params.number(name)
+            await self.session.call(mount.set_guide_rates(rates[0], rates[1]))
+
+        return put
 
     async def _put_tracking(self, params: Params) -> None:
         on = params.boolean("Tracking")
