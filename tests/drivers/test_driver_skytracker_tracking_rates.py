@@ -7,6 +7,8 @@ import asyncio
 import math
 from pathlib import Path
 
+import pytest
+
 from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.mount import GuideDirection, TrackingMode
 from scopelink.protocol.skytracker import TrackerMode
@@ -33,6 +35,7 @@ async def _track_at(r: Rig, alt_deg: float, az_deg: float) -> None:
     await eventually(lambda: all(axis.rate != 0.0 for axis in r.sim.axes))
 
 
+@pytest.mark.solo
 async def test_custom_rates_follow_the_integrated_target(tmp_path: Path) -> None:
     async with rig(tmp_path, "tcp", clock_rate=SPEED_UP, guide_speed_arcsec_s=20) as r:
         await _track_at(r, 45.0, 120.0)
