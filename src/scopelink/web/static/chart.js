@@ -10,7 +10,7 @@ import { loadSky, loadTrack, sky } from "./chart/data.js";
 import { placeLabels } from "./chart/labels.js";
 import {
   drawBackground, drawConstellations, drawDeepSky, drawGrid, drawGround, drawMilkyWay,
-  drawNamedObjects, drawStars, palettes, twilightName,
+  drawNamedObjects, drawStars, palettes,
 } from "./chart/layers.js";
 import { drawLimits, drawMarkers, drawPaths, drawSunZone } from "./chart/overlay.js";
 import { attachControls, buildToolbar, followMount, loadField, view } from "./chart/view.js";
@@ -22,7 +22,7 @@ const FOLLOW_STEP_PX = 2; // a followed mount is re-centred once it is this far 
 
 const data = { mount: null, state: null, sky: [], selected: null, frame: null, track: null };
 const hooks = { onSelect: () => {} };
-const chart = { canvas: null, ctx: null, width: 0, height: 0, field: loadField() };
+const chart = { canvas: null, ctx: null, width: 0, height: 0, field: loadField(), twilight: "" };
 let cache = null; // the J2000 layers turned into the sky of data.frame
 let drawnKey = null; // what the last drawing showed (see baseKey and overlayKey)
 let pending = false;
@@ -185,10 +185,14 @@ function draw() {
   const budget = Math.max(8, Math.round((width * height) / LABEL_AREA_PX2));
   const placed = placeLabels(ctx, base.labels, markers.keepOut, width, height, budget);
   const fovText = view.fov >= 10 ? `${view.fov.toFixed(0)}°` : `${view.fov.toFixed(1)}°`;
-  setFovText(`${fovText}${s.sunAlt == null ? "" : ` · ${twilightName(s.sunAlt)}`}`);
+  // The phase is the server's (web/almanac.py: one definition of its boundaries); kept between
+  // messages that carry no clock.
+  if (data.state && data.state.clock && data.state.clock.twilight) chart.twilight = data.state.clock.twilight;
+  const twilight = chart.twilight || "";
+  setFovText(`${fovText}${twilight ? ` · ${twilight}` : ""}`);
   report = {
     ...base.drawn, ...paths, ...markers.result, labels: placed, clickable: base.clickable, fov: view.fov,
-    view: { alt: view.alt, az: view.az }, twilight: twilightName(s.sunAlt), ms: performance.now() - started,
+    view: { alt: view.alt, az: view.az }, twilight, ms: performance.now() - started,
   };
 }
 

@@ -47,15 +47,6 @@ export function skyColour(sunAlt, colours) {
   return `rgb(${stops[0][1]})`;
 }
 
-export function twilightName(sunAlt) {
-  if (sunAlt == null) return "";
-  if (sunAlt > -0.833) return "day";
-  if (sunAlt > -6) return "civil twilight";
-  if (sunAlt > -12) return "nautical twilight";
-  if (sunAlt > -18) return "astronomical twilight";
-  return "night";
-}
-
 // The faintest magnitude the sky's brightness lets through: none by day, 8 by night, linear in
 // the Sun's depth in between (about 3.8 at the end of civil twilight, 5.9 of nautical).
 export function skyLimit(sunAlt) {
