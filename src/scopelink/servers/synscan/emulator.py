@@ -10,6 +10,7 @@ connected :class:`~scopelink.mount.Mount` it is a bridge. Use it as an async con
 
 from __future__ import annotations
 
+from types import TracebackType
 from typing import Self
 
 from scopelink.mount import Mount
@@ -49,6 +50,7 @@ class SynScanEmulator(HostedDevice):
         cold_start: bool = False,
     ) -> None:
         self.cold_start = cold_start
+        self._switched_on_mount = False
         control = AccessControl(access, "SynScan")
         self.hand_control = SynScanHandControl(mount, config, axis_passthrough=axis_passthrough)
         self.server = SynScanServer(self.hand_control, faults, access=control, dead_man=dead_man)
@@ -63,13 +65,26 @@ class SynScanEmulator(HostedDevice):
         return self.server.faults
 
     async def __aenter__(self) -> Self:
-        if not self.mount.state.connected:
+        self._switched_on_mount = not self.mount.state.connected
+        if self._switched_on_mount:
             await self.mount.connect()
         if self.cold_start:
             await self.hand_control.power_cycle()
         else:
             await self.hand_control.power_on()
         return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        """Stop serving, then switch off the mount if entering switched it on (its watchers end)."""
+        await super().__aexit__(exc_type, exc, traceback)
+        if self._switched_on_mount:
+            self._switched_on_mount = False
+            await self.mount.disconnect()
 
     async def power_cycle(self) -> None:
         """Switch the emulated hand control off and on: see ``SynScanHandControl.power_cycle``."""
