@@ -78,6 +78,10 @@ def test_park_then_status_agree_through_the_running_serve(config: Path, runtime_
         status, _, err = scopelink_here(config, "guide", "north", "100")
         assert status == 1
         assert f"cannot be done through a running scopelink serve (PID {serve.pid})" in err
+        # `pointing` (which talks to the dashboard itself) finds the same serve without --url.
+        status, out, err = scopelink_here(config, "pointing", "--json")
+        assert status == 0, err
+        assert "syncs" in json.loads(out)
         status, _, err = scopelink_here(config, "status", "--device", "serve:1")
         assert status == 1
         assert "no scopelink serve with PID 1 is running" in err

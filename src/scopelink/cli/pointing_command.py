@@ -44,7 +44,7 @@ def register(commands: CommandParsers) -> None:
     parser.add_argument(
         "--url",
         default=None,
-        help="the dashboard of the running serve (default: this machine, serve's default port)",
+        help="the dashboard of a serve (default: the one this user runs, else port 8080 here)",
     )
     parser.add_argument("--pairing", default=None, help="the pairing token serve printed")
     parser.add_argument("--json", action="store_true", help="print the model as JSON")
@@ -74,7 +74,8 @@ def _ask(args: argparse.Namespace, body: dict[str, Any] | None) -> dict[str, Any
     from scopelink.web.dashboard import PAIRING_HEADER  # noqa: PLC0415 - only to run
 
     if args.url is None:
-        args.url = f"http://127.0.0.1:{DEFAULT_DASHBOARD_PORT}"
+        args.url, token = _running_dashboard(DEFAULT_DASHBOARD_PORT)
+        args.pairing = args.pairing or token
     url = args.url.rstrip("/") + "/api/pointing"
     if not url.startswith(("http://", "https://")):
         raise CommandError(f"--url {args.url!r} is not an http:// address")
@@ -97,6 +98,18 @@ def _ask(args: argparse.Namespace, body: dict[str, Any] | None) -> dict[str, Any
     if not isinstance(answer, dict):
         raise CommandError(f"{args.url} did not answer as a scopelink dashboard")
     return answer
+
+
+def _running_dashboard(default_port: int) -> tuple[str, str | None]:
+    """The dashboard (and pairing token) of this user's running serve (cli/serve_registry.py),
+    as the other commands find it; else serve's default address on this machine."""
+    from scopelink.cli.serve_registry import running_serves  # noqa: PLC0415 - light
+
+    for entry in running_serves():
+        if entry.dashboard is not None:
+            token = entry.about.get("pairing")
+            return entry.dashboard, token if isinstance(token, str) else None
+    return f"http://127.0.0.1:{default_port}", None
 
 
 def _refusal(error: urllib.error.HTTPError) -> str:
