@@ -16,3 +16,6 @@ def test_quick_dashboard_benchmark_prints_its_figures() -> None:
     assert any(line.startswith("state + chart objects") for line in lines), result.stdout
     assert any(line.strip().startswith("10 pages") for line in lines), result.stdout
     assert any("x a 9600-baud line" in line for line in lines), result.stdout
+    goal = lines[-1]
+    assert goal.startswith("goal: server CPU per open page <= 0.05 core, every row: "), goal
+    assert ("PASS" in goal) != ("MISS" in goal), goal
