@@ -40,13 +40,25 @@ from scopelink.mount import errors as mount_errors
 from scopelink.mount.parking import Resume
 from scopelink.mount.progress import ProgressTracker
 
-__all__ = ["POLL_S", "REQUEST_TIMEOUT_S", "ServeMount"]
+__all__ = ["DIRECT", "POLL_S", "REQUEST_TIMEOUT_S", "ServeMount"]
 
 REQUEST_TIMEOUT_S: Final = 10.0
 """How long one request to the serve may take (a park or goto returns once started)."""
 POLL_S: Final = 0.5
 """How often a slew or ``status --watch`` reads the serve's state."""
 _PIER: Final = {"east": PierSide.EAST, "west": PierSide.WEST}
+
+
+class _NoRedirects(urllib.request.HTTPRedirectHandler):
+    """A redirect is an answer, not a hop: the pairing token goes nowhere else."""
+
+    def redirect_request(self, *args: Any, **kwargs: Any) -> None:
+        return None
+
+
+DIRECT: Final = urllib.request.build_opener(urllib.request.ProxyHandler({}), _NoRedirects)
+"""Straight to the serve on this machine: no ``http_proxy`` of the environment (it would get
+the pairing token and every command, and reach its own 127.0.0.1), no redirect followed."""
 
 
 class ServeMount:
@@ -238,7 +250,7 @@ class ServeMount:
         data = None if body is None else json.dumps(dict(body)).encode()
         request = urllib.request.Request(self.url + path, data, headers, method=method)
         try:
-            with urllib.request.urlopen(request, timeout=REQUEST_TIMEOUT_S) as response:
+            with DIRECT.open(request, timeout=REQUEST_TIMEOUT_S) as response:
                 answer = json.loads(response.read())
         except urllib.error.HTTPError as error:
             raise _refusal(error) from None
