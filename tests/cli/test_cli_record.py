@@ -154,3 +154,21 @@ async def test_emulate_replay_answers_and_reports_divergences_on_stderr(
     err = (await emulator.stderr.read()).decode()
     assert "replaying 2 exchanges from" in err
     assert "replay: divergence at line 2 (exchange 1, byte 0): expected 'V', received 'e'" in err
+
+
+def test_a_record_that_cannot_start_leaves_no_file(tmp_path: Path, config: Path) -> None:
+    """Bad input costs one line and nothing else: no header-only file blocks the retry."""
+    recording = tmp_path / "session.jsonl"
+    for where, said in (
+        (("--tcp", "abc"), "bad --tcp 'abc'"),
+        (("--tcp", "127.0.0.1:99999"), "bad --tcp"),
+        (("--tcp", "203.0.113.5:0"), "cannot open tcp server 203.0.113.5:0"),
+        (("--pty", str(tmp_path / "absent" / "link")), "cannot open pty"),
+    ):
+        status, _, err = scopelink_here(
+            config, "record", "--device", "synscan:loop://", *where, str(recording)
+        )
+        assert (status, err.count("\n")) in ((1, 1), (1, 2)), err
+        assert said in err
+        assert "Traceback" not in err
+        assert not recording.exists(), where
