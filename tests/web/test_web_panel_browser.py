@@ -155,10 +155,11 @@ async def test_desktop_controls_keys_gamepad_progress_and_feedback(browser: Brow
         async def asked_to_stop() -> bool:
             return bool(rates) and rates[-1] == 0
 
-        for start, end in (
+        holds: list[tuple[Callable[[], Awaitable[object]], Callable[[], Awaitable[object]]]] = [
             (lambda: pad(page, "fakePad.axes[0] = 1"), lambda: pad(page, "fakePad.axes[0] = 0")),
             (lambda: page.keyboard.down("a"), lambda: page.keyboard.up("a")),
-        ):
+        ]
+        for start, end in holds:
             await start()
             await until(lambda: slewing(s), "the mount moves")
             await pad(page, HIDE)
