@@ -172,3 +172,24 @@ def test_a_record_that_cannot_start_leaves_no_file(tmp_path: Path, config: Path)
         assert said in err
         assert "Traceback" not in err
         assert not recording.exists(), where
+
+
+async def test_a_command_cut_short_and_sent_again_is_answered(tmp_path: Path) -> None:
+    """A client that times out mid-command and sends it again from the start ("K" then "Ka",
+    on the wire "KKa") gets the recorded answer: the byte that broke the match may begin it."""
+    recording = tmp_path / "retry.jsonl"
+    recording.write_text(
+        '{"scopelink_recording": 1, "protocol": "synscan"}\n'
+        '{"t": 0.1, "dir": "->", "data": "Ka"}\n{"t": 0.2, "dir": "<-", "data": "a#"}\n'
+        '{"t": 0.3, "dir": "->", "data": "V"}\n{"t": 0.4, "dir": "<-", "data": "042507#"}\n'
+    )
+    replay = ReplayDevice(read_recording(recording.read_bytes()))
+    async with replay, await open_serial(await replay.on_pty()) as link:
+        await link.write(b"KKa")
+        async with asyncio.timeout(5):
+            assert await link.read_exactly(2) == b"a#"
+        await link.write(b"V")
+        async with asyncio.timeout(5):
+            assert await link.read_exactly(7) == b"042507#"
+    (divergence,) = replay.divergences
+    assert (divergence.line, divergence.offset, divergence.received) == (2, 1, b"K")
