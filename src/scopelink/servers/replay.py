@@ -104,12 +104,13 @@ class ReplayDevice(HostedDevice):
                     self._flush(diverging)
                     self._matched += 1
                     await self._answer_if_due(link)
-                elif self._matched and byte == command[0]:
+                elif restart := _restart(command, self._matched, byte):
                     # A command cut short and sent again (a client's retry): this byte is the
-                    # divergence where it stands, and begins the command afresh.
+                    # divergence where it stands, and with what came before it begins the
+                    # command afresh.
                     self._diverge_at = self._matched
                     self._flush(bytearray((byte,)))
-                    self._matched = 1
+                    self._matched = restart
                     await self._answer_if_due(link)
                 else:
                     if not diverging:
@@ -148,6 +149,16 @@ class ReplayDevice(HostedDevice):
         logger.info("%s", divergence.describe())
         if self._report is not None:
             self._report(divergence)
+
+
+def _restart(command: bytes, matched: int, byte: int) -> int:
+    """How much of ``command`` the bytes seen end with, once ``byte`` broke a match of
+    ``matched`` bytes (0: none)."""
+    seen = command[:matched] + bytes((byte,))
+    for length in range(matched, 0, -1):
+        if seen.endswith(command[:length]):
+            return length
+    return 0
 
 
 @dataclass(frozen=True, slots=True)
