@@ -16,7 +16,7 @@ from scopelink.astro import Site
 from scopelink.decode import Direction, annotate
 from scopelink.decode.recording import read_recording
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import open_serial, open_tcp
+from scopelink.links import Link, open_serial, open_tcp
 from scopelink.servers.replay import ReplayDevice, replay_to_driver
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimClock, SimulatedMount
@@ -24,6 +24,13 @@ from tests.support.cli import read_line_matching, scopelink_here, start_scopelin
 
 SITE = Site(40.4, -3.7)
 DOCS = Path(__file__).parents[2] / "docs" / "cli.md"
+
+
+async def asked(link: Link, command: bytes, size: int) -> bytes:
+    """Send ``command``; the ``size`` bytes answered (within 5 s)."""
+    await link.write(command)
+    async with asyncio.timeout(5):
+        return await link.read_exactly(size)
 
 
 async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, config: Path) -> None:
@@ -140,12 +147,8 @@ async def test_emulate_replay_answers_and_reports_divergences_on_stderr(
         port = int(line.rsplit(":", 1)[1])
         async with await open_tcp("127.0.0.1", port) as link:
             await link.write(b"e")  # not recorded here: reported, not answered
-            await link.write(b"V")
-            async with asyncio.timeout(5):
-                assert await link.read_exactly(7) == b"042705#"
-            await link.write(b"J")
-            async with asyncio.timeout(5):
-                assert await link.read_exactly(2) == b"\x01#"
+            assert await asked(link, b"V", 7) == b"042705#"
+            assert await asked(link, b"J", 2) == b"\x01#"
     finally:
         emulator.send_signal(signal.SIGTERM)
         async with asyncio.timeout(10):
@@ -185,11 +188,7 @@ async def test_a_command_cut_short_and_sent_again_is_answered(tmp_path: Path) ->
     )
     replay = ReplayDevice(read_recording(recording.read_bytes()))
     async with replay, await open_serial(await replay.on_pty()) as link:
-        await link.write(b"KKa")
-        async with asyncio.timeout(5):
-            assert await link.read_exactly(2) == b"a#"
-        await link.write(b"V")
-        async with asyncio.timeout(5):
-            assert await link.read_exactly(7) == b"042507#"
+        assert await asked(link, b"KKa", 2) == b"a#"
+        assert await asked(link, b"V", 7) == b"042507#"
     (divergence,) = replay.divergences
     assert (divergence.line, divergence.offset, divergence.received) == (2, 1, b"K")
