@@ -11,7 +11,9 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from argparse import Namespace
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -76,21 +78,23 @@ def test_park_then_status_agree_through_the_running_serve(config: Path, runtime_
         status, _, err = scopelink_here(config, "goto", "--altaz", "-5", "180")
         assert status == 1
         assert "hint: the horizon and limits are set in the config file" in err
-        # A `move` whose terminal goes (an SSH session dropped: SIGHUP) stops the axis it moved.
-        mover = subprocess.Popen(
-            [sys.executable, "-m", "scopelink", "move", "ra", "8x"],
-            env=environment(config),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            stdin=subprocess.DEVNULL,
-            text=True,
-        )
-        assert mover.stdout is not None
-        assert "moving the primary axis" in mover.stdout.readline()
-        assert _state(config)["slewing"] is True
-        mover.send_signal(signal.SIGHUP)
-        assert mover.wait(timeout=20) == 0
-        assert _state(config)["slewing"] is False
+        # A `move` whose terminal goes (an SSH session dropped: SIGHUP) stops the axis it moved;
+        # so does one killed outright (its live connection to the serve is the dead-man's).
+        for kill in (signal.SIGHUP, signal.SIGKILL):
+            mover = subprocess.Popen(
+                [sys.executable, "-m", "scopelink", "move", "ra", "8x"],
+                env=environment(config),
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                stdin=subprocess.DEVNULL,
+                text=True,
+            )
+            assert mover.stdout is not None
+            assert "moving the primary axis" in mover.stdout.readline()
+            assert _state(config)["slewing"] is True
+            mover.send_signal(kill)
+            assert mover.wait(timeout=20) == (0 if kill == signal.SIGHUP else -kill)
+            _wait_until(lambda: _state(config)["slewing"] is False, "the axis stops")
         # What the serve's API does not offer is refused in one line, never attempted.
         status, _, err = scopelink_here(config, "guide", "north", "100")
         assert status == 1
@@ -188,3 +192,10 @@ async def test_an_ignored_hangup_stays_ignored() -> None:
                 await stop.wait()
     finally:
         signal.signal(signal.SIGHUP, previous)
+
+
+def _wait_until(check: Callable[[], bool], what: str, timeout_s: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for: {what}"
+        time.sleep(0.05)
