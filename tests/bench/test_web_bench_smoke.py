@@ -16,3 +16,14 @@ def test_quick_dashboard_benchmark_prints_its_figures() -> None:
     assert any(line.startswith("state + chart objects") for line in lines), result.stdout
     assert any(line.strip().startswith("10 pages") for line in lines), result.stdout
     assert any("x a 9600-baud line" in line for line in lines), result.stdout
+
+
+@pytest.mark.timeout(60)
+def test_quick_object_flood_benchmark_prints_its_goal() -> None:
+    result = run_quick_bench("bench.web_object_flood", timeout_s=60)
+    assert_provenance(result.stdout)
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("poller unloaded ") for line in lines), result.stdout
+    assert any(line.startswith("flood: 16 connections") for line in lines), result.stdout
+    (goal,) = (line for line in lines if line.startswith("goal "))
+    assert goal.split(": ")[1].split()[0] in ("PASS", "MISS"), goal
