@@ -1,6 +1,7 @@
 """Bounded computations for the dashboard's requests: CPU-heavy answers (an object's almanac,
 ~0.1 s each) run one at a time on the dashboard's own thread, resting as long as each took, with a
-few waiting; any more are answered ``429 Busy`` at once (``docs/dashboard.md``, "Limits").
+few waiting; any more are answered ``429 Busy`` at once (``docs/dashboard.md``, "Information"
+and "Security").
 
 Without this a client within the access policy's request rate (16 connections asking
 ``/api/object`` back to back) kept the default executor's threads busy and took the event loop's
