@@ -1,7 +1,7 @@
 """Heavy dashboard reads cannot starve the mount's poller: ``/api/object`` asked, or the live
 connection (``/ws``) opened, back to back.
 
-Run ``.venv/bin/python -m bench.web_object_flood`` (about 20 s) or with ``--quick`` (about 4 s).
+Run ``.venv/bin/python -m bench.web_object_flood`` (about 20 s) or with ``--quick`` (about 5 s).
 See ``docs/dashboard.md``, "Limits".
 
 The rig is the SynScan driver polling an emulated hand control over TCP paced at 9600 baud, with
@@ -100,12 +100,12 @@ async def _flooded(
         "bench.web_object_flood",
         "--flood",
         str(port),
-        str(seconds + 1.0),
+        str(seconds + 0.6),
         kind,
         cwd=ROOT,
         stdout=subprocess.PIPE,
     )
-    await asyncio.sleep(0.5)  # the flood under way
+    await asyncio.sleep(0.4)  # the flood under way (the process started)
     loaded = await _poll_rate(mount, seconds)
     started = time.monotonic()
     await asyncio.to_thread(lambda: None)
@@ -164,7 +164,7 @@ def main() -> None:
     if args.flood:
         asyncio.run(flood(int(args.flood[0]), float(args.flood[1]), args.flood[2]))
         return
-    asyncio.run(measure(0.6 if args.quick else 8.0))
+    asyncio.run(measure(0.3 if args.quick else 8.0))
 
 
 if __name__ == "__main__":
