@@ -20,7 +20,6 @@ import asyncio
 import subprocess
 import sys
 import time
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -118,30 +117,20 @@ async def _flooded(
 
 async def measure(seconds: float) -> None:
     from bench.provenance import print_provenance
-    from bench.security_flood import SITE
-    from scopelink.drivers.synscan import SynScanMount
+    from bench.security_flood import polled_synscan
     from scopelink.servers.access import DEFAULT_POLICY
-    from scopelink.servers.synscan import SynScanEmulator
-    from scopelink.sim import EQ6, SimClock, SimulatedMount
     from scopelink.web import Dashboard
 
     print_provenance()
-    device = SimulatedMount(EQ6, site=SITE, clock=SimClock(start=datetime.now(UTC)))
-    async with SynScanEmulator(device) as emulator:
-        host, port = await emulator.on_tcp("127.0.0.1", 0)
-        mount = SynScanMount(f"tcp://{host}:{port}", site=SITE)
-        await mount.connect()
-        try:
-            async with (
-                mount.watching(),
-                mount.poller.holding_full_rate(),
-                Dashboard(mount, port=0, trace=False, access=DEFAULT_POLICY) as dashboard,
-            ):
-                await asyncio.sleep(0.5)
-                unloaded = await _poll_rate(mount, seconds)
-                results = [await _flooded(mount, dashboard.port, kind, seconds) for kind in KINDS]
-        finally:
-            await mount.disconnect()
+    async with (
+        polled_synscan() as mount,
+        mount.watching(),
+        mount.poller.holding_full_rate(),
+        Dashboard(mount, port=0, trace=False, access=DEFAULT_POLICY) as dashboard,
+    ):
+        await asyncio.sleep(0.5)
+        unloaded = await _poll_rate(mount, seconds)
+        results = [await _flooded(mount, dashboard.port, kind, seconds) for kind in KINDS]
     print(f"poller unloaded {unloaded:.1f} polls/s")
     worst = 1.0
     for kind, (loaded, answered, refused, waited_ms) in zip(KINDS, results, strict=True):
