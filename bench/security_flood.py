@@ -177,37 +177,41 @@ class Rig:
 
 
 @asynccontextmanager
-async def serving(policy: AccessPolicy, state_dir: Path) -> AsyncIterator[Rig]:
-    """The SynScan driver on a 9600-baud emulated hand control, with Alpaca, LX200 and the SynScan
-    server in front of it under ``policy``, as ``scopelink serve`` wires them."""
+async def polled_synscan() -> AsyncIterator[SynScanMount]:
+    """The SynScan driver, connected, on a 9600-baud emulated hand control over TCP."""
     device = SimulatedMount(EQ6, site=SITE, clock=SimClock(start=datetime.now(UTC)))
     async with SynScanEmulator(device) as emulator:
         host, port = await emulator.on_tcp("127.0.0.1", 0)
         mount = SynScanMount(f"tcp://{host}:{port}", site=SITE)
         await mount.connect()
         try:
-            async with contextlib.AsyncExitStack() as stack:
-                await stack.enter_async_context(mount.watching())
-                alpaca = AlpacaServer(
-                    mount, port=0, discovery_port=None, state_dir=state_dir, access=policy
-                )
-                await stack.enter_async_context(alpaca)
-                await alpaca.telescope.connect()
-                lx200 = await stack.enter_async_context(LX200Server(mount, access=policy))
-                _, lx200_port = await lx200.on_tcp("127.0.0.1", 0)
-                synscan = await stack.enter_async_context(
-                    SynScanEmulator(mount, wire=None, access=policy)
-                )
-                _, synscan_port = await synscan.on_tcp("127.0.0.1", 0)
-                ports = {"alpaca": alpaca.port, "lx200": lx200_port, "synscan": synscan_port}
-                controls = {
-                    "alpaca": alpaca.access,
-                    "lx200": lx200.access,
-                    "synscan": synscan.access,
-                }
-                yield Rig(mount, ports, controls)
+            yield mount
         finally:
             await mount.disconnect()
+
+
+@asynccontextmanager
+async def serving(policy: AccessPolicy, state_dir: Path) -> AsyncIterator[Rig]:
+    """The SynScan driver on a 9600-baud emulated hand control, with Alpaca, LX200 and the SynScan
+    server in front of it under ``policy``, as ``scopelink serve`` wires them."""
+    async with polled_synscan() as mount, contextlib.AsyncExitStack() as stack:
+        await stack.enter_async_context(mount.watching())
+        alpaca = AlpacaServer(
+            mount, port=0, discovery_port=None, state_dir=state_dir, access=policy
+        )
+        await stack.enter_async_context(alpaca)
+        await alpaca.telescope.connect()
+        lx200 = await stack.enter_async_context(LX200Server(mount, access=policy))
+        _, lx200_port = await lx200.on_tcp("127.0.0.1", 0)
+        synscan = await stack.enter_async_context(SynScanEmulator(mount, wire=None, access=policy))
+        _, synscan_port = await synscan.on_tcp("127.0.0.1", 0)
+        ports = {"alpaca": alpaca.port, "lx200": lx200_port, "synscan": synscan_port}
+        controls = {
+            "alpaca": alpaca.access,
+            "lx200": lx200.access,
+            "synscan": synscan.access,
+        }
+        yield Rig(mount, ports, controls)
 
 
 async def poll_rate(mount: SynScanMount, seconds: float) -> float:

@@ -19,3 +19,15 @@ def test_quick_dashboard_benchmark_prints_its_figures() -> None:
     goal = lines[-1]
     assert goal.startswith("goal: server CPU per open page <= 0.05 core, every row: "), goal
     assert ("PASS" in goal) != ("MISS" in goal), goal
+
+
+@pytest.mark.timeout(60)
+def test_quick_object_flood_benchmark_prints_its_goal() -> None:
+    result = run_quick_bench("bench.web_object_flood", timeout_s=60)
+    assert_provenance(result.stdout)
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("poller unloaded ") for line in lines), result.stdout
+    for kind in ("object", "live"):
+        assert any(line.startswith(f"flood {kind}") for line in lines), result.stdout
+    (goal,) = (line for line in lines if line.startswith("goal "))
+    assert goal.split(": ")[1].split()[0] in ("PASS", "MISS"), goal

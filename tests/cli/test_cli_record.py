@@ -16,7 +16,7 @@ from scopelink.astro import Site
 from scopelink.decode import Direction, annotate
 from scopelink.decode.recording import read_recording
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import open_serial, open_tcp
+from scopelink.links import Link, open_serial, open_tcp
 from scopelink.servers.replay import ReplayDevice, replay_to_driver
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import PRESETS, SimClock, SimulatedMount
@@ -24,6 +24,13 @@ from tests.support.cli import read_line_matching, scopelink_here, start_scopelin
 
 SITE = Site(40.4, -3.7)
 DOCS = Path(__file__).parents[2] / "docs" / "cli.md"
+
+
+async def asked(link: Link, command: bytes, size: int) -> bytes:
+    """Send ``command``; the ``size`` bytes answered (within 5 s)."""
+    await link.write(command)
+    async with asyncio.timeout(5):
+        return await link.read_exactly(size)
 
 
 async def test_record_decode_replay_and_the_regression_test(tmp_path: Path, config: Path) -> None:
@@ -140,12 +147,8 @@ async def test_emulate_replay_answers_and_reports_divergences_on_stderr(
         port = int(line.rsplit(":", 1)[1])
         async with await open_tcp("127.0.0.1", port) as link:
             await link.write(b"e")  # not recorded here: reported, not answered
-            await link.write(b"V")
-            async with asyncio.timeout(5):
-                assert await link.read_exactly(7) == b"042705#"
-            await link.write(b"J")
-            async with asyncio.timeout(5):
-                assert await link.read_exactly(2) == b"\x01#"
+            assert await asked(link, b"V", 7) == b"042705#"
+            assert await asked(link, b"J", 2) == b"\x01#"
     finally:
         emulator.send_signal(signal.SIGTERM)
         async with asyncio.timeout(10):
@@ -154,3 +157,38 @@ async def test_emulate_replay_answers_and_reports_divergences_on_stderr(
     err = (await emulator.stderr.read()).decode()
     assert "replaying 2 exchanges from" in err
     assert "replay: divergence at line 2 (exchange 1, byte 0): expected 'V', received 'e'" in err
+
+
+def test_a_record_that_cannot_start_leaves_no_file(tmp_path: Path, config: Path) -> None:
+    """Bad input costs one line and nothing else: no header-only file blocks the retry."""
+    recording = tmp_path / "session.jsonl"
+    for where, said in (
+        (("--tcp", "abc"), "bad --tcp 'abc'"),
+        (("--tcp", "127.0.0.1:99999"), "bad --tcp"),
+        (("--tcp", "203.0.113.5:0"), "cannot open tcp server 203.0.113.5:0"),
+        (("--pty", str(tmp_path / "absent" / "link")), "cannot open pty"),
+    ):
+        status, _, err = scopelink_here(
+            config, "record", "--device", "synscan:loop://", *where, str(recording)
+        )
+        assert (status, err.count("\n")) in ((1, 1), (1, 2)), err
+        assert said in err
+        assert "Traceback" not in err
+        assert not recording.exists(), where
+
+
+async def test_a_command_cut_short_and_sent_again_is_answered(tmp_path: Path) -> None:
+    """A client that times out mid-command and sends it again from the start ("K" then "Ka",
+    on the wire "KKa") gets the recorded answer: the byte that broke the match may begin it."""
+    recording = tmp_path / "retry.jsonl"
+    recording.write_text(
+        '{"scopelink_recording": 1, "protocol": "synscan"}\n'
+        '{"t": 0.1, "dir": "->", "data": "Ka"}\n{"t": 0.2, "dir": "<-", "data": "a#"}\n'
+        '{"t": 0.3, "dir": "->", "data": "V"}\n{"t": 0.4, "dir": "<-", "data": "042507#"}\n'
+    )
+    replay = ReplayDevice(read_recording(recording.read_bytes()))
+    async with replay, await open_serial(await replay.on_pty()) as link:
+        assert await asked(link, b"KKa", 2) == b"a#"
+        assert await asked(link, b"V", 7) == b"042507#"
+    (divergence,) = replay.divergences
+    assert (divergence.line, divergence.offset, divergence.received) == (2, 1, b"K")

@@ -3,6 +3,7 @@ user (its runtime file) and drives that serve's mount, through the serve's own g
 
 from __future__ import annotations
 
+import asyncio
 import fcntl
 import json
 import os
@@ -10,7 +11,9 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from argparse import Namespace
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -18,6 +21,7 @@ import pytest
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import DeviceCommand
 from scopelink.cli.serve_registry import register_serve, running_serves, unregister_serve
+from scopelink.cli.stopping import until_stopped
 from scopelink.drivers.open import DeviceSpec
 from tests.support.cli import environment, scopelink_here
 
@@ -74,6 +78,23 @@ def test_park_then_status_agree_through_the_running_serve(config: Path, runtime_
         status, _, err = scopelink_here(config, "goto", "--altaz", "-5", "180")
         assert status == 1
         assert "hint: the horizon and limits are set in the config file" in err
+        # A `move` whose terminal goes (an SSH session dropped: SIGHUP) stops the axis it moved;
+        # so does one killed outright (its live connection to the serve is the dead-man's).
+        for kill in (signal.SIGHUP, signal.SIGKILL):
+            mover = subprocess.Popen(
+                [sys.executable, "-m", "scopelink", "move", "ra", "8x"],
+                env=environment(config),
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                stdin=subprocess.DEVNULL,
+                text=True,
+            )
+            assert mover.stdout is not None
+            assert "moving the primary axis" in mover.stdout.readline()
+            assert _state(config)["slewing"] is True
+            mover.send_signal(kill)
+            assert mover.wait(timeout=20) == (0 if kill == signal.SIGHUP else -kill)
+            _wait_until(lambda: _state(config)["slewing"] is False, "the axis stops")
         # What the serve's API does not offer is refused in one line, never attempted.
         status, _, err = scopelink_here(config, "guide", "north", "100")
         assert status == 1
@@ -149,3 +170,32 @@ def test_documented_defaults_are_the_code_s() -> None:
     docs = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
     assert f"reads the serve every **{POLL_S:g} s**" in docs
     assert f"each request may take **{REQUEST_TIMEOUT_S:g} s**" in docs
+
+
+def _state(config: Path) -> dict[str, object]:
+    status, out, err = scopelink_here(config, "status", "--json")
+    assert status == 0, err
+    state: dict[str, object] = json.loads(out)
+    return state
+
+
+async def test_an_ignored_hangup_stays_ignored() -> None:
+    """Under ``nohup`` a serve must not end when the terminal goes."""
+    previous = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        async with until_stopped():
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
+        async with until_stopped() as stop:
+            os.kill(os.getpid(), signal.SIGHUP)
+            async with asyncio.timeout(5):
+                await stop.wait()
+    finally:
+        signal.signal(signal.SIGHUP, previous)
+
+
+def _wait_until(check: Callable[[], bool], what: str, timeout_s: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for: {what}"
+        time.sleep(0.05)

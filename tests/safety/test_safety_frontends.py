@@ -273,3 +273,10 @@ async def test_dashboard_pad_is_stopped_at_the_horizon_and_by_a_closed_page() ->
         rest = await wait_until_still(rig, timeout_s=5.0)
         assert rest < 13.0
         assert rig.mount.guard.rate_motions == {}
+        # A move naming the closed page (sent while its link was down, or late) would have no
+        # owner, so nothing would stop it when the page goes: it is refused, nothing moves.
+        async with http.post("/api/move", json=up) as response:
+            assert response.status == 409, await response.text()
+            assert (await response.json())["kind"] == "SessionGone"
+        await asyncio.sleep(0.3)
+        assert rig.mount.guard.rate_motions == {}

@@ -30,6 +30,7 @@ from scopelink.sim import (
     SimulatedMount,
 )
 from scopelink.web.almanac import TWILIGHT_BOUNDARIES_DEG, clock_json, twilight_phase
+from scopelink.web.busy import OBJECT_INFO_AT_ONCE, REST_PER_BUSY
 from scopelink.web.health import WINDOW_S
 from scopelink.web.objectinfo import LIMIT_STEP_MIN
 from scopelink.web.pad import DEFAULT_SYNSCAN_RATE, GENERIC_MULTIPLES, pad_json, rates_json
@@ -137,6 +138,14 @@ async def test_object_almanac_and_the_time_it_reaches_the_mounts_horizon() -> No
         assert error["suggestions"]
         status, error = await s.get("/api/object", name="")
         assert status == 400
+        # A flood of these (~0.1 s of CPU each) is bounded: one computed at a time, a few wait,
+        # the rest are told to come back (they took the poller's CPU: docs/dashboard.md).
+        answers = await asyncio.gather(*(s.get("/api/object", name="Moon") for _ in range(24)))
+        statuses = sorted(status for status, _ in answers)
+        assert set(statuses) == {200, 429}, statuses
+        assert statuses.count(200) >= OBJECT_INFO_AT_ONCE
+        busy = next(body for status, body in answers if status == 429)
+        assert busy["kind"] == "Busy"
 
 
 def _parse(text: str) -> datetime:
@@ -252,6 +261,8 @@ def test_the_documented_defaults_are_the_codes() -> None:
         f"every {js('gamepad.js', 'POLL_MS'):g} ms",
         f"more than {js('firstrun.js', 'CLOCK_WARN_S'):g} s",
         f"at most every {js('info.js', 'REFETCH_MIN_MS') / 1000:g} s",
+        f"`OBJECT_INFO_AT_ONCE` = {OBJECT_INFO_AT_ONCE}",
+        f"`REST_PER_BUSY` = {REST_PER_BUSY:g}",
     ]
     boundaries = [(-0.833, "day"), *TWILIGHT_BOUNDARIES_DEG[1:]]
     for (boundary, phase), (table_boundary, table_phase) in zip(

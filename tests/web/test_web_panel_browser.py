@@ -14,7 +14,7 @@ from collections.abc import Awaitable, Callable
 from pathlib import Path
 
 import pytest
-from playwright.async_api import Browser, Page, expect
+from playwright.async_api import Browser, Page, Request, expect
 
 from scopelink.cli.config import load_config
 from scopelink.cli.site_store import SettingsSiteStore
@@ -35,6 +35,11 @@ Object.defineProperty(Navigator.prototype, "getGamepads", {
   value: () => [window.fakePadPlugged ? window.fakePad : null, null, null, null],
 });
 """
+
+HIDE = """Object.defineProperty(document, "hidden", { configurable: true, get: () => true });
+document.dispatchEvent(new Event("visibilitychange"))"""
+SHOW = """Object.defineProperty(document, "hidden", { configurable: true, get: () => false });
+document.dispatchEvent(new Event("visibilitychange"))"""
 
 
 async def until(check: Callable[[], Awaitable[bool]], what: str, timeout_s: float = 8.0) -> None:
@@ -59,6 +64,14 @@ async def moves_then_stops(
     await until(lambda: slewing(s), "the mount moves")
     await stop()
     await until(lambda: _not(slewing(s)), "the mount stops")
+
+
+def _keep_rate(request: Request, rates: list[float]) -> None:
+    """The rates the page's moves ask for, in order."""
+    if request.url.endswith("/api/move"):
+        body = request.post_data_json
+        assert isinstance(body, dict)
+        rates.append(float(body["rate_deg_s"]))
 
 
 async def _not(value: Awaitable[bool]) -> bool:
@@ -132,6 +145,32 @@ async def test_desktop_controls_keys_gamepad_progress_and_feedback(browser: Brow
         await asyncio.sleep(0.4)
         assert not await slewing(s)  # the stick is still held: nothing until it centres
         await pad(page, "fakePad.buttons[0].pressed = false; fakePad.axes[0] = 0")
+        await asyncio.sleep(0.2)  # the centred stick is seen: the latch lets go
+
+        # The page hidden (a phone's screen locked, with no blur) stops the stick and the keys;
+        # the held stick does not start again while hidden, nor on return until it centres.
+        rates: list[float] = []
+        page.on("request", lambda r: _keep_rate(r, rates))
+
+        async def asked_to_stop() -> bool:
+            return bool(rates) and rates[-1] == 0
+
+        holds: list[tuple[Callable[[], Awaitable[object]], Callable[[], Awaitable[object]]]] = [
+            (lambda: pad(page, "fakePad.axes[0] = 1"), lambda: pad(page, "fakePad.axes[0] = 0")),
+            (lambda: page.keyboard.down("a"), lambda: page.keyboard.up("a")),
+        ]
+        for start, end in holds:
+            await start()
+            await until(lambda: slewing(s), "the mount moves")
+            await pad(page, HIDE)
+            await until(asked_to_stop, "hiding the page stops it")
+            await asyncio.sleep(0.4)  # several of the gamepad's polls
+            await pad(page, SHOW)
+            await asyncio.sleep(0.4)
+            assert rates[-1] == 0, rates
+            await end()
+            await until(lambda: _not(slewing(s)), "the mount stops")
+            await asyncio.sleep(0.2)  # the centred stick is seen
 
         # Go by name: the list closes, progress shows, then the arrival; the almanac follows.
         await page.locator("#goto-name").press_sequentially("Capel", delay=20)

@@ -252,7 +252,10 @@ async def _run_on_serve(command: DeviceCommand, body: Callable[[Mount], Awaitabl
         mount = await ServeMount.open(chosen[0])
         if command.site_given:  # 'scopelink site' sends the configured site or --site
             mount.site = command.site
-        return await body(cast(Mount, mount))
+        try:
+            return await body(cast(Mount, mount))
+        finally:
+            await mount.disconnect()
 
     return await _one_line_errors(on_serve())
 

@@ -73,6 +73,6 @@ def positive_rate(rate: float) -> float:
 
 def parse_host_port(text: str, option: str) -> tuple[str, int]:
     host, _, port = text.rpartition(":")
-    if not host or not port.isdigit():
+    if not host or not port.isdigit() or int(port) > 65535:
         raise CommandError(f"bad {option} {text!r}", "give HOST:PORT, e.g. 127.0.0.1:0")
-    return host, int(port)
+    return host.removeprefix("[").removesuffix("]"), int(port)

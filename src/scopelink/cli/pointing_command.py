@@ -71,6 +71,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _ask(args: argparse.Namespace, body: dict[str, Any] | None) -> dict[str, Any]:
     from scopelink.cli.serve_command import DEFAULT_DASHBOARD_PORT  # noqa: PLC0415 - one definition
+    from scopelink.cli.serve_mount import DIRECT  # noqa: PLC0415 - no proxy, no redirect
     from scopelink.web.dashboard import PAIRING_HEADER  # noqa: PLC0415 - only to run
 
     if args.url is None:
@@ -85,7 +86,7 @@ def _ask(args: argparse.Namespace, body: dict[str, Any] | None) -> dict[str, Any
     data = None if body is None else json.dumps(body).encode()
     request = urllib.request.Request(url, data=data, headers=headers)
     try:
-        with urllib.request.urlopen(request, timeout=_TIMEOUT_S) as response:
+        with DIRECT.open(request, timeout=_TIMEOUT_S) as response:
             answer = json.loads(response.read())
     except urllib.error.HTTPError as error:
         raise CommandError(_refusal(error)) from None

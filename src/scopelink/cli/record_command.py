@@ -87,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.file)
     if path.exists():
         raise CommandError(f"{path} exists", "give a new name: a recording is never overwritten")
+    if args.tcp is not None:  # bad input is told before the device or the file is touched
+        args.tcp = parse_host_port(args.tcp, "--tcp")
     protocol = Protocol(spec.kind) if spec.kind else None
     stopbits = SKY_TRACKER_STOP_BITS if spec.kind == "skytracker" else 1
     return asyncio.run(_record(args, spec.target, protocol, stopbits, path))
@@ -145,6 +147,7 @@ async def _record(
     busy = asyncio.Lock()
     gone = False
     relaying: asyncio.Task[None] | None = None
+    listening = False
     try:
         async with until_stopped() as stop:
 
@@ -157,7 +160,7 @@ async def _record(
                     stop.set()
 
             if args.tcp is not None:
-                host, port = parse_host_port(args.tcp, "--tcp")
+                host, port = args.tcp
                 server = await serve_tcp(serve_client, host=host, port=port)
                 if bound_beyond_loopback(host):
                     print(
@@ -173,6 +176,7 @@ async def _record(
                 relaying = asyncio.create_task(serve_client(pty))
                 relaying.add_done_callback(lambda _: stop.set())  # the device went, or a fault
                 closer = pty.close
+            listening = True
             print(f"recording {args.device} to {args.file}: connect the program to {where}")
             print("Ctrl-C ends the recording.", flush=True)
             await stop.wait()
@@ -187,6 +191,8 @@ async def _record(
             relaying.cancel()
         await device.close()
         output.close()
+        if not listening:  # it never started: no header-only file to block the retry
+            await asyncio.to_thread(path.unlink, missing_ok=True)
     note = " (the device went away)" if gone else ""
     print(f"recorded {writer.transfers} transfers to {args.file}{note}", file=sys.stderr)
     return 1 if gone else 0

@@ -12,6 +12,7 @@ as a :class:`~scopelink.mount.NotSupportedError` naming what cannot be done this
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import time
 import urllib.error
@@ -40,7 +41,7 @@ from scopelink.mount import errors as mount_errors
 from scopelink.mount.parking import Resume
 from scopelink.mount.progress import ProgressTracker
 
-__all__ = ["POLL_S", "REQUEST_TIMEOUT_S", "ServeMount"]
+__all__ = ["DIRECT", "POLL_S", "REQUEST_TIMEOUT_S", "ServeMount"]
 
 REQUEST_TIMEOUT_S: Final = 10.0
 """How long one request to the serve may take (a park or goto returns once started)."""
@@ -49,8 +50,24 @@ POLL_S: Final = 0.5
 _PIER: Final = {"east": PierSide.EAST, "west": PierSide.WEST}
 
 
+class _NoRedirects(urllib.request.HTTPRedirectHandler):
+    """A redirect is an answer, not a hop: the pairing token goes nowhere else."""
+
+    def redirect_request(self, *args: Any, **kwargs: Any) -> None:
+        return None
+
+
+DIRECT: Final = urllib.request.build_opener(urllib.request.ProxyHandler({}), _NoRedirects)
+"""Straight to the serve on this machine: no ``http_proxy`` of the environment (it would get
+the pairing token and every command, and reach its own 127.0.0.1), no redirect followed."""
+
+
 class ServeMount:
     """The serve's mount (see the module docstring). Built by :meth:`open`."""
+
+    _live: tuple[Any, asyncio.Task[None], str] | None = None
+    """While a motion of this command's may run: the HTTP client, the task reading the live
+    connection, and its session."""
 
     def __init__(self, entry: ServeEntry, described: dict[str, Any]) -> None:
         assert entry.dashboard is not None
@@ -150,7 +167,36 @@ class ServeMount:
         await self._command("/api/abort", {})
 
     async def move_axis(self, axis: MountAxis, rate_deg_s: float) -> None:
-        await self._command("/api/move", {"axis": axis.name.lower(), "rate_deg_s": rate_deg_s})
+        body: dict[str, object] = {"axis": axis.name.lower(), "rate_deg_s": rate_deg_s}
+        if rate_deg_s != 0.0:
+            body["session"] = await self._live_session()
+        await self._command("/api/move", body)
+
+    async def _live_session(self) -> str:
+        """The session of a live connection to the serve, held until :meth:`disconnect`: the
+        serve's dead-man stops this command's motions when the connection goes (the process
+        killed outright, the machine asleep), as it does a dashboard page's."""
+        if self._live is not None:
+            return self._live[2]
+        import aiohttp  # noqa: PLC0415 - only for a rate motion
+
+        http = aiohttp.ClientSession(trust_env=False)  # no proxy: straight to the serve
+        try:
+            async with asyncio.timeout(REQUEST_TIMEOUT_S):
+                socket = await http.ws_connect(self.url + "/ws", max_msg_size=0)
+                hello = await socket.receive_json()
+            token = hello["session"]
+            if not isinstance(token, str):
+                raise TypeError("no session")
+        except (aiohttp.ClientError, TimeoutError, ValueError, TypeError, KeyError) as error:
+            await http.close()
+            raise MountError(
+                f"the running scopelink serve (PID {self.entry.pid}) gives no live connection "
+                f"at {self.url}/ws, which a motion needs (its dead-man): {error or type(error)}"
+            ) from None
+        reading = asyncio.create_task(_read_until_closed(socket), name="serve live connection")
+        self._live = (http, reading, token)
+        return token
 
     async def set_tracking(self, mode: TrackingMode) -> None:
         await self._command("/api/tracking", {"mode": mode.value})
@@ -175,7 +221,14 @@ class ServeMount:
         await self._command("/api/time", {"utc": utc.isoformat()})
 
     async def disconnect(self) -> None:
-        """Nothing to let go of: the serve keeps its mount."""
+        """The live connection closed (the serve keeps its mount)."""
+        live, self._live = self._live, None
+        if live is not None:
+            http, reading, _ = live
+            reading.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reading
+            await http.close()
 
     @property
     def park_position(self) -> NoReturn:
@@ -238,7 +291,7 @@ class ServeMount:
         data = None if body is None else json.dumps(dict(body)).encode()
         request = urllib.request.Request(self.url + path, data, headers, method=method)
         try:
-            with urllib.request.urlopen(request, timeout=REQUEST_TIMEOUT_S) as response:
+            with DIRECT.open(request, timeout=REQUEST_TIMEOUT_S) as response:
                 answer = json.loads(response.read())
         except urllib.error.HTTPError as error:
             raise _refusal(error) from None
@@ -251,6 +304,12 @@ class ServeMount:
         if not isinstance(answer, dict):
             raise MountError(f"{self.url} did not answer as a scopelink dashboard")
         return answer
+
+
+async def _read_until_closed(socket: Any) -> None:
+    """Read (and drop) the serve's updates, so that its pings are answered."""
+    async for _ in socket:
+        pass
 
 
 def _refusal(error: urllib.error.HTTPError) -> Exception:

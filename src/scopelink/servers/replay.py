@@ -5,7 +5,8 @@ in order, byte for byte and for any protocol: once the bytes a client sends matc
 exchange's command, the recorded reply is sent. A byte that is not the one recorded at that
 point is a **divergence**: it is reported (on stderr by the CLI, in :attr:`ReplayDevice.divergences`
 for tests) with the recording's line and the byte's position, dropped, and not answered; the
-replay stays where it was, so a client that retries or goes on as recorded is answered again.
+replay stays where it was, so a client that retries or goes on as recorded is answered again
+(a retry may begin with the very byte that broke the match: ``K`` then ``Ka`` is answered).
 Replies go out at once (at 9600 baud when paced), not at the recorded latency.
 """
 
@@ -103,6 +104,14 @@ class ReplayDevice(HostedDevice):
                     self._flush(diverging)
                     self._matched += 1
                     await self._answer_if_due(link)
+                elif restart := _restart(command, self._matched, byte):
+                    # A command cut short and sent again (a client's retry): this byte is the
+                    # divergence where it stands, and with what came before it begins the
+                    # command afresh.
+                    self._diverge_at = self._matched
+                    self._flush(bytearray((byte,)))
+                    self._matched = restart
+                    await self._answer_if_due(link)
                 else:
                     if not diverging:
                         self._diverge_at = self._matched
@@ -140,6 +149,16 @@ class ReplayDevice(HostedDevice):
         logger.info("%s", divergence.describe())
         if self._report is not None:
             self._report(divergence)
+
+
+def _restart(command: bytes, matched: int, byte: int) -> int:
+    """How much of ``command`` the bytes seen end with, once ``byte`` broke a match of
+    ``matched`` bytes (0: none)."""
+    seen = command[:matched] + bytes((byte,))
+    for length in range(matched, 0, -1):
+        if seen.endswith(command[:length]):
+            return length
+    return 0
 
 
 @dataclass(frozen=True, slots=True)

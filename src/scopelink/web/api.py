@@ -172,7 +172,18 @@ class _Api:
         rate = body.number("rate_deg_s", -limit, limit)
         # The page's live session owns the motion: it stops if the page goes (dead-man).
         session = body.text("session") if body.has("session") else None
-        with self.mount.acting_for(session):
+        with self.mount.acting_for(session) as client:
+            if session is not None and client is None and rate != 0.0:
+                # Its page's live connection is gone: nothing would stop this motion when the
+                # page goes. A stop is always taken.
+                return web.json_response(
+                    {
+                        "error": "this page's live connection is gone: wait for it to come "
+                        "back (or reload the page), then press again",
+                        "kind": "SessionGone",
+                    },
+                    status=409,
+                )
             await self.mount.move_axis(axis, rate)
         return self._ok()
 

@@ -34,6 +34,7 @@ from scopelink.servers.http_guard import MAX_BODY_BYTES, GuardedAppRunner, HttpG
 from scopelink.web.api import Handler, add_api_routes, error_middleware
 from scopelink.web.deepsky import add_deep_sky_route
 from scopelink.web.live import LiveHub
+from scopelink.web.live_opens import LiveOpens
 from scopelink.web.panel_api import add_panel_routes
 from scopelink.web.site_check import SiteStore
 from scopelink.web.skycommander import add_skycommander_routes
@@ -135,10 +136,11 @@ def _is_loopback(peer: str | None) -> bool:
         return False
 
 
-def _access_middleware(control: AccessControl) -> Middleware:
-    """The allow-list (403), read-only (403 on every POST) and the request rate (held up to the
-    policy's ``max_delay_s``, then 429 with Retry-After). Connection limits (503) are the
-    guard's (``servers/http_guard.py``), applied when a connection is made."""
+def _access_middleware(control: AccessControl, opens: LiveOpens | None) -> Middleware:
+    """The allow-list (403), read-only (403 on every POST), the request rate (held up to the
+    policy's ``max_delay_s``, then 429 with Retry-After) and, given ``opens``, how often the
+    live connection may be opened (429). Connection limits (503) are the guard's
+    (``servers/http_guard.py``), applied when a connection is made."""
 
     @web.middleware
     async def access(request: web.Request, handler: Handler) -> web.StreamResponse:
@@ -160,6 +162,14 @@ def _access_middleware(control: AccessControl) -> Middleware:
             )
         if wait:
             await asyncio.sleep(wait)
+        if opens is not None and request.path == "/ws":
+            again = opens.admit(host)
+            if again is not None:
+                return web.json_response(
+                    {"error": "live connections opened too often: retry later", "kind": "TooMany"},
+                    status=429,
+                    headers={"Retry-After": retry_after(again)},
+                )
         # Connections (a live page's WebSocket among them) were counted when they were made.
         return await handler(request)
 
@@ -203,6 +213,8 @@ class Dashboard:
         self.mount = mount
         self.host = host
         self.access = AccessControl(access, "dashboard")
+        self._opens = LiveOpens() if access is not None else None
+        """How often the live connection may be opened (only under a policy, as every limit)."""
         self.guard = HttpGuard(self.access)
         self.hosts = HostAllowList(host, allowed_hosts)
         if pairing_token is None and self.hosts.beyond_loopback:
@@ -228,7 +240,7 @@ class Dashboard:
         app = web.Application(
             middlewares=[
                 _host_and_origin(self.hosts),
-                _access_middleware(self.access),
+                _access_middleware(self.access, self._opens),
                 self._pairing_middleware(),
                 error_middleware,
             ],

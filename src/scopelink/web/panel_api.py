@@ -2,7 +2,8 @@
 
 - ``GET /api/object?name=``: what the information panel shows about an object
   (:func:`scopelink.web.objectinfo.object_info`: type, magnitude, size, rise/transit/set, when it
-  reaches the mount's horizon or meridian limit), computed off the event loop;
+  reaches the mount's horizon or meridian limit), computed off the event loop, one at a time
+  (:mod:`scopelink.web.busy`: beyond a few in hand, ``429 Busy``);
 - ``POST /api/pushto``: ``{"name": ...}`` makes it the push-to target whose figures ride on every
   WebSocket update (``panel.pushto``); ``{}`` or ``{"name": null}`` stops;
 - ``GET``/``POST /api/setup``: the first-run site check (:mod:`scopelink.web.site_check`).
@@ -10,11 +11,10 @@
 
 from __future__ import annotations
 
-import asyncio
-
 from aiohttp import web
 
 from scopelink.mount import Mount
+from scopelink.web.busy import BusyError, Computations, busy_response
 from scopelink.web.live import LiveHub
 from scopelink.web.objectinfo import object_info
 from scopelink.web.params import BadRequestError, read_body
@@ -29,12 +29,17 @@ class _PanelApi:
     def __init__(self, mount: Mount, hub: LiveHub) -> None:
         self.mount = mount
         self.hub = hub
+        self.computations = Computations()
 
     async def object(self, request: web.Request) -> web.Response:
         name = request.query.get("name", "").strip()
         if not 0 < len(name) <= _MAX_NAME:
             raise BadRequestError(f"'name' must be 1-{_MAX_NAME} characters")
-        return web.json_response(await asyncio.to_thread(object_info, self.mount, name))
+        try:
+            info = await self.computations.run(object_info, self.mount, name)
+        except BusyError as error:
+            return busy_response(error)
+        return web.json_response(info)
 
     async def pushto(self, request: web.Request) -> web.Response:
         body = await read_body(request)
@@ -49,4 +54,5 @@ def add_panel_routes(
     api = _PanelApi(mount, hub)
     app.router.add_get("/api/object", api.object)
     app.router.add_post("/api/pushto", api.pushto)
+    app.on_cleanup.append(api.computations.close)
     add_setup_routes(app, mount, site_store)

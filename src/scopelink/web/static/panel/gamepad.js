@@ -75,6 +75,7 @@ const Gamepads = (() => {
       right: x > DEAD_ZONE || pressed(DPAD.right),
     };
     const any = Object.values(want).some(Boolean);
+    if (document.hidden) latched = true; // nothing moves from a page nobody sees
     if (stopNow || latched) {
       if (!any && !stopNow) latched = false;
       releaseAll();
@@ -95,10 +96,13 @@ const Gamepads = (() => {
   function setup() {
     window.addEventListener("gamepadconnected", startPolling);
     window.addEventListener("gamepaddisconnected", () => { if (present) poll(); });
-    document.addEventListener("visibilitychange", () => { if (document.hidden && present) lose("hidden"); });
     // An unfocused page may get a frozen snapshot of the pad: let go, and wait for the stick to
-    // come back to the centre (as after STOP) before moving again. The same when the link drops.
+    // come back to the centre (as after STOP) before moving again. The same when the link drops,
+    // and when the page is hidden: the poll runs on (slower) and would press the held stick again.
     const letGo = () => { if (present) { releaseAll(); latched = true; } };
+    document.addEventListener("visibilitychange", () => {
+      if (document.hidden && present) { lose("hidden"); latched = true; }
+    });
     window.addEventListener("blur", letGo);
     document.addEventListener("scopelink:link", (event) => { if (!event.detail) letGo(); });
     if (pads().length) startPolling();

@@ -124,7 +124,13 @@ const Info = (() => {
     try {
       const response = await fetch(`/api/object?name=${encodeURIComponent(name)}`);
       info = await response.json();
-      if (!response.ok) { if (serial === infoSerial) $("object-info").hidden = true; return; }
+      if (!response.ok) {
+        if (serial !== infoSerial) return;
+        $("object-info").hidden = true;
+        // Busy (429): ask again at an update after the server's Retry-After second.
+        if (response.status === 429) setTimeout(() => { if (serial === infoSerial) shownName = null; }, 1000);
+        return;
+      }
     } catch (_) { return; }
     if (serial !== infoSerial) return;
     shownInfo = info;

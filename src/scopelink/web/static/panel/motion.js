@@ -157,12 +157,15 @@ const Motion = (() => {
       if (!dir) return;
       release(dir, `key ${event.key.toLowerCase()}`); // "w" and "W" (Shift) are one key
     }, true);
-    // A key released while the window had no focus never sends keyup: stop on losing focus.
-    window.addEventListener("blur", () => {
+    // A key released while the window had no focus never sends keyup: stop on losing focus,
+    // and on the page being hidden (a locked phone, another tab) even where no blur comes.
+    const letGo = () => {
       for (const dir of DIRECTIONS) for (const source of [...holders[dir]]) {
         if (source.startsWith("key") || source === "pointer") release(dir, source);
       }
-    });
+    };
+    window.addEventListener("blur", letGo);
+    document.addEventListener("visibilitychange", () => { if (document.hidden) letGo(); });
     $("keys-button").addEventListener("click", () => toggleHelp());
     $("keys-close").addEventListener("click", () => toggleHelp(false));
   }
