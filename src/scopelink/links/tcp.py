@@ -12,6 +12,7 @@ from types import TracebackType
 from typing import Self
 
 from scopelink.links.base import Link, LinkClosedError, LinkOpenError
+from scopelink.links.tcp_client import TcpClientLink, connect_tcp_client
 
 logger = logging.getLogger(__name__)
 
@@ -70,12 +71,15 @@ class TcpLink(Link):
             await self._writer.wait_closed()
 
 
-async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> TcpLink:
-    """Connect to ``host:port``; LinkOpenError says why if that fails within ``connect_timeout``."""
+async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> TcpClientLink:
+    """Connect to ``host:port``; LinkOpenError says why if that fails within ``connect_timeout``.
+
+    The link is a :class:`~scopelink.links.tcp_client.TcpClientLink` (protocol-driven, the
+    least CPU per reply); accepted connections are :class:`TcpLink`."""
     name = f"tcp {_endpoint(host, port)}"
     try:
         async with asyncio.timeout(connect_timeout):
-            reader, writer = await asyncio.open_connection(host, port)
+            return await connect_tcp_client(host, port, name)
     except TimeoutError:
         hint = "is the address right and the device on this network?"
         raise LinkOpenError(name, f"no answer within {connect_timeout:g} s", hint) from None
@@ -86,7 +90,6 @@ async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> Tcp
         raise LinkOpenError(name, f"unknown host ({exc.strerror})", "check the host name") from exc
     except OSError as exc:
         raise LinkOpenError(name, exc.strerror or str(exc)) from exc
-    return TcpLink(reader, writer, name)
 
 
 class TcpServer:

@@ -347,22 +347,43 @@ class SynScanWire:
             raise _ExchangeError(
                 f"{command.describe()!r} not sent: a stop goes first", interrupted=True, sent=False
             )
-        data = self._codec.send(command)
-        self.statistics.exchanges += 1
-        self.statistics.bytes_sent += len(data)
+        codec = self._codec
+        data = codec.send(command)
+        statistics = self.statistics
+        statistics.exchanges += 1
+        statistics.bytes_sent += len(data)
+        deadline = self._deadline
         completed = False
         try:
-            self.last_write_at = self._deadline.loop.time()
-            await link.write(data)
+            now = self.last_write_at = deadline.loop.time()
+            if not link.write_now(data):  # a TCP command leaves at once, without a coroutine
+                await link.write(data)
+                now = deadline.loop.time()
             if meanwhile is not None:
                 meanwhile()
-            with self._interruptible(self.timeout_s):
-                reply = await self._read_reply(link, patient)
+                now = deadline.loop.time()
+            with self._interruptible(self.timeout_s, now):
+                # The reply, read by shape (inline rather than a coroutine of its own: this
+                # runs on every command, issue #14). Exact types, not isinstance: the events
+                # derive from an ABC, whose isinstance check runs Python code on every reply
+                # (the error events have no subclasses).
+                while True:
+                    event = codec.next_event()
+                    if event is NEED_DATA:
+                        received = await link.read()
+                        statistics.bytes_received += len(received)
+                        codec.receive_data(received)
+                    elif type(event) is UnexpectedData:
+                        self._discard_stale(event.data, patient)
+                    elif type(event) is MalformedReply:
+                        raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
+                    else:
+                        break
             completed = True
             self.last_answer_s = time.monotonic()
-            return reply
+            return cast(AnyReply, event)
         except TimeoutError:
-            if self._deadline.interrupted:
+            if deadline.interrupted:
                 self.statistics.interrupted += 1
                 raise _ExchangeError(
                     f"the reply to {command.describe()!r} was abandoned: a stop went first",
@@ -380,32 +401,20 @@ class SynScanWire:
                 # Cancelled or failed half way: the stream is out of step until resynchronised.
                 self._needs_resync = True
 
-    async def _read_reply(self, link: Link, patient: bool) -> AnyReply:
-        codec = self._codec
-        while True:
-            event = codec.next_event()
-            # Exact types, not isinstance: the events derive from an ABC, whose isinstance
-            # check runs Python code on every reply (the error events have no subclasses).
-            if event is NEED_DATA:
-                data = await link.read()
-                self.statistics.bytes_received += len(data)
-                codec.receive_data(data)
-            elif type(event) is UnexpectedData:
-                self._discard(event.data)
-                if patient and not self._stops_waiting:
-                    deadline = self._deadline
-                    give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
-                    deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
-            elif type(event) is MalformedReply:
-                raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
-            else:
-                return cast(AnyReply, event)
+    def _discard_stale(self, data: bytes, patient: bool) -> None:
+        """Stale bytes before the reply: dropped; a ``patient`` read (a resynchronising echo)
+        then waits one more timeout from now, up to ``_ECHO_PATIENCE`` timeouts in all."""
+        self._discard(data)
+        if patient and not self._stops_waiting:
+            deadline = self._deadline
+            give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
+            deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
 
-    def _interruptible(self, seconds: float | None) -> ReplyDeadline:
+    def _interruptible(self, seconds: float | None, now: float | None = None) -> ReplyDeadline:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
         either way ``TimeoutError`` leaves the ``with`` block, and ``self._deadline.interrupted``
         tells which."""
-        deadline = self._deadline.start(seconds)
+        deadline = self._deadline.start(seconds, now)
         if self._stops_waiting and self._needs_resync:
             deadline.interrupt()
         return deadline
