@@ -12,7 +12,11 @@ from types import TracebackType
 from typing import Self
 
 from scopelink.links.base import Link, LinkClosedError, LinkOpenError
-from scopelink.links.tcp_client import TcpClientLink, connect_tcp_client
+from scopelink.links.tcp_client import (
+    TcpClientLink,
+    connect_tcp_client,
+    peer_host_without_nagle,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -33,12 +37,8 @@ class TcpLink(Link):
         super().__init__(name)
         self._reader = reader
         self._writer = writer
-        peer = writer.get_extra_info("peername")
-        self.peer_host: str | None = str(peer[0]) if peer else None
+        self.peer_host = peer_host_without_nagle(writer)
         """The address at the other end (servers check it against their allow-list)."""
-        sock = writer.get_extra_info("socket")
-        if sock is not None:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
     async def _read_some(self, max_bytes: int) -> bytes:
         try:

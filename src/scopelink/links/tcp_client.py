@@ -23,6 +23,16 @@ from scopelink.links.base import Link, LinkClosedError
 from scopelink.links.inbound import InboundBuffer
 
 
+def peer_host_without_nagle(transport: asyncio.BaseTransport | asyncio.StreamWriter) -> str | None:
+    """Switch Nagle off on a connected TCP socket (single-byte commands leave at once) and return
+    the address at the other end (None if unknown)."""
+    sock = transport.get_extra_info("socket")
+    if sock is not None:
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    peer = transport.get_extra_info("peername")
+    return str(peer[0]) if peer else None
+
+
 class _ClientProtocol(asyncio.Protocol):
     """Feeds the link's inbound buffer; tracks write back-pressure and the connection's end."""
 
@@ -82,12 +92,8 @@ class TcpClientLink(Link):
         self._transport = transport
         self._protocol = protocol
         self._inbound = protocol.inbound
-        peer = transport.get_extra_info("peername")
-        self.peer_host: str | None = str(peer[0]) if peer else None
+        self.peer_host = peer_host_without_nagle(transport)
         """The address at the other end."""
-        sock = transport.get_extra_info("socket")
-        if sock is not None:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
