@@ -164,6 +164,18 @@ class SynScanWire:
         scheduler = self.scheduler
         if scheduler.try_take():  # a free wire: no queue to join (the common case)
             try:
+                link, io = self._link, self._io
+                in_step = not self._needs_resync and link is not None and not link.closed
+                if in_step and io.try_take():
+                    # In step, open, the link free: the first attempt right here, without the
+                    # recovery loop's coroutine (issue #14: CPU per command).
+                    try:
+                        return await self._exchange(command, meanwhile)
+                    except _ExchangeError as error:
+                        failure = self._failed(error, None)
+                    finally:
+                        io.release()
+                    return await self._ask_holding_the_wire(command, meanwhile, failure)
                 return await self._ask_holding_the_wire(command, meanwhile)
             finally:
                 scheduler.release()
@@ -187,10 +199,14 @@ class SynScanWire:
                 self._holder = None
 
     async def _ask_holding_the_wire(
-        self, command: AnyCommand, meanwhile: Callable[[], object] | None
+        self,
+        command: AnyCommand,
+        meanwhile: Callable[[], object] | None,
+        failure: _ExchangeError | None = None,
     ) -> AnyReply:
-        failure: _ExchangeError | None = None
-        for _attempt in range(2):
+        """Recover if needed, then exchange; after a ``failure`` (a first attempt that failed,
+        here or in :meth:`ask`) only one attempt is left."""
+        for _attempt in range(1 if failure is not None else 2):
             io = self._io
             if not io.try_take():
                 await io.take(Priority.COMMAND)
@@ -199,17 +215,22 @@ class SynScanWire:
                     await self._recover(command, failure)
                 return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
-                self.statistics.failures += 1
-                self._needs_resync |= error.sent
-                if error.interrupted:  # a stop went out meanwhile: re-sending could undo it
-                    raise DeviceError(str(error)) from None
-                logger.info("%s: %s; recovering", self.name, error)
-                if failure is not None:
-                    raise DeviceError(f"{failure}; after recovering, again: {error}") from None
-                failure = error
+                failure = self._failed(error, failure)
             finally:
                 io.release()
-        raise AssertionError("unreachable")  # pragma: no cover
+        raise AssertionError("unreachable")  # pragma: no cover - _failed raises on the second
+
+    def _failed(self, error: _ExchangeError, failure: _ExchangeError | None) -> _ExchangeError:
+        """Count a failed attempt; raise DeviceError if it may not be retried (a stop went out
+        meanwhile: re-sending could undo it) or was the second; else return it (recover next)."""
+        self.statistics.failures += 1
+        self._needs_resync |= error.sent
+        if error.interrupted:
+            raise DeviceError(str(error)) from None
+        logger.info("%s: %s; recovering", self.name, error)
+        if failure is not None:
+            raise DeviceError(f"{failure}; after recovering, again: {error}") from None
+        return error
 
     async def stop_at_once(self, commands: Sequence[AnyCommand]) -> bool:
         """Take the link for a stop ahead of everything queued; if the stream is out of step (or
