@@ -16,6 +16,8 @@ import argparse
 import asyncio
 import functools
 import multiprocessing
+import os
+import socket
 import sys
 import threading
 import time
@@ -55,10 +57,12 @@ class Sizes:
     polls: int
     rounds: int
     commands: int
+    cpu_rounds: int
+    """Rounds of the CPU section (short: 2000 commands take about a second per client)."""
 
 
-FULL = Sizes(polls=150, rounds=3, commands=2000)
-QUICK = Sizes(polls=20, rounds=1, commands=100)
+FULL = Sizes(polls=150, rounds=3, commands=2000, cpu_rounds=7)
+QUICK = Sizes(polls=20, rounds=1, commands=100, cpu_rounds=1)
 
 
 def new_sim() -> SimulatedMount:
@@ -86,6 +90,14 @@ def serve_emulator_process(pipe: Connection, paced_replies: bool) -> None:
         runner.run(serve())
 
 
+_PLACED = hasattr(os, "sched_setaffinity") and len(os.sched_getaffinity(0)) >= 2
+"""Whether the emulator and the clients are placed on CPUs of their own (Linux, two or more)."""
+CLIENT_CPU, EMULATOR_CPU = sorted(os.sched_getaffinity(0))[:2] if _PLACED else (0, 0)
+"""Every client thread runs on the first allowed CPU, the emulator process on the second: the
+same placement for each client (a reply always wakes a thread on the other core). Unplaced, the
+scheduler's choices moved the figures by 20-30 % from run to run."""
+
+
 @contextmanager
 def emulator_process(*, paced_replies: bool) -> Iterator[str]:
     """Start :func:`serve_emulator_process`; yields its ``tcp://`` address."""
@@ -93,6 +105,8 @@ def emulator_process(*, paced_replies: bool) -> Iterator[str]:
     parent, child = context.Pipe()
     process = context.Process(target=serve_emulator_process, args=(child, paced_replies))
     process.start()
+    if _PLACED and process.pid is not None:
+        os.sched_setaffinity(process.pid, {EMULATOR_CPU})
     try:
         if not parent.poll(60.0):
             raise RuntimeError("the emulator process did not start")
@@ -179,6 +193,8 @@ def timed_in_thread(name: str, setup: Callable[[], Batch], count: int) -> Client
 
     def run() -> None:
         try:
+            if _PLACED:
+                os.sched_setaffinity(0, {CLIENT_CPU})  # this thread only
             batch = setup()
             batch(10)  # warm up (imports, caches)
             cpu, wall = time.thread_time(), time.perf_counter()
@@ -206,6 +222,36 @@ def scopelink_client(url: str) -> Batch:
         for _ in range(count):
             reply = await mount.wire.ask(GetRaDec(), Priority.POLL)
             assert isinstance(reply, Position)
+
+    return lambda count: loop.run_until_complete(polls(count))
+
+
+def asyncio_floor_client(url: str) -> Batch:
+    """The least an asyncio client can do (the floor under any asyncio driver): an
+    ``asyncio.Protocol`` on the same default event loop as our driver, writing ``e`` and
+    resolving a future once 18 bytes are in; no codec, timeout, scheduler or link object."""
+    loop = asyncio.new_event_loop()
+    host, port = url.removeprefix("tcp://").rsplit(":", 1)
+
+    class Floor(asyncio.Protocol):
+        def __init__(self) -> None:
+            self.received = b""
+            self.waiter: asyncio.Future[bytes] | None = None
+
+        def data_received(self, data: bytes) -> None:
+            self.received += data
+            if len(self.received) >= 18 and self.waiter is not None:
+                self.waiter.set_result(self.received[:18])
+                self.received, self.waiter = self.received[18:], None
+
+    transport, protocol = loop.run_until_complete(loop.create_connection(Floor, host, int(port)))
+    transport.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+    async def polls(count: int) -> None:
+        for _ in range(count):
+            transport.write(b"e")
+            protocol.waiter = loop.create_future()
+            await protocol.waiter
 
     return lambda count: loop.run_until_complete(polls(count))
 
@@ -240,19 +286,20 @@ def pyserial_client(url: str) -> Batch:
 CLIENTS: list[tuple[str, Callable[[str], Batch]]] = [
     ("scopelink SynScanMount.wire", scopelink_client),
     (f"nexstar {NEXSTAR_PIN} getPosition", nexstar_client),
+    ("asyncio floor (bare Protocol)", asyncio_floor_client),
     ("pyserial write/read", pyserial_client),
 ]
 
 
 def cpu_per_command(url: str, sizes: Sizes) -> list[ClientFigures]:
     """Time each client in turn against one unpaced emulator (in its own process), for
-    ``sizes.rounds`` interleaved rounds: each client's best (least CPU) round."""
+    ``sizes.cpu_rounds`` interleaved rounds: each client's best (least CPU) round."""
     rounds = [
         [
             timed_in_thread(name, functools.partial(make, url), sizes.commands)
             for name, make in CLIENTS
         ]
-        for _ in range(sizes.rounds)
+        for _ in range(sizes.cpu_rounds)
     ]
     return [min(runs, key=lambda row: row.cpu_us) for runs in zip(*rounds, strict=True)]
 
@@ -298,7 +345,10 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
         )
     print(f"driver e polls / bare-link e polls: {rows[1].per_s / rows[2].per_s:.1%}")
     print()
-    print("2. CPU per 'e' command: each client in its own thread (thread CPU clock), unpaced")
+    print(
+        f"2. CPU per 'e' command: each client in its own thread (thread CPU clock), unpaced "
+        f"(best of {sizes.cpu_rounds} rounds)"
+    )
     print("   emulator on TCP in another process")
     with emulator_process(paced_replies=False) as url:
         figures = cpu_per_command(url, sizes)
@@ -307,6 +357,12 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
     for row in figures:
         ratio = row.cpu_us / baseline
         print(f"{row.name:<30} {row.cpu_us:>8.0f} {row.wall_us:>8.0f} {ratio:>15.2f}x")
+    ours, nexstar, floor = figures[0].cpu_us, figures[1].cpu_us, figures[2].cpu_us
+    print(
+        f"our driver above the asyncio floor: {ours - floor:+.0f} us ({ours / floor:.2f}x); "
+        f"the floor itself is {floor / nexstar:.2f}x nexstar's"
+    )
+    print(f"client threads on CPU {CLIENT_CPU}, emulator on CPU {EMULATOR_CPU}" if _PLACED else "")
     print()
     print(goal_line(figures))
     return 0

@@ -21,6 +21,8 @@ def test_quick_driver_benchmark_prints_its_tables() -> None:
     assert any(line.startswith("scopelink SynScanMount.wire") for line in lines), result.stdout
     assert any(line.startswith("nexstar 0.0.5 getPosition") for line in lines), result.stdout
     assert any(line.startswith("pyserial write/read") for line in lines), result.stdout
+    assert any(line.startswith("asyncio floor (bare Protocol)") for line in lines), result.stdout
+    assert any(line.startswith("our driver above the asyncio floor: ") for line in lines)
     goal = lines[-1]
     assert goal.startswith("goal CPU per e <= nexstar's: "), result.stdout
     assert goal.split(": ")[1].split(";")[0] in {"PASS", "MISS"}, goal

@@ -1,8 +1,12 @@
 """Pseudo-terminal links, opened from the other side by real programs: socat and pyserial."""
 
 import asyncio
+import contextlib
 import os
 import shutil
+import threading
+import time
+import tty
 from pathlib import Path
 
 import pytest
@@ -74,6 +78,38 @@ async def test_a_serial_client_may_read_before_the_device_answers() -> None:
         await pty.write(b"042507#")
         assert await asyncio.wait_for(pending, 2.0) == b"042507#"
         assert not client.closed
+
+
+async def test_back_to_back_exchanges_are_never_taken_for_a_hang_up() -> None:
+    """A driver writes a command and reads its reply, again and again. The client's descriptor
+    stays watched between reads, so a readiness report queued before one read took its bytes
+    can wake the next read before the device has answered: on a VMIN=0 tty that read is empty,
+    which is not the end of the stream. The device answers from another thread, as a real one
+    answers from another machine (in this loop it would answer too soon to show it)."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    path = os.ttyname(slave)
+
+    def device() -> None:
+        with contextlib.suppress(OSError):  # EIO once the client has closed: done
+            while command := os.read(master, 16):
+                time.sleep(0.0003)  # the client's next read starts before the reply is in
+                os.write(master, command)
+
+    answering = threading.Thread(target=device, daemon=True)
+    answering.start()
+    try:
+        async with await open_serial(path) as client:
+            for index in range(300):
+                command = bytes([0x41 + index % 26])
+                await client.write(command)
+                async with asyncio.timeout(2.0):  # in this task, as a driver reads
+                    assert await client.read() == command
+            assert not client.closed
+    finally:
+        os.close(slave)
+        os.close(master)
+        answering.join(2.0)
 
 
 async def test_a_serial_client_sees_the_device_go_away() -> None:

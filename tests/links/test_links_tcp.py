@@ -134,3 +134,41 @@ async def test_listening_on_a_busy_port_says_so() -> None:
     async with await serve_tcp(shout_back) as server:
         with pytest.raises(LinkOpenError, match=f"127.0.0.1:{server.port}"):
             await serve_tcp(shout_back, port=server.port)
+
+
+async def test_client_write_now_sends_at_once_then_waits_under_back_pressure() -> None:
+    """``write_now`` hands a command over without a coroutine; when the peer stops reading and
+    the kernel's buffers fill, it sends nothing and says so, ``write`` waits for the drain, and
+    every byte arrives in order once the peer reads again (nothing lost, nothing doubled)."""
+    reading = asyncio.Event()
+    received = bytearray()
+    arrived = asyncio.Event()
+
+    async def slow_reader(link: Link) -> None:
+        await reading.wait()
+        while True:
+            received.extend(await link.read())
+            arrived.set()
+
+    async with await serve_tcp(slow_reader) as server:
+        async with await open_tcp("127.0.0.1", server.port) as client:
+            assert client.write_now(b"e")
+            chunk = bytes(range(256)) * 256
+            sent = 1
+            while client.write_now(chunk):  # the transport takes it until its buffer is high
+                sent += len(chunk)
+                assert sent < 200_000_000, "write_now never reported back-pressure"
+            pending = asyncio.create_task(client.write(chunk))
+            await asyncio.sleep(0.05)
+            assert not pending.done(), "write did not wait for the buffer to drain"
+            reading.set()
+            await asyncio.wait_for(pending, 10.0)
+            sent += len(chunk)
+            assert client.bytes_written == sent
+            async with asyncio.timeout(10.0):
+                while len(received) < sent:
+                    arrived.clear()
+                    await arrived.wait()
+            assert received[:1] == b"e"
+            assert bytes(received[1:]) == chunk * ((sent - 1) // len(chunk))
+        assert not client.write_now(b"e")  # closed: nothing sent, the caller's write raises

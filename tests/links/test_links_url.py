@@ -11,7 +11,7 @@ from scopelink.links import (
     LinkSpecError,
     PacedLink,
     SerialLink,
-    TcpLink,
+    TcpClientLink,
     open_link,
     serve_tcp,
 )
@@ -31,7 +31,7 @@ async def round_trip(link: Link) -> bytes:
 async def test_tcp_and_socket_urls_reach_our_server() -> None:
     async with await serve_tcp(shout_back) as server:
         tcp = await open_link(f"tcp://127.0.0.1:{server.port}")
-        assert isinstance(tcp, TcpLink)
+        assert isinstance(tcp, TcpClientLink)
         assert await round_trip(tcp) == b"PING"
         bridged = await open_link(f" socket://127.0.0.1:{server.port} ")
         assert isinstance(bridged, SerialLink)

@@ -148,13 +148,15 @@ class ReplyDeadline:
             self._handle, self._handle_at = None, float("inf")
         return loop
 
-    def start(self, seconds: float | None) -> ReplyDeadline:
-        """Begin a read that times out after ``seconds`` (None: never); use as ``with``."""
+    def start(self, seconds: float | None, now: float | None = None) -> ReplyDeadline:
+        """Begin a read that times out after ``seconds`` (None: never) from ``now`` (loop time;
+        default: the clock now, looked up); use as ``with``."""
         assert self._task is None, "one read at a time"
         loop = self.loop
         task = asyncio.current_task(loop)
         assert task is not None
-        now = loop.time()
+        if now is None:
+            now = loop.time()
         self._task, self._cancelling = task, task.cancelling()
         self._expired = self.interrupted = False
         self.since = now

@@ -17,6 +17,7 @@ from scopelink.links.pacing import PacedLink, paced, precise_event_loop
 from scopelink.links.pty import LineSettings, PtyLink, open_pty
 from scopelink.links.serial import SerialLink, open_serial
 from scopelink.links.tcp import ConnectionHandler, TcpLink, TcpServer, open_tcp, serve_tcp
+from scopelink.links.tcp_client import TcpClientLink
 from scopelink.links.url import open_link
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "PacedLink",
     "PtyLink",
     "SerialLink",
+    "TcpClientLink",
     "TcpLink",
     "TcpServer",
     "memory_pair",

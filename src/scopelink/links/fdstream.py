@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import errno
 import os
+import select
 from collections.abc import Callable
 
 from scopelink.links.base import LinkClosedError
@@ -31,6 +32,9 @@ class FdStream:
         self._name = name
         self._loop = asyncio.get_running_loop()
         self._waiters: set[asyncio.Future[None]] = set()
+        self._read_waiters: list[asyncio.Future[None]] = []
+        self._watching = False
+        """Registered with the loop for readability: kept from one read to the next."""
         self._closed = False
 
     async def read(self, max_bytes: int) -> bytes:
@@ -47,8 +51,13 @@ class FdStream:
             if data:
                 return data
             if data is None or (self._empty_read_may_mean_no_data and not waited):
-                await self._wait_ready(self._loop.add_reader, self._loop.remove_reader)
+                await self._wait_readable()
                 waited = True
+                continue
+            if self._empty_read_may_mean_no_data and not _readable_now(self._fd):
+                # A readiness report gone stale (the watch outlives each read, so a report
+                # queued before the last read took its bytes can wake the next one): wait again.
+                await self._wait_readable()
                 continue
             # Empty although the descriptor said it was readable: the other end hung up.
             raise LinkClosedError(f"{self._name}: end of stream")
@@ -71,11 +80,43 @@ class FdStream:
         """Stop using the descriptor; pending reads and writes raise LinkClosedError."""
         self._closed = True
         # Unregister now: the owner closes the fd next and its number may be reused at once.
+        self._watching = False
         self._loop.remove_reader(self._fd)
         self._loop.remove_writer(self._fd)
         for waiter in self._waiters:
             if not waiter.done():
                 waiter.set_exception(LinkClosedError(f"{self._name} is closed"))
+
+    async def _wait_readable(self) -> None:
+        """Wait until the descriptor is readable. The loop keeps watching it after the wait
+        (a driver reads again right after its next command): registering and unregistering on
+        every read cost two ``epoll_ctl`` calls and the selector's bookkeeping per reply
+        (issue #14). Readable while nobody reads, it is unregistered (:meth:`_on_readable`)."""
+        waiter: asyncio.Future[None] = self._loop.create_future()
+        self._read_waiters.append(waiter)
+        self._waiters.add(waiter)
+        if not self._watching:
+            self._loop.add_reader(self._fd, self._on_readable)
+            self._watching = True
+        try:
+            await waiter
+        finally:
+            self._waiters.discard(waiter)
+            if waiter in self._read_waiters:  # cancelled or closed before the fd was readable
+                self._read_waiters.remove(waiter)
+
+    def _on_readable(self) -> None:
+        waiters = self._read_waiters
+        if not waiters:
+            # Nobody reads now: stop watching (level-triggered, it would fire every loop turn
+            # until someone reads); the next read registers again.
+            self._watching = False
+            self._loop.remove_reader(self._fd)
+            return
+        self._read_waiters = []
+        for waiter in waiters:
+            if not waiter.done():
+                waiter.set_result(None)
 
     async def _wait_ready(
         self,
@@ -100,6 +141,13 @@ class FdStream:
         if exc.errno in _GONE_ERRNOS:
             return LinkClosedError(f"{self._name}: device or peer gone ({exc.strerror})")
         return LinkClosedError(f"{self._name}: I/O error ({exc})")
+
+
+def _readable_now(fd: int) -> bool:
+    """Whether ``fd`` reads as readable (data or a hang-up) right now, without waiting."""
+    poller = select.poll()  # not select.select: any descriptor number, even above 1023
+    poller.register(fd, select.POLLIN)
+    return bool(poller.poll(0))
 
 
 def _resolve(waiter: asyncio.Future[None]) -> None:

@@ -12,6 +12,11 @@ from types import TracebackType
 from typing import Self
 
 from scopelink.links.base import Link, LinkClosedError, LinkOpenError
+from scopelink.links.tcp_client import (
+    TcpClientLink,
+    connect_tcp_client,
+    peer_host_without_nagle,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -32,12 +37,8 @@ class TcpLink(Link):
         super().__init__(name)
         self._reader = reader
         self._writer = writer
-        peer = writer.get_extra_info("peername")
-        self.peer_host: str | None = str(peer[0]) if peer else None
+        self.peer_host = peer_host_without_nagle(writer)
         """The address at the other end (servers check it against their allow-list)."""
-        sock = writer.get_extra_info("socket")
-        if sock is not None:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
     async def _read_some(self, max_bytes: int) -> bytes:
         try:
@@ -70,12 +71,15 @@ class TcpLink(Link):
             await self._writer.wait_closed()
 
 
-async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> TcpLink:
-    """Connect to ``host:port``; LinkOpenError says why if that fails within ``connect_timeout``."""
+async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> TcpClientLink:
+    """Connect to ``host:port``; LinkOpenError says why if that fails within ``connect_timeout``.
+
+    The link is a :class:`~scopelink.links.tcp_client.TcpClientLink` (protocol-driven, the
+    least CPU per reply); accepted connections are :class:`TcpLink`."""
     name = f"tcp {_endpoint(host, port)}"
     try:
         async with asyncio.timeout(connect_timeout):
-            reader, writer = await asyncio.open_connection(host, port)
+            return await connect_tcp_client(host, port, name)
     except TimeoutError:
         hint = "is the address right and the device on this network?"
         raise LinkOpenError(name, f"no answer within {connect_timeout:g} s", hint) from None
@@ -86,7 +90,6 @@ async def open_tcp(host: str, port: int, *, connect_timeout: float = 5.0) -> Tcp
         raise LinkOpenError(name, f"unknown host ({exc.strerror})", "check the host name") from exc
     except OSError as exc:
         raise LinkOpenError(name, exc.strerror or str(exc)) from exc
-    return TcpLink(reader, writer, name)
 
 
 class TcpServer:

@@ -164,6 +164,18 @@ class SynScanWire:
         scheduler = self.scheduler
         if scheduler.try_take():  # a free wire: no queue to join (the common case)
             try:
+                link, io = self._link, self._io
+                in_step = not self._needs_resync and link is not None and not link.closed
+                if in_step and io.try_take():
+                    # In step, open, the link free: the first attempt right here, without the
+                    # recovery loop's coroutine (issue #14: CPU per command).
+                    try:
+                        return await self._exchange(command, meanwhile)
+                    except _ExchangeError as error:
+                        failure = self._failed(error, None)
+                    finally:
+                        io.release()
+                    return await self._ask_holding_the_wire(command, meanwhile, failure)
                 return await self._ask_holding_the_wire(command, meanwhile)
             finally:
                 scheduler.release()
@@ -187,10 +199,14 @@ class SynScanWire:
                 self._holder = None
 
     async def _ask_holding_the_wire(
-        self, command: AnyCommand, meanwhile: Callable[[], object] | None
+        self,
+        command: AnyCommand,
+        meanwhile: Callable[[], object] | None,
+        failure: _ExchangeError | None = None,
     ) -> AnyReply:
-        failure: _ExchangeError | None = None
-        for _attempt in range(2):
+        """Recover if needed, then exchange; after a ``failure`` (a first attempt that failed,
+        here or in :meth:`ask`) only one attempt is left."""
+        for _attempt in range(1 if failure is not None else 2):
             io = self._io
             if not io.try_take():
                 await io.take(Priority.COMMAND)
@@ -199,17 +215,22 @@ class SynScanWire:
                     await self._recover(command, failure)
                 return await self._exchange(command, meanwhile)
             except _ExchangeError as error:
-                self.statistics.failures += 1
-                self._needs_resync |= error.sent
-                if error.interrupted:  # a stop went out meanwhile: re-sending could undo it
-                    raise DeviceError(str(error)) from None
-                logger.info("%s: %s; recovering", self.name, error)
-                if failure is not None:
-                    raise DeviceError(f"{failure}; after recovering, again: {error}") from None
-                failure = error
+                failure = self._failed(error, failure)
             finally:
                 io.release()
-        raise AssertionError("unreachable")  # pragma: no cover
+        raise AssertionError("unreachable")  # pragma: no cover - _failed raises on the second
+
+    def _failed(self, error: _ExchangeError, failure: _ExchangeError | None) -> _ExchangeError:
+        """Count a failed attempt; raise DeviceError if it may not be retried (a stop went out
+        meanwhile: re-sending could undo it) or was the second; else return it (recover next)."""
+        self.statistics.failures += 1
+        self._needs_resync |= error.sent
+        if error.interrupted:
+            raise DeviceError(str(error)) from None
+        logger.info("%s: %s; recovering", self.name, error)
+        if failure is not None:
+            raise DeviceError(f"{failure}; after recovering, again: {error}") from None
+        return error
 
     async def stop_at_once(self, commands: Sequence[AnyCommand]) -> bool:
         """Take the link for a stop ahead of everything queued; if the stream is out of step (or
@@ -347,22 +368,43 @@ class SynScanWire:
             raise _ExchangeError(
                 f"{command.describe()!r} not sent: a stop goes first", interrupted=True, sent=False
             )
-        data = self._codec.send(command)
-        self.statistics.exchanges += 1
-        self.statistics.bytes_sent += len(data)
+        codec = self._codec
+        data = codec.send(command)
+        statistics = self.statistics
+        statistics.exchanges += 1
+        statistics.bytes_sent += len(data)
+        deadline = self._deadline
         completed = False
         try:
-            self.last_write_at = self._deadline.loop.time()
-            await link.write(data)
+            now = self.last_write_at = deadline.loop.time()
+            if not link.write_now(data):  # a TCP command leaves at once, without a coroutine
+                await link.write(data)
+                now = deadline.loop.time()
             if meanwhile is not None:
                 meanwhile()
-            with self._interruptible(self.timeout_s):
-                reply = await self._read_reply(link, patient)
+                now = deadline.loop.time()
+            with self._interruptible(self.timeout_s, now):
+                # The reply, read by shape (inline rather than a coroutine of its own: this
+                # runs on every command, issue #14). Exact types, not isinstance: the events
+                # derive from an ABC, whose isinstance check runs Python code on every reply
+                # (the error events have no subclasses).
+                while True:
+                    event = codec.next_event()
+                    if event is NEED_DATA:
+                        received = await link.read()
+                        statistics.bytes_received += len(received)
+                        codec.receive_data(received)
+                    elif type(event) is UnexpectedData:
+                        self._discard_stale(event.data, patient)
+                    elif type(event) is MalformedReply:
+                        raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
+                    else:
+                        break
             completed = True
             self.last_answer_s = time.monotonic()
-            return reply
+            return cast(AnyReply, event)
         except TimeoutError:
-            if self._deadline.interrupted:
+            if deadline.interrupted:
                 self.statistics.interrupted += 1
                 raise _ExchangeError(
                     f"the reply to {command.describe()!r} was abandoned: a stop went first",
@@ -380,32 +422,20 @@ class SynScanWire:
                 # Cancelled or failed half way: the stream is out of step until resynchronised.
                 self._needs_resync = True
 
-    async def _read_reply(self, link: Link, patient: bool) -> AnyReply:
-        codec = self._codec
-        while True:
-            event = codec.next_event()
-            # Exact types, not isinstance: the events derive from an ABC, whose isinstance
-            # check runs Python code on every reply (the error events have no subclasses).
-            if event is NEED_DATA:
-                data = await link.read()
-                self.statistics.bytes_received += len(data)
-                codec.receive_data(data)
-            elif type(event) is UnexpectedData:
-                self._discard(event.data)
-                if patient and not self._stops_waiting:
-                    deadline = self._deadline
-                    give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
-                    deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
-            elif type(event) is MalformedReply:
-                raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
-            else:
-                return cast(AnyReply, event)
+    def _discard_stale(self, data: bytes, patient: bool) -> None:
+        """Stale bytes before the reply: dropped; a ``patient`` read (a resynchronising echo)
+        then waits one more timeout from now, up to ``_ECHO_PATIENCE`` timeouts in all."""
+        self._discard(data)
+        if patient and not self._stops_waiting:
+            deadline = self._deadline
+            give_up_at = deadline.since + _ECHO_PATIENCE * self.timeout_s
+            deadline.reschedule(min(deadline.loop.time() + self.timeout_s, give_up_at))
 
-    def _interruptible(self, seconds: float | None) -> ReplyDeadline:
+    def _interruptible(self, seconds: float | None, now: float | None = None) -> ReplyDeadline:
         """A read that times out after ``seconds`` (None: never) or when a stop interrupts it;
         either way ``TimeoutError`` leaves the ``with`` block, and ``self._deadline.interrupted``
         tells which."""
-        deadline = self._deadline.start(seconds)
+        deadline = self._deadline.start(seconds, now)
         if self._stops_waiting and self._needs_resync:
             deadline.interrupt()
         return deadline

@@ -106,7 +106,7 @@ class SynScanClientConnection:
             return MalformedReply(
                 command, self._take(result.index + 1), result.index, result.reason
             )
-        self._take(result.length)
+        del self._buffer[: result.length]  # the reply's bytes: parsed, not needed as bytes
         self._state = ClientState.IDLE
         self._resynchronising = False
         return cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import datetime as dt
 import re
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, Self
 
 from scopelink.protocol.base import NEED_DATA
 from scopelink.protocol.synscan import angles
@@ -43,6 +43,9 @@ from scopelink.protocol.synscan.values import (
 )
 
 _VERSION_HEX_DIGITS = 6
+
+_set_field = object.__setattr__
+"""Sets a field of a frozen dataclass (as its generated ``__init__`` does)."""
 _NEXSTAR_VERSION_BYTES = 2
 _BINARY_SYNSCAN_VERSION_BYTES = 3
 
@@ -142,12 +145,27 @@ class Position(Reply):
         return encode_hex_pair(self.axis1_units, self.axis2_units, self.precise)
 
     @classmethod
+    def _in_range(cls, frame: Frame, axis1_units: int, axis2_units: int, precise: bool) -> Self:
+        """A position from units already known to be in range (each parsed from exactly
+        ``hex_width(precise)`` hex digits, so below ``units_per_revolution(precise)``): the
+        checks of ``__post_init__`` are skipped. Every reply is parsed here (issue #14: CPU per
+        command); the bytes and the values are those of the checked constructor."""
+        position = object.__new__(cls)
+        _set_field(position, "frame", frame)
+        _set_field(position, "axis1_units", axis1_units)
+        _set_field(position, "axis2_units", axis2_units)
+        _set_field(position, "precise", precise)
+        return position
+
+    @classmethod
     def scan(cls, buffer: bytes | bytearray, frame: Frame, precise: bool) -> ScanResult:
         """Read a position of ``frame`` and precision at the start of ``buffer``."""
         whole = _WHOLE_POSITION[precise].match(buffer)
         if whole is not None:
             first, second = whole.groups()
-            return Complete(cls(frame, int(first, 16), int(second, 16), precise), whole.end())
+            return Complete(
+                cls._in_range(frame, int(first, 16), int(second, 16), precise), whole.end()
+            )
         width = angles.hex_width(precise)
 
         def check(index: int, value: int) -> str | None:
