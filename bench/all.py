@@ -53,6 +53,7 @@ PLAN = (
     Step("emulators", "emulators"),
     Step("planetarium_servers", "planetarium_servers"),
     Step("web_dashboard", "web_dashboard"),
+    Step("web_object_flood", "web_object_flood"),
     Step("cli_latency", "cli_latency"),
     Step("startup", "startup"),
     Step("alpaca_wrk", "alpaca_wrk"),
