@@ -12,6 +12,7 @@ from scopelink.links import (
     LinkClosedError,
     LinkOpenError,
     LinkSpecError,
+    open_pty,
     open_serial,
     serve_tcp,
 )
@@ -127,3 +128,15 @@ def test_pyserial_open_errors_become_advice(code: int, reason: str, hint_word: s
     error = _open_error("/dev/ttyUSB0", raised)
     assert str(error).startswith(f"cannot open /dev/ttyUSB0: {reason} — ")
     assert hint_word in error.hint
+
+
+async def test_concurrent_closes_release_the_port_once() -> None:
+    """A reader that meets the end of the stream and a disconnect close the link at the same
+    time: the port's descriptor must be closed once. Closed twice, the second close fails with
+    EBADF (seen in the suite) or, worse, closes whatever file has reused the number meanwhile."""
+    for _ in range(20):
+        device = await open_pty()
+        link = await open_serial(device.path)
+        outcomes = await asyncio.gather(link.close(), link.close(), return_exceptions=True)
+        await device.close()
+        assert outcomes == [None, None]

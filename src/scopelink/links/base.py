@@ -54,6 +54,7 @@ class Link(ABC):
     def __init__(self, name: str) -> None:
         self._name = name
         self._closed = False
+        self._closing: asyncio.Future[None] | None = None
         self.bytes_read = 0
         """Bytes read and written since the link opened (the poller's line cap counts them)."""
         self.bytes_written = 0
@@ -140,7 +141,16 @@ class Link(ABC):
     async def close(self) -> None:
         """Release the link (idempotent); pending and later reads and writes then raise."""
         self._closed = True
-        await self._close_transport()
+        await self._close_transport_once()
+
+    async def _close_transport_once(self) -> None:
+        """Close the transport once, whoever asks and however many at a time: a reader meeting
+        the end of the stream and a disconnect close together, and a descriptor closed twice
+        fails (EBADF) or closes whatever file reused its number meanwhile. Every caller waits
+        for that one close; a caller cancelled meanwhile does not cancel it."""
+        if self._closing is None:
+            self._closing = asyncio.ensure_future(self._close_transport())
+        await asyncio.shield(self._closing)
 
     async def drain_input(self, quiet_seconds: float = 0.05, max_seconds: float = 2.0) -> bytes:
         """Read and discard input until the line has been quiet for ``quiet_seconds``.
@@ -177,7 +187,7 @@ class Link(ABC):
     async def _release_after_end(self) -> None:
         """The stream ended under us: nothing more can pass, so free the resources now."""
         self._closed = True
-        await self._close_transport()
+        await self._close_transport_once()
 
     @abstractmethod
     async def _read_some(self, max_bytes: int) -> bytes:
