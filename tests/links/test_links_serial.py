@@ -139,4 +139,4 @@ async def test_concurrent_closes_release_the_port_once() -> None:
         link = await open_serial(device.path)
         outcomes = await asyncio.gather(link.close(), link.close(), return_exceptions=True)
         await device.close()
-        assert outcomes == [None, None]
+        assert list(outcomes) == [None, None]
