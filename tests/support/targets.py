@@ -3,10 +3,11 @@ moved to a chosen epoch, and a site where a place culminates high at a given tim
 
 from __future__ import annotations
 
-from datetime import datetime
+from datetime import datetime, timedelta
 from pathlib import Path
 
 from scopelink.astro import Site, gmst_hours
+from scopelink.astro.targets import SatellitePass, SatelliteTarget, next_pass
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 COMETS = DATA / "comets.txt"
@@ -38,3 +39,16 @@ def site_under(ra_hours: float, dec_deg: float, t: datetime) -> Site:
     longitude = ((ra_hours - gmst_hours(t)) * 15.0 + 180.0) % 360.0 - 180.0
     latitude = max(-60.0, min(60.0, dec_deg + (30.0 if dec_deg >= 0 else -30.0)))
     return Site(latitude, longitude)
+
+
+def high_pass(target: SatelliteTarget, start: datetime, min_alt_deg: float = 30.0) -> SatellitePass:
+    """The first pass after ``start`` culminating at least ``min_alt_deg`` high."""
+    t = start
+    for _ in range(200):
+        found = next_pass(target, t)
+        if found is None:
+            break
+        if found.max_alt_deg >= min_alt_deg:
+            return found
+        t = found.set + timedelta(minutes=1)
+    raise AssertionError(f"no pass of {target.name} above {min_alt_deg}° after {start}")
