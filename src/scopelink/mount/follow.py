@@ -58,8 +58,9 @@ stable with a reading up to an interval old)."""
 INTERVAL_S = {TargetKind.SATELLITE: 1.0}
 """Seconds of the mount's clock between rate updates by kind; others: ``DEFAULT_INTERVAL_S``."""
 
-DEFAULT_INTERVAL_S = 10.0
-"""The Moon's rates change by < 0.01″/s in 10 s; a planet's and a comet's far less."""
+DEFAULT_INTERVAL_S = 30.0
+"""The Moon's path curves by < 0.01″ from a line over 30 s. Each update restarts a SynScan
+driver's PC loop (a transient of a few arcsec), so fewer updates follow more closely there."""
 
 GOTO_LEAD_S = 60.0
 """A satellite is met where it will be this many seconds (of the mount's clock) after the goto
@@ -157,46 +158,56 @@ class TargetFollower:
     async def run(
         self, stop: asyncio.Event | None = None, duration_s: float | None = None
     ) -> FollowResult:
-        """Goto, follow until ``stop`` is set, ``duration_s`` of the mount's clock has passed,
-        the pass ends or the target leaves the limits; the rates go back to zero at the end."""
+        """Goto, then follow until ``stop`` is set, ``duration_s`` of the mount's clock has
+        passed since following began, the pass ends or the target leaves the limits; the rates
+        go back to zero at the end (the mount tracks at the sidereal rate)."""
         stop = stop or asyncio.Event()
         plan = self.check()
         mount = self.mount
         try:
             async with mount.watching():
-                began = mount.now()
                 if plan is None:
                     start = mount.now()
-                    await self._goto(start)
                 else:
                     start = max(plan.start, mount.now() + timedelta(seconds=GOTO_LEAD_S))
                     if start >= plan.end - timedelta(seconds=10):
                         raise FollowError(f"{self.target.name}: too little of the pass is left")
                     await self._wait_until(start - timedelta(seconds=GOTO_LEAD_S), stop)
-                    if stop.is_set():
-                        self.result.reason = "stopped"
-                        return self.result
-                    await self._goto(start)
+                if not stop.is_set():
+                    await self._goto(start, stop)
+                if plan is not None and not stop.is_set():
                     await self._wait_until(start, stop)
+                if stop.is_set():
+                    self.result.reason = "stopped"
+                    return self.result
                 end = plan.end if plan is not None else None
                 if duration_s is not None:
-                    until = began + timedelta(seconds=duration_s)
+                    until = mount.now() + timedelta(seconds=duration_s)
                     end = until if end is None else min(end, until)
-                if not stop.is_set():
-                    await self._follow(stop, end)
-                else:
-                    self.result.reason = "stopped"
+                await self._follow(stop, end)
         finally:
             with contextlib.suppress(MountError):
                 if mount.state.connected and not mount.tracking_rates.zero:
                     await asyncio.shield(mount.set_tracking_rates(0.0, 0.0))
         return self.result
 
-    async def _goto(self, at: datetime) -> None:
+    async def _goto(self, at: datetime, stop: asyncio.Event) -> None:
+        """Goto the target's place at ``at``; ``stop`` meanwhile aborts the slew."""
         ra, dec = self.target.position(at)
         await self.mount.goto_equatorial(ra, dec)
         self._report(FollowReport(self.mount.now(), "slewing", None, math.nan, math.nan, ra, dec))
-        await self.mount.wait_for_slew()
+        slew = asyncio.create_task(self.mount.wait_for_slew())
+        stopper = asyncio.create_task(stop.wait())
+        done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
+        for task in (slew, stopper):
+            if task not in done:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+        if slew not in done:
+            await self.mount.abort()
+        else:
+            slew.result()
 
     async def _wait_until(self, deadline: datetime, stop: asyncio.Event) -> None:
         async with aclosing(self.mount.states()) as states:
