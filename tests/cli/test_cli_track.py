@@ -54,7 +54,7 @@ def test_moon_live_view_on_a_terminal_and_ctrl_c_stops_cleanly(config: Path) -> 
     try:
         seen = _read_until(controller, "″/s".encode(), b"", 40.0)
         assert b"following Moon (moon)" in seen, seen
-        assert "Moon: following, error".encode() in seen, seen
+        assert b"Moon: following, error" in seen, seen
         assert b"\x1b[" in seen  # drawn live, not in plain lines
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=20) == 0
