@@ -60,10 +60,9 @@ class TrackService:
             raise BadRequestError(str(error)) from None
 
     async def start(self, name: str) -> None:
-        target = self._target(name)
-        await self.stop()
-        follower = TargetFollower(self.mount, target)
+        follower = TargetFollower(self.mount, self._target(name))
         follower.check()  # refusals (Sun, no custom rates, limits) before anything moves
+        await self.stop()
         self.follower, self._ended, self._path = follower, None, None
         self._stop = asyncio.Event()
         self._task = asyncio.create_task(self._run(follower, self._stop), name="web track")
