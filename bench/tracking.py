@@ -227,8 +227,8 @@ async def run_device(device: str, minutes: float, quick: bool, tle: Path) -> lis
         measure = "max" if kind == "iss" else "RMS"
         rows.append(
             f"| {device} | {target.name} | {rms:.2f}″ RMS, {worst:.2f}″ max "
-            f"({len(errors)} samples; {reason}) | {peer_rms:.0f}″ RMS, {peer_worst:.0f}″ max | goal {measure} <= "
-            f"{goal:g}″: {verdict} | {time.monotonic() - began:.0f} s |"
+            f"({len(errors)} samples; {reason}) | {peer_rms:.0f}″ RMS, {peer_worst:.0f}″ max "
+            f"| goal {measure} <= {goal:g}″: {verdict} | {time.monotonic() - began:.0f} s |"
         )
         print(rows[-1], flush=True)
     return rows
