@@ -179,3 +179,12 @@ def test_bad_elements_and_names_give_one_line(tmp_path: Path) -> None:
         orbit_target("Halley", tmp_path / "missing.txt", GREENWICH)
     with pytest.raises(TargetError, match=r"no satellite called 'Hubble' .*ISS \(ZARYA\)"):
         satellite_target("Hubble", SATELLITES, GREENWICH)
+
+
+def test_an_mpcorb_asteroid_line_reads_as_its_xephem_twin() -> None:
+    t = datetime(2024, 12, 1, tzinfo=UTC)
+    mpc = orbit_target("Ceres", COMETS, GREENWICH)
+    assert (mpc.name, mpc.kind) == ("(1) Ceres", TargetKind.ASTEROID)
+    assert orbit_target("1", COMETS, GREENWICH).name == "(1) Ceres"
+    xephem = orbit_target("(1) Ceres (XEphem)", COMETS, GREENWICH)
+    assert _apart_arcsec(mpc.position(t), xephem.position(t)) < 0.1

@@ -11,7 +11,12 @@ from pathlib import Path
 import pytest
 
 from scopelink.astro import Site
-from scopelink.astro.targets import orbit_target, satellite_target, solar_system_target
+from scopelink.astro.targets import (
+    TargetKind,
+    orbit_target,
+    satellite_target,
+    solar_system_target,
+)
 from scopelink.mount import Limits, NotSupportedError, SunAvoidanceError
 from scopelink.mount.follow import FollowReport, TargetFollower
 from scopelink.mount.follow_plan import FollowError
@@ -117,3 +122,32 @@ async def test_stop_ends_following_and_zeroes_the_rates() -> None:
     assert result.reason == "stopped"
     assert mount.tracking_rates.zero
     await mount.disconnect()
+
+
+def test_the_tracking_page_states_the_followers_defaults() -> None:
+    from scopelink.astro.targets.passes import SAMPLE_STEP_S
+    from scopelink.mount.follow import (
+        DEFAULT_INTERVAL_S,
+        GAIN,
+        GOTO_LEAD_S,
+        INTERVAL_S,
+        REPORT_EVERY_S,
+    )
+    from scopelink.mount.follow_plan import MIN_FOLLOW_S, PASS_WINDOW_HOURS, RATE_MARGIN
+    from scopelink.web.track import PATH_MINUTES, PATH_POINTS
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    tracking = " ".join((docs / "tracking.md").read_text(encoding="utf-8").split())
+    cli = " ".join((docs / "cli.md").read_text(encoding="utf-8").split())
+    assert f"`GAIN` = {GAIN:g}" in tracking
+    assert f"`GOTO_LEAD_S` = {GOTO_LEAD_S:g} s" in tracking
+    assert (
+        f"({DEFAULT_INTERVAL_S:g} s by default, {INTERVAL_S[TargetKind.SATELLITE]:g} s" in tracking
+    )
+    assert f"(default {DEFAULT_INTERVAL_S:g}; {INTERVAL_S[TargetKind.SATELLITE]:g} for a" in cli
+    assert f"`REPORT_EVERY_S` = {REPORT_EVERY_S:g} s" in tracking
+    assert f"`RATE_MARGIN` = {RATE_MARGIN * 100:.0f} %" in tracking
+    assert f"`MIN_FOLLOW_S` = {MIN_FOLLOW_S:g} s" in tracking
+    assert f"within {PASS_WINDOW_HOURS:g} h" in tracking
+    assert f"`SAMPLE_STEP_S` ({SAMPLE_STEP_S:g} s)" in tracking
+    assert f"next {PATH_MINUTES:g} minutes in {PATH_POINTS} points" in tracking

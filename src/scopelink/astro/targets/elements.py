@@ -113,11 +113,15 @@ def orbit_target(name: str, path: Path, site: Site | None) -> OrbitTarget:
 
 
 def _keys(full_name: str) -> set[str]:
-    """The names an orbit answers to: whole, before the parenthesis, inside it, the number."""
+    """The names an orbit answers to: whole, before the parenthesis, inside it, after it,
+    a periodic comet's or an asteroid's number."""
     keys = {name_key(full_name)}
     before, _, inside = full_name.partition("(")
     keys.add(name_key(before))
     if inside:
+        number, _, after = inside.partition(")")
+        keys.add(name_key(number))  # "(433) Eros" answers to "433" and to "Eros"
+        keys.add(name_key(after))
         keys.add(name_key(inside.rstrip(") ")))
     if "/" in before:
         keys.add(name_key(before.split("/")[0]))  # "12P/Pons-Brooks" answers to "12P"
