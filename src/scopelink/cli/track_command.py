@@ -222,7 +222,10 @@ async def follow(mount: Mount, args: argparse.Namespace) -> int:
             )
 
         follower = TargetFollower(mount, target, interval_s=args.interval, on_report=show)
-        plan = follower.check()  # refusals before anything moves, with the pass plan
+        try:
+            plan = follower.check()  # refusals before anything moves, with the pass plan
+        except TargetError as error:  # e.g. a TLE SGP4 cannot carry to tonight
+            raise CommandError(str(error)) from None
         if plan is not None:
             print(
                 f"{target.name}: pass {plan.rise:%H:%M:%S}-{plan.set:%H:%M:%S} UTC, culminating "
@@ -233,7 +236,10 @@ async def follow(mount: Mount, args: argparse.Namespace) -> int:
         else:
             print(f"following {target.name} ({target.kind.value})", flush=True)
         async with until_stopped() as stop:
-            result = await follower.run(stop=stop, duration_s=args.duration)
+            try:
+                result = await follower.run(stop=stop, duration_s=args.duration)
+            except TargetError as error:
+                raise CommandError(str(error)) from None
     errors = [e for _, e in result.errors]
     if errors:
         span = (result.errors[-1][0] - result.errors[0][0]).total_seconds()

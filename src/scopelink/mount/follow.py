@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 
 from scopelink.astro import j2000_to_observed, wrap_signed_degrees
-from scopelink.astro.targets import MovingTarget, SatelliteTarget, TargetKind
+from scopelink.astro.targets import MovingTarget, SatelliteTarget, TargetError, TargetKind
 from scopelink.mount.base import Mount
 from scopelink.mount.errors import (
     LimitError,
@@ -239,7 +239,11 @@ class TargetFollower:
                         f": {problems}" if problems else ""
                     )
                     return
-                error = self._error(state)
+                try:
+                    error = self._error(state)
+                except TargetError as failed:  # e.g. SGP4 cannot carry the TLE this far
+                    self.result.reason = str(failed)
+                    return
                 self.result.errors.append((t, error[2]))
                 self._throttled(state, "following", *rates)
                 if next_update is None or t >= next_update:

@@ -61,7 +61,10 @@ class TrackService:
 
     async def start(self, name: str) -> None:
         follower = TargetFollower(self.mount, self._target(name))
-        follower.check()  # refusals (Sun, no custom rates, limits) before anything moves
+        try:
+            follower.check()  # refusals (Sun, no custom rates, limits) before anything moves
+        except TargetError as error:
+            raise BadRequestError(str(error)) from None
         await self.stop()
         self.follower, self._ended, self._path = follower, None, None
         self._stop = asyncio.Event()
