@@ -163,15 +163,17 @@ async def follow(
 
 
 async def peer(
-    r: Rig, target: MovingTarget, seconds: float, start: datetime
+    r: Rig, target: MovingTarget, seconds: float, at: datetime
 ) -> list[tuple[float, float]]:
-    """Sidereal tracking from a goto to the target's place, no correction."""
-    ra, dec = target.position(start)
+    """Sidereal tracking from a goto to the target's place at ``at`` (a satellite: where the
+    follower meets it), no correction, sampled from ``at`` on."""
+    ra, dec = target.position(at)
     async with r.mount.watching():
         await r.mount.goto_equatorial(ra, dec)
         await r.mount.wait_for_slew()
         if r.mount.state.tracking is not TrackingMode.SIDEREAL:
             await r.mount.set_tracking(TrackingMode.SIDEREAL)
+        await r.mount.wait_for(lambda s: s.read_at >= at)
         return await _sample(r, target, seconds, lambda: True)
 
 
@@ -200,9 +202,11 @@ async def run_device(device: str, minutes: float, quick: bool, tle: Path) -> lis
             start = found.rise - timedelta(seconds=90)
             rate = ISS_CLOCK.get(device, 1.0)
             seconds = (found.set - found.rise).total_seconds()
+            met = found.rise  # the follower meets it at its rise (or 60 s after the start)
         else:
             site = site_under(*_make(kind, name, None, tle).position(START), START)
             start, rate = START, CLOCK.get(device, 1.0)
+            met = START
         target = _make(kind, name, site, tle)
         began = time.monotonic()
         async with rig(device, site, start, rate) as r:
@@ -215,9 +219,7 @@ async def run_device(device: str, minutes: float, quick: bool, tle: Path) -> lis
                 rows.append(f"| {device} | {target.name} | refused: {error} | | |")
                 continue
         async with rig(device, site, start, rate) as r:
-            peer_errors = await peer(
-                r, target, min(seconds, 600.0 if kind == "iss" else seconds), start
-            )
+            peer_errors = await peer(r, target, seconds, met)
         skip = 0.0 if kind == "iss" else SETTLE_S
         rms, worst = _score(errors, skip)
         peer_rms, peer_worst = _score(peer_errors, skip)
