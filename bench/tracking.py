@@ -10,7 +10,7 @@ reading). The ISS runs over its first pass culminating >= 30° (Greenwich), its 
 moved to the run's date, and is scored while the rates allow (the followed stretch).
 
 Devices: ``sim`` (the simulator, 100x clock), ``synscan`` (the SynScan driver over TCP at 9600
-baud to the SynScan emulator in front of the simulator, 10x clock; the ISS at 5x), or any
+baud to the SynScan emulator in front of the simulator, 10x clock; the ISS in real time), or any
 device string ``scopelink --device`` takes (a real mount, a ``scopelink emulate`` on a port:
 its own clock, its own readings as the measure). A mount without custom rates is reported
 "not supported" (the Sky Tracker until its custom rates land).
@@ -59,7 +59,9 @@ SETTLE_S = 120.0
 """Left out of the score: the goto's landing error being closed (four loop time constants)."""
 
 CLOCK = {"sim": 100.0, "synscan": 10.0}
-ISS_CLOCK = {"sim": 10.0, "synscan": 5.0}
+ISS_CLOCK = {"sim": 10.0, "synscan": 1.0}
+"""The ISS on SynScan in real time: each rate update restarts the driver's loop, which takes
+real wire time (~0.15 s at 9600 baud); an accelerated clock would multiply its cost."""
 
 
 @dataclass
