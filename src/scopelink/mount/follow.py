@@ -128,7 +128,7 @@ class TargetFollower:
         """Refuse what cannot be followed (nothing moves); a satellite's pass plan."""
         mount, target = self.mount, self.target
         limit = mount.capabilities.max_tracking_offset_arcsec_s
-        if limit <= 0.0:
+        if limit <= 0.0 or TrackingMode.SIDEREAL not in mount.capabilities.tracking_modes:
             raise NotSupportedError("this mount cannot track at custom rates")
         if target.kind is TargetKind.SUN and mount.limits.sun_avoidance_deg > 0.0:
             raise SunAvoidanceError(
