@@ -10,10 +10,11 @@ reading). The ISS runs over its first pass culminating >= 30° (Greenwich), its 
 moved to the run's date, and is scored while the rates allow (the followed stretch).
 
 Devices: ``sim`` (the simulator, 100x clock), ``synscan`` (the SynScan driver over TCP at 9600
-baud to the SynScan emulator in front of the simulator, 10x clock; the ISS in real time), or any
-device string ``scopelink --device`` takes (a real mount, a ``scopelink emulate`` on a port:
-its own clock, its own readings as the measure). A mount without custom rates is reported
-"not supported" (the Sky Tracker until its custom rates land).
+baud to the SynScan emulator in front of the simulator, 10x clock; the ISS in real time),
+``skytracker`` (the Sky Tracker driver over TCP to its emulator in front of the simulator,
+10x), or any device string ``scopelink --device`` takes (a real mount, a ``scopelink
+emulate`` on a port: its own clock, its own readings as the measure). A mount without custom
+rates is reported "not supported" (the Sky Tracker until its custom rates land).
 
     .venv/bin/python -m bench.tracking                       # sim and synscan, 60 min each
     .venv/bin/python -m bench.tracking --device sim --minutes 10
@@ -45,9 +46,14 @@ from scopelink.astro.targets import (
     satellite_target,
     solar_system_target,
 )
+from scopelink.drivers.open import open_mount
+from scopelink.drivers.skytracker import SkyTrackerMount
+from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Mount, MountError, TrackingMode
 from scopelink.mount.follow import TargetFollower
-from scopelink.sim import EQ6, SimClock, SimulatedMount
+from scopelink.servers.skytracker import SkyTrackerEmulator
+from scopelink.servers.synscan import SynScanEmulator
+from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
 
 START = datetime(2026, 3, 3, 21, 0, tzinfo=UTC)
 """The Moon five days old at dusk, Jupiter high; the comet is far and faint but moves."""
@@ -58,7 +64,7 @@ GOALS_ARCSEC = {"moon": 10.0, "planet": 10.0, "comet": 10.0, "iss": 0.25 * 3600.
 SETTLE_S = 120.0
 """Left out of the score: the goto's landing error being closed (four loop time constants)."""
 
-CLOCK = {"sim": 100.0, "synscan": 10.0}
+CLOCK = {"sim": 100.0, "synscan": 10.0, "skytracker": 10.0}
 ISS_CLOCK = {"sim": 10.0, "synscan": 1.0}
 """The ISS on SynScan in real time: each rate update restarts the driver's loop, which takes
 real wire time (~0.15 s at 9600 baud); an accelerated clock would multiply its cost."""
@@ -74,6 +80,10 @@ class Rig:
 
 @contextlib.asynccontextmanager
 async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIterator[Rig]:
+    if device == "skytracker":
+        async with _skytracker(site, start, rate) as sky:
+            yield sky
+        return
     if device in ("sim", "synscan"):
         sim = SimulatedMount(EQ6, site=site, clock=SimClock(start=start, rate=rate))
 
@@ -89,8 +99,6 @@ async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIte
             finally:
                 await sim.disconnect()
             return
-        from scopelink.drivers.synscan import SynScanMount
-        from scopelink.servers.synscan import SynScanEmulator
 
         async with SynScanEmulator(sim) as emulator:
             host, port = await emulator.on_tcp("127.0.0.1", 0)
@@ -101,7 +109,6 @@ async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIte
             finally:
                 await mount.disconnect()
         return
-    from scopelink.drivers.open import open_mount
 
     device_mount: Mount = await open_mount(device, site)
 
@@ -115,6 +122,29 @@ async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIte
         yield Rig(device_mount, reading, 1.0)
     finally:
         await device_mount.disconnect()
+
+
+@contextlib.asynccontextmanager
+async def _skytracker(site: Site, start: datetime, rate: float) -> AsyncIterator[Rig]:
+    """The Sky Tracker driver over TCP to the Sky Tracker emulator in front of the simulator."""
+
+    sim = SimulatedMount(SKY_TRACKER, site=site, clock=SimClock(start=start, rate=rate))
+
+    def truth() -> tuple[datetime, float, float]:
+        t = sim.elapsed()
+        ra, dec = sim.j2000_at(t)
+        return sim.clock.epoch + timedelta(seconds=t), ra, dec
+
+    with tempfile.TemporaryDirectory() as data:
+        async with SkyTrackerEmulator(sim, Path(data)) as emulator:
+            host, port = await emulator.on_tcp()
+            spec = f"tcp://{host}:{port}"
+            mount = SkyTrackerMount(spec, site=site, clock=sim.clock.now, name=spec)
+            await mount.connect()
+            try:
+                yield Rig(mount, truth, rate)
+            finally:
+                await mount.disconnect()
 
 
 async def _sample(
@@ -213,12 +243,14 @@ async def run_device(device: str, minutes: float, quick: bool, tle: Path) -> lis
         began = time.monotonic()
         async with rig(device, site, start, rate) as r:
             if r.mount.capabilities.max_tracking_offset_arcsec_s <= 0.0:
-                rows.append(f"| {device} | {target.name} | not supported: no custom rates | | |")
+                rows.append(f"| {device} | {target.name} | not supported: no custom rates | | | |")
+                print(rows[-1], flush=True)
                 break
             try:
                 errors, reason = await follow(r, target, seconds)
             except MountError as error:
-                rows.append(f"| {device} | {target.name} | refused: {error} | | |")
+                rows.append(f"| {device} | {target.name} | refused: {error} | | | |")
+                print(rows[-1], flush=True)
                 continue
         async with rig(device, site, start, rate) as r:
             peer_errors = await peer(r, target, seconds, met)
@@ -240,7 +272,9 @@ async def run_device(device: str, minutes: float, quick: bool, tle: Path) -> lis
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--device", action="append", help="sim, synscan or a device string")
+    parser.add_argument(
+        "--device", action="append", help="sim, synscan, skytracker or a device string"
+    )
     parser.add_argument("--minutes", type=float, default=60.0, help="of the mount's clock")
     parser.add_argument("--quick", action="store_true", help="sim, the Moon, 4 minutes")
     args = parser.parse_args()
@@ -257,7 +291,11 @@ def main() -> int:
         rows = []
         for device in devices:
             rows += asyncio.run(run_device(device, minutes, args.quick, tle))
-    missed = sum("MISSED" in row for row in rows)
+    missed = sum("MISSED" in row or "refused" in row for row in rows)
+    unsupported = sum("not supported" in row for row in rows)
+    if unsupported and not missed and len(rows) == unsupported:
+        print("goal: nothing measured: not supported")
+        return 0
     print(
         f"goal: every figure within its goal: {'MISSED' if missed else 'met'}"
         + (f" ({missed} missed)" if missed else "")
