@@ -160,6 +160,8 @@ async def _sample(
     first: datetime | None = None
     while not done():
         await asyncio.sleep(1.0 / r.clock_rate)
+        if done():  # following ended during the sleep: the rates are zero now
+            break
         now = r.truth()
         if now is None or not ready():
             continue
