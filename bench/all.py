@@ -65,6 +65,7 @@ PLAN = (
     Step("astro", "astro"),
     Step("persistence", "persistence"),
     Step("pointing", "pointing"),
+    Step("tracking", "tracking"),
     Step("security_flood", "security_flood"),
     Step("safety_guard", "safety_guard"),
     Step("safety_guard_noisy", "safety_guard", ("--noisy",)),

@@ -89,8 +89,8 @@ COMMANDS: Final = (
     Command("stop", "stop every motion now (gotos and manual moves)", "motion_commands"),
     Command(
         "track",
-        "tracking on, off, or a mode (sidereal, lunar, solar, altaz, pec)",
-        "motion_commands",
+        "tracking on, off, or a mode; or follow the Moon, a planet, a comet, a satellite",
+        "track_command",
     ),
     Command("park", "move to the park position and stop tracking", "motion_commands"),
     Command("unpark", "allow motion again after park", "motion_commands"),

@@ -1,4 +1,5 @@
-"""``move``, ``stop``, ``track``, ``park``, ``unpark`` and ``guide``: the mount's hand controls."""
+"""``move``, ``stop``, ``park``, ``unpark`` and ``guide``: the mount's hand controls (``track``,
+which also follows moving targets, is ``track_command``; it uses :func:`tracking_mode_for`)."""
 
 from __future__ import annotations
 
@@ -81,24 +82,6 @@ def register(commands: CommandParsers) -> None:
     )
     add_device_arguments(stop)
     stop.set_defaults(run=_run_stop)
-
-    track = _add(
-        commands,
-        "track",
-        description=(
-            "Set tracking: 'on' picks sidereal for an equatorial mount and altaz for an alt-az "
-            "one; 'off' stops it; or name a mode this mount supports."
-        ),
-        examples=("  scopelink track on\n  scopelink track lunar\n  scopelink track off\n"),
-    )
-    track.add_argument(
-        "mode",
-        choices=["on", *(mode.value for mode in TrackingMode)],
-        metavar="on|off|MODE",
-        help="on, off, " + ", ".join(m.value for m in TrackingMode if m is not TrackingMode.OFF),
-    )
-    add_device_arguments(track)
-    track.set_defaults(run=_run_track)
 
     park = _add(
         commands,
@@ -221,17 +204,6 @@ def tracking_mode_for(mount: Mount, word: str) -> TrackingMode:
         if mode in modes:
             return mode
     raise CommandError("this mount cannot track", "'scopelink info' shows what it can do")
-
-
-def _run_track(args: argparse.Namespace) -> int:
-    async def body(mount: Mount) -> int:
-        mode = tracking_mode_for(mount, args.mode)
-        await mount.set_tracking(mode)
-        state = await mount.refresh()
-        print(f"tracking: {state.tracking.value}")
-        return 0
-
-    return run_on_mount(args, body)
 
 
 # --- park ------------------------------------------------------------------------------------

@@ -30,6 +30,7 @@ from scopelink.web.params import BadRequestError, read_body
 from scopelink.web.site_check import site_from_body
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.timeset import parse_utc
+from scopelink.web.track import add_track_routes
 
 __all__ = ["add_api_routes", "error_middleware"]
 
@@ -234,3 +235,4 @@ def add_api_routes(app: web.Application, mount: Mount) -> None:
     app.router.add_post("/api/unpark", api.unpark)
     app.router.add_post("/api/site", api.site)
     app.router.add_post("/api/time", api.time)
+    add_track_routes(app, mount)  # GET/POST /api/track: following a moving target
