@@ -131,6 +131,19 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         )
         await shot(page, "slewing")
         await s.post("/api/abort")
+        # The real endpoint (web/track.py): following the Moon replaces the stub's track with the
+        # server's (its path at once, its error once the mount follows), and stopping clears it.
+        await page.unroute("**/api/track")
+        status, _ = await s.post("/api/track", {"target": "moon"})
+        assert status == 200
+        await page.wait_for_function(
+            "() => { const r = Chart.debug.report(); return r.track && r.error !== '12″'; }",
+            timeout=TIMEOUT_MS,
+        )
+        status, _ = await s.post("/api/track", {"target": None})
+        assert status == 200
+        await page.wait_for_function("() => !Chart.debug.report().track", timeout=TIMEOUT_MS)
+        await s.post("/api/abort")
 
         # Centred on the mount and zoomed in all the way: a 1° field with the eyepiece frame.
         await page.get_by_role("button", name="Centre on the mount and follow it (M)").click()

@@ -222,6 +222,10 @@ function selectAt(x, y) {
   hooks.onSelect(point);
 }
 
+// While a target is followed its error changes: GET /api/track again every few seconds (the
+// server keeps the path for 30 s and the last error at hand, so a request is cheap); a new
+// target asks at once. The serial drops answers and timers a later request made stale.
+const TRACK_REFRESH_MS = 5000;
 let trackSerial = 0;
 async function refreshTrack() {
   const serial = ++trackSerial;
@@ -229,6 +233,9 @@ async function refreshTrack() {
   if (serial !== trackSerial) return;
   data.track = track;
   schedule();
+  if (track && track.target) {
+    setTimeout(() => { if (serial === trackSerial) refreshTrack(); }, TRACK_REFRESH_MS);
+  }
 }
 const mountAltAz = () => (data.state && data.state.alt_deg != null ? { alt: data.state.alt_deg, az: data.state.az_deg } : null);
 const targetKey = (state) => (state && state.target ? JSON.stringify(state.target) : "");
