@@ -146,11 +146,17 @@ class Link(ABC):
     async def _close_transport_once(self) -> None:
         """Close the transport once, whoever asks and however many at a time: a reader meeting
         the end of the stream and a disconnect close together, and a descriptor closed twice
-        fails (EBADF) or closes whatever file reused its number meanwhile. Every caller waits
-        for that one close; a caller cancelled meanwhile does not cancel it."""
-        if self._closing is None:
-            self._closing = asyncio.ensure_future(self._close_transport())
-        await asyncio.shield(self._closing)
+        fails (EBADF) or closes whatever file reused its number meanwhile. The first caller
+        closes at once, in its own turn (a separate task would let others see the link closed
+        and not yet released); later callers wait for it."""
+        if self._closing is not None:
+            await asyncio.shield(self._closing)
+            return
+        self._closing = asyncio.get_running_loop().create_future()
+        try:
+            await self._close_transport()
+        finally:
+            self._closing.set_result(None)
 
     async def drain_input(self, quiet_seconds: float = 0.05, max_seconds: float = 2.0) -> bytes:
         """Read and discard input until the line has been quiet for ``quiet_seconds``.
