@@ -14,7 +14,8 @@ baud to the SynScan emulator in front of the simulator, 10x clock; the ISS in re
 ``skytracker`` (the Sky Tracker driver over TCP to its emulator in front of the simulator,
 10x), or any device string ``scopelink --device`` takes (a real mount, a ``scopelink
 emulate`` on a port: its own clock, its own readings as the measure). A mount without custom
-rates is reported "not supported" (the Sky Tracker until its custom rates land).
+rates is reported "not supported". The Sky Tracker has custom rates now, but following fails
+on it (its status polls: docs/tracking.md, "Limits found").
 
     .venv/bin/python -m bench.tracking                       # sim and synscan, 60 min each
     .venv/bin/python -m bench.tracking --device sim --minutes 10
