@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import sys
 import time
 from types import TracebackType
@@ -22,6 +21,7 @@ from scopelink.cli.options import add_device_arguments
 from scopelink.cli.stopping import until_stopped
 from scopelink.cli.targets import AltAz, Named, accept_negative_values, parse_target
 from scopelink.mount import Mount, SlewProgress
+from scopelink.mount.slew_wait import slew_unless_stopped
 
 __all__ = ["EXIT_INTERRUPTED", "SlewDisplay", "register", "run_goto", "run_sync"]
 
@@ -127,28 +127,20 @@ def run_goto(args: argparse.Namespace) -> int:
 
 async def _follow_slew(mount: Mount, label: str, timeout_s: float, stop: asyncio.Event) -> int:
     """Show progress until the slew ends; ``stop`` (Ctrl-C) or a timeout aborts it."""
-    with SlewDisplay(label) as display:
-        slew = asyncio.create_task(mount.wait_for_slew(timeout_s, progress=display.update))
-        stopper = asyncio.create_task(stop.wait())
-        done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
-        for task in (slew, stopper):
-            if task not in done:
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
-    if stopper in done:
-        await mount.abort()
-        state = await mount.refresh()
-        print(f"slew aborted; the mount stopped at {position_text(state)}", flush=True)
-        return EXIT_INTERRUPTED
     try:
-        state = slew.result()
+        with SlewDisplay(label) as display:
+            ended = await slew_unless_stopped(mount, stop, timeout_s, display.update)
     except TimeoutError:
         await mount.abort()
         raise CommandError(
             f"the slew did not end within {timeout_s:g} s: the mount was stopped",
             "check the mount for obstructions; raise --slew-timeout for very slow mounts",
         ) from None
+    if ended is None:
+        state = await mount.refresh()
+        print(f"slew aborted; the mount stopped at {position_text(state)}", flush=True)
+        return EXIT_INTERRUPTED
+    state = ended
     print(f"arrived: {position_text(state)}", flush=True)
     return 0
 

@@ -24,6 +24,7 @@ from scopelink.mount import (
     ParkPosition,
     TrackingMode,
 )
+from scopelink.mount.slew_wait import slew_unless_stopped
 
 __all__ = ["AXES", "parse_rate", "register"]
 
@@ -237,19 +238,10 @@ def _run_park(args: argparse.Namespace) -> int:
             if args.no_wait:
                 print("parking")
                 return 0
-            slew = asyncio.create_task(mount.wait_for_slew(_PARK_TIMEOUT_S))
-            stopper = asyncio.create_task(stop.wait())
-            done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
-            for task in (slew, stopper):
-                if task not in done:
-                    task.cancel()
-                    with contextlib.suppress(asyncio.CancelledError):
-                        await task
-            if stopper in done:
-                await mount.abort()
+            state = await slew_unless_stopped(mount, stop, _PARK_TIMEOUT_S)
+            if state is None:
                 print("park interrupted: the mount was stopped")
                 return 130
-            state = slew.result()
         print(f"parked at {position_text(state)}")
         return 0
 

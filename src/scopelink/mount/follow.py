@@ -35,6 +35,7 @@ from scopelink.mount.errors import (
     SunAvoidanceError,
 )
 from scopelink.mount.follow_plan import FollowError, PassPlan, plan_pass
+from scopelink.mount.slew_wait import slew_unless_stopped
 from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import MountState, TrackingMode
 
@@ -196,18 +197,7 @@ class TargetFollower:
         ra, dec = self.target.position(at)
         await self.mount.goto_equatorial(ra, dec)
         self._report(FollowReport(self.mount.now(), "slewing", None, math.nan, math.nan, ra, dec))
-        slew = asyncio.create_task(self.mount.wait_for_slew())
-        stopper = asyncio.create_task(stop.wait())
-        done, _ = await asyncio.wait({slew, stopper}, return_when=asyncio.FIRST_COMPLETED)
-        for task in (slew, stopper):
-            if task not in done:
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
-        if slew not in done:
-            await self.mount.abort()
-        else:
-            slew.result()
+        await slew_unless_stopped(self.mount, stop)
 
     async def _wait_until(self, deadline: datetime, stop: asyncio.Event) -> None:
         async with aclosing(self.mount.states()) as states:
