@@ -73,6 +73,11 @@ async def test_the_chart_on_a_desktop(browser: Browser) -> None:
         drawn = await report(page)
         assert drawn["fov"] == 200
         assert drawn["twilight"] == "night"  # 21 h UTC in March
+        # The sky hides stars by the server's twilight boundaries (web/almanac.py, the hello).
+        limits = await page.evaluate("[0, -0.8, -0.9, -6, -12, -18, -40].map(Chart.debug.skyLimit)")
+        assert limits[:2] == [-99, -99]  # day: upper limb above -0.833°
+        assert limits[2:6] == pytest.approx([2.0233, 3.8058, 5.9029, 8.0], abs=1e-3)
+        assert limits[6] == 8.0
         assert drawn["mount"] is not None  # the crosshair is on the chart
         assert_labels_apart(drawn["labels"])
         # The J2000 layers sit where the server puts the same stars (its frame, its refraction).

@@ -22,6 +22,7 @@ from scopelink.mount import Mount
 from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import SimClock, SimulatedMount
 from scopelink.web import Dashboard
+from scopelink.web.almanac import TWILIGHT_BOUNDARIES_DEG
 from scopelink.web.traffic import TrafficMonitor, parse_trace_line, protocol_by_port
 from tests.support.web import HIGH_UP, SITE, START, served, sim_mount
 
@@ -53,6 +54,8 @@ async def test_hello_describes_the_mount_the_sky_and_the_state() -> None:
         assert 250 < sky[HIGH_UP]["az"] < 330
         assert hello["state"]["connected"] is True
         assert hello["traffic_enabled"] is True
+        # The chart's twilight boundaries are the almanac's (the page holds no copy).
+        assert hello["twilight_deg"] == {p: b for b, p in TWILIGHT_BOUNDARIES_DEG}
 
 
 async def test_updates_flow_while_a_page_is_open_and_polling_stops_after() -> None:

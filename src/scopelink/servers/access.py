@@ -34,6 +34,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field
 
 from scopelink.mount import MountError
+from scopelink.servers.buckets import KeyedBuckets, TokenBucket
 
 __all__ = [
     "DEFAULT_POLICY",
@@ -162,40 +163,6 @@ OPEN_POLICY = AccessPolicy(
 """No limit at all: what a server built without a policy uses (library use, benchmarks)."""
 
 
-class TokenBucket:
-    """``rate`` tokens a second up to ``burst``; one token per request."""
-
-    def __init__(self, rate: float, burst: int, now: float) -> None:
-        self.rate = rate
-        self.burst = float(burst)
-        self._tokens = float(burst)
-        self._stamp = now
-
-    def _refill(self, now: float) -> None:
-        elapsed = max(0.0, now - self._stamp)
-        self._tokens = min(self.burst, self._tokens + elapsed * self.rate)
-        self._stamp = now
-
-    def reserve(self, now: float, *, max_wait_s: float = float("inf")) -> float | None:
-        """Take a token; the wait until it is really available (0 now), or None (nothing taken)
-        when that wait would exceed ``max_wait_s``."""
-        self._refill(now)
-        wait = max(0.0, (1.0 - self._tokens) / self.rate)
-        if wait > max_wait_s:
-            return None
-        self._tokens -= 1.0
-        return wait
-
-    def wait_for_one(self, now: float) -> float:
-        """How long until one token is free (for a Retry-After)."""
-        self._refill(now)
-        return max(0.0, (1.0 - self._tokens) / self.rate)
-
-    def full(self, now: float) -> bool:
-        self._refill(now)
-        return self._tokens >= self.burst
-
-
 @dataclass(frozen=True, slots=True)
 class Refusal:
     """Why a connection was not admitted: ``forbidden`` (allow-list) or ``busy`` (a limit)."""
@@ -257,7 +224,10 @@ class AccessControl:
         self.name = name
         self.clock = clock
         self._per_host: dict[str, int] = {}
-        self._buckets: dict[str, TokenBucket] = {}
+        # Four buckets per connection allowed (+1: the one being made) before idle ones go.
+        self._buckets = KeyedBuckets(
+            self.policy.requests_per_s, self.policy.burst, 4 * self.policy.max_connections + 1
+        )
         self._server_bucket = TokenBucket(
             self.policy.server_requests_per_s, self.policy.server_burst, clock()
         )
@@ -341,20 +311,7 @@ class AccessControl:
         return self.wait_for_one(self._buckets.get(host))
 
     def _bucket_of(self, host: str) -> TokenBucket:
-        bucket = self._buckets.get(host)
-        if bucket is None:
-            now = self.clock()
-            self._forget_idle_buckets(now)
-            bucket = TokenBucket(self.policy.requests_per_s, self.policy.burst, now)
-            self._buckets[host] = bucket
-        return bucket
-
-    def _forget_idle_buckets(self, now: float) -> None:
-        if len(self._buckets) <= 4 * self.policy.max_connections:
-            return
-        for host in [h for h in self._buckets if h not in self._per_host]:
-            if self._buckets[host].full(now):
-                del self._buckets[host]
+        return self._buckets.of(host, self.clock(), busy=self._per_host)
 
     def release(self, client: Client) -> None:
         """``client``'s connection has ended (:meth:`Client.release` calls this once)."""
@@ -367,10 +324,8 @@ class AccessControl:
             return
         self._per_host.pop(client.host, None)
         # Forget an idle address's bucket only when full: reconnecting must not refill it.
-        bucket = self._buckets.get(client.host)
-        if bucket is not None and bucket.full(self.clock()):
-            del self._buckets[client.host]
-        self._forget_idle_buckets(self.clock())
+        self._buckets.forget_if_full(client.host, self.clock())
+        self._buckets.prune(self.clock(), busy=self._per_host)
 
     @contextlib.asynccontextmanager
     async def session(self, host: str | None) -> AsyncIterator[Client | Refusal]:

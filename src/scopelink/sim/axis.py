@@ -26,6 +26,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
+from scopelink.astro import wrap_signed_degrees
+
 __all__ = [
     "Axis",
     "AxisPlan",
@@ -379,7 +381,7 @@ class Axis:
         t = self._when(at)
         shift = position_deg - self.unwrapped_position_at(t)
         if self.wrap:
-            shift = _wrap_signed(shift)
+            shift = wrap_signed_degrees(shift)
         self._segments = [replace(s, offset_deg=s.offset_deg + shift) for s in self._segments]
         self.counter_offset_deg += shift
 
@@ -418,7 +420,7 @@ class Axis:
     def _unwrapped_target(self, target_deg: float, position: float) -> float:
         if not math.isfinite(target_deg):
             raise ValueError(f"{self.name}: target {target_deg} is not a number")
-        return position + _wrap_signed(target_deg - position) if self.wrap else target_deg
+        return position + wrap_signed_degrees(target_deg - position) if self.wrap else target_deg
 
     def _follow_value_before(self, t: float) -> float:
         """The followed part just before ``t`` (pieces starting at ``t`` ignored)."""
@@ -450,7 +452,7 @@ class Axis:
     def _difference(self, trajectory: Trajectory, t: float) -> float:
         step = trajectory(t + _DERIVATIVE_STEP_S) - trajectory(t - _DERIVATIVE_STEP_S)
         if self.wrap:
-            step = _wrap_signed(step)
+            step = wrap_signed_degrees(step)
         return step / (2.0 * _DERIVATIVE_STEP_S)
 
 
@@ -462,8 +464,3 @@ def _in_force(items: list[_Planned], t: float) -> _Planned:
 def _piece(t: float, base: float, trajectory: Trajectory | None) -> FollowPiece:
     origin = trajectory(t) if trajectory is not None else 0.0
     return FollowPiece(t, base, trajectory, origin)
-
-
-def _wrap_signed(degrees: float) -> float:
-    """``degrees`` wrapped to [-180, 180)."""
-    return (degrees + 180.0) % 360.0 - 180.0

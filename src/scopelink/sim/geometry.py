@@ -34,6 +34,7 @@ from scopelink.astro import (
     destination_side_of_pier,
     hadec_to_altaz,
     wrap_hour_angle,
+    wrap_signed_degrees,
 )
 from scopelink.mount import AlignmentMode, GuideDirection, Limits
 from scopelink.mount.meridian import limit_of, past_meridian_deg
@@ -45,10 +46,6 @@ __all__ = [
     "GermanEquatorialGeometry",
     "geometry_for",
 ]
-
-
-def _wrap_signed(degrees: float) -> float:
-    return (degrees + 180.0) % 360.0 - 180.0
 
 
 class Geometry(ABC):
@@ -156,7 +153,7 @@ class GermanEquatorialGeometry(_Equatorial):
 
     def to_hadec(self, primary: float, secondary: float) -> tuple[float, float]:
         s = self.hemisphere
-        d = _wrap_signed(secondary)
+        d = wrap_signed_degrees(secondary)
         if abs(d) <= 90.0:
             return wrap_hour_angle(s * (6.0 + primary / 15.0)), s * d
         dec = 180.0 - d if d > 0.0 else -180.0 - d
@@ -167,13 +164,13 @@ class GermanEquatorialGeometry(_Equatorial):
         if side is PierSide.UNKNOWN:
             side = destination_side_of_pier(ha_hours)
         if side is self.normal_side:
-            return _wrap_signed(15.0 * (s * ha_hours - 6.0)), s * dec_deg
+            return wrap_signed_degrees(15.0 * (s * ha_hours - 6.0)), s * dec_deg
         # Flipped secondary in [90, 270]: with the normal [-90, 90] one continuous range through
         # the visible pole, so a flip never swings the tube through the pole below the horizon.
-        return _wrap_signed(15.0 * (s * ha_hours + 6.0)), 180.0 - s * dec_deg
+        return wrap_signed_degrees(15.0 * (s * ha_hours + 6.0)), 180.0 - s * dec_deg
 
     def pier_side(self, primary: float, secondary: float) -> PierSide:
-        if abs(_wrap_signed(secondary)) <= 90.0:
+        if abs(wrap_signed_degrees(secondary)) <= 90.0:
             return self.normal_side
         return PierSide.WEST if self.normal_side is PierSide.EAST else PierSide.EAST
 
@@ -201,7 +198,7 @@ class GermanEquatorialGeometry(_Equatorial):
         s = self.hemisphere
         if direction in (GuideDirection.EAST, GuideDirection.WEST):
             return 0, s if direction is GuideDirection.WEST else -s
-        flipped = abs(_wrap_signed(secondary)) > 90.0
+        flipped = abs(wrap_signed_degrees(secondary)) > 90.0
         sign = -s if flipped else s
         return 1, sign if direction is GuideDirection.NORTH else -sign
 
@@ -222,7 +219,7 @@ class ForkEquatorialGeometry(_Equatorial):
 
     def from_hadec(self, ha_hours: float, dec_deg: float, side: PierSide) -> tuple[float, float]:
         s = self.hemisphere
-        return _wrap_signed(15.0 * s * ha_hours), s * dec_deg
+        return wrap_signed_degrees(15.0 * s * ha_hours), s * dec_deg
 
     def guide_axis(self, direction: GuideDirection, secondary: float) -> tuple[int, float]:
         s = self.hemisphere

@@ -22,6 +22,7 @@ from scopelink.astro import (
     j2000_to_apparent,
     j2000_to_observed,
     observed_to_j2000,
+    wrap_signed_degrees,
 )
 from scopelink.mount import (
     Capabilities,
@@ -281,7 +282,7 @@ class SimulatedMount(Mount):
         counters = self.geometry.to_axes(alt, az, self._side_at(t))
         for axis, counter in zip(self.axes, counters, strict=True):
             current = axis.unwrapped_position_at(t)
-            axis.set_position(current + _wrap_signed(counter - current), at=t)
+            axis.set_position(current + wrap_signed_degrees(counter - current), at=t)
         self._aligned = True
         self._plan.retarget(t)
         self._finish(limits_from=t)
@@ -296,10 +297,10 @@ class SimulatedMount(Mount):
         )
         counters = self.geometry.to_axes(alt, az, self._side_at(t))
         offsets = [
-            axis.counter_offset_deg + _wrap_signed(counter - axis.unwrapped_position_at(t))
+            axis.counter_offset_deg + wrap_signed_degrees(counter - axis.unwrapped_position_at(t))
             for axis, counter in zip(self.axes, counters, strict=True)
         ]
-        return SyncFrame(_wrap_signed(offsets[0]), offsets[1])
+        return SyncFrame(wrap_signed_degrees(offsets[0]), offsets[1])
 
     async def _abort(self) -> None:
         t = self._begin(replan=True)
@@ -484,7 +485,3 @@ def _default_tracking(model: MountModel) -> TrackingMode:
     if model.alignment_mode is AlignmentMode.ALT_AZ:
         return TrackingMode.ALT_AZ
     return TrackingMode.SIDEREAL
-
-
-def _wrap_signed(degrees: float) -> float:
-    return (degrees + 180.0) % 360.0 - 180.0

@@ -19,6 +19,7 @@ from scopelink.astro import (
     PierSide,
     Site,
     j2000_to_observed,
+    wrap_signed_degrees,
 )
 from scopelink.mount import TrackingMode
 from scopelink.mount.rates import TrackingRates, tracking_rate_deg_s
@@ -80,7 +81,8 @@ def sky_target(
 
 
 def _unwrap(value: float, reference: float) -> float:
-    return reference + (value - reference + 180.0) % 360.0 - 180.0
+    """``value`` plus or minus whole turns, within half a turn of ``reference``."""
+    return reference + wrap_signed_degrees(value - reference)
 
 
 class SkyPath:

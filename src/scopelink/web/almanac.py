@@ -16,7 +16,7 @@ import numpy as np
 from scopelink.astro import Site, j2000_to_observed, lst_hours
 from scopelink.astro.catalog import SUN_MOON_HORIZON_DEG, EphemerisRangeError, find
 
-__all__ = ["TWILIGHT_BOUNDARIES_DEG", "clock_json", "twilight_phase"]
+__all__ = ["TWILIGHT_BOUNDARIES_DEG", "clock_json", "twilight_json", "twilight_phase"]
 
 TWILIGHT_BOUNDARIES_DEG = (
     (SUN_MOON_HORIZON_DEG, "day"),
@@ -34,6 +34,12 @@ def twilight_phase(sun_geometric_alt_deg: float) -> str:
         if sun_geometric_alt_deg > boundary:
             return phase
     return "night"
+
+
+def twilight_json() -> dict[str, float]:
+    """The boundaries by phase (the live connection's hello, ``twilight_deg``): the chart dims
+    the sky from them, so the page holds no copy of these numbers."""
+    return {phase: boundary for boundary, phase in TWILIGHT_BOUNDARIES_DEG}
 
 
 def _sun_and_moon(t: datetime, site: Site) -> tuple[list[float], list[float]] | None:

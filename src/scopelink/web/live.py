@@ -20,6 +20,7 @@ from aiohttp import WSMsgType, web
 
 from scopelink.mount import Mount
 from scopelink.mount.deadman import MotionClient
+from scopelink.web.almanac import twilight_json
 from scopelink.web.sky import SkyPositions, sky_frame, sky_positions
 from scopelink.web.snapshot import describe_mount, state_json
 from scopelink.web.traffic import TrafficMonitor
@@ -91,6 +92,7 @@ class LiveHub:
             "type": "hello",
             "panel": await self.panel.as_json(with_clock=True),
             "mount": describe_mount(self._mount),
+            "twilight_deg": twilight_json(),
             "traffic_enabled": self._traffic is not None,
             "traffic": traffic,
             "state": state_json(self._mount, self._mount.state),

@@ -14,7 +14,7 @@ import math
 import time
 from typing import Final
 
-from scopelink.servers.access import TokenBucket
+from scopelink.servers.buckets import KeyedBuckets, TokenBucket
 
 __all__ = [
     "LIVE_OPENS_PER_S",
@@ -42,18 +42,13 @@ class LiveOpens:
         self._server = TokenBucket(
             LIVE_SERVER_OPENS_PER_S, LIVE_SERVER_OPEN_BURST, time.monotonic()
         )
-        self._addresses: dict[str, TokenBucket] = {}
+        self._addresses = KeyedBuckets(LIVE_OPENS_PER_S, LIVE_OPEN_BURST, _KEPT_ADDRESSES)
 
     def admit(self, address: str | None) -> float | None:
         """None when an open from ``address`` may go ahead (its tokens taken), else the seconds
         until it may."""
         now = time.monotonic()
-        key = address or ""
-        bucket = self._addresses.get(key)
-        if bucket is None:
-            if len(self._addresses) >= _KEPT_ADDRESSES:
-                self._addresses = {k: b for k, b in self._addresses.items() if not b.full(now)}
-            bucket = self._addresses[key] = TokenBucket(LIVE_OPENS_PER_S, LIVE_OPEN_BURST, now)
+        bucket = self._addresses.of(address or "", now)
         wait = max(bucket.wait_for_one(now), self._server.wait_for_one(now))
         if wait > 0.0:
             return max(1.0, math.ceil(wait))

@@ -100,69 +100,57 @@ class _FrameReader:
         return message_type, frame
 
 
-class StellariumServerConnection:
-    """The telescope-server side: gotos in, current positions out."""
+class _Connection:
+    """What both sides share: the frame reader, and the message type and length they expect."""
 
     def __init__(self) -> None:
         self._reader = _FrameReader()
 
     @property
     def broken(self) -> bool:
-        """True once a :class:`BadLength` was seen: nothing more will be parsed."""
         return self._reader.broken is not None
+
+    def receive_data(self, data: bytes) -> None:
+        self._reader.receive_data(data)
+
+    def _next_body(self, length: int, what: str) -> bytes | SkippedMessage | BadLength | NeedData:
+        """The next frame if it is a position-type message of ``length`` bytes (``what``: its
+        name in the reason a frame is skipped)."""
+        frame = self._reader.next_frame()
+        if not isinstance(frame, tuple):
+            return frame
+        message_type, data = frame
+        if message_type != MESSAGE_TYPE_POSITION:
+            return SkippedMessage(message_type, data, "unknown message type")
+        if len(data) != length:
+            return SkippedMessage(
+                message_type, data, f"a {what} is {length} bytes long, not {len(data)}"
+            )
+        return data
+
+
+class StellariumServerConnection(_Connection):
+    """The telescope-server side: gotos in, current positions out."""
 
     @property
     def pending(self) -> int:
         return self._reader.pending
 
-    def receive_data(self, data: bytes) -> None:
-        self._reader.receive_data(data)
-
     def next_event(self) -> GotoMessage | SkippedMessage | BadLength | NeedData:
         """The next goto, a skipped frame, the fatal :class:`BadLength`, or NEED_DATA."""
-        frame = self._reader.next_frame()
-        if not isinstance(frame, tuple):
-            return frame
-        message_type, data = frame
-        if message_type != MESSAGE_TYPE_POSITION:
-            return SkippedMessage(message_type, data, "unknown message type")
-        if len(data) != GOTO_LENGTH:
-            return SkippedMessage(
-                message_type, data, f"a goto is {GOTO_LENGTH} bytes long, not {len(data)}"
-            )
-        return GotoMessage.decode(data)
+        body = self._next_body(GOTO_LENGTH, "goto")
+        return GotoMessage.decode(body) if isinstance(body, bytes) else body
 
     def send(self, position: CurrentPosition) -> bytes:
         return position.encode()
 
 
-class StellariumClientConnection:
+class StellariumClientConnection(_Connection):
     """The planetarium side (what Stellarium does): gotos out, current positions in."""
 
-    def __init__(self) -> None:
-        self._reader = _FrameReader()
-
-    @property
-    def broken(self) -> bool:
-        return self._reader.broken is not None
-
-    def receive_data(self, data: bytes) -> None:
-        self._reader.receive_data(data)
-
     def next_event(self) -> CurrentPosition | SkippedMessage | BadLength | NeedData:
-        frame = self._reader.next_frame()
-        if not isinstance(frame, tuple):
-            return frame
-        message_type, data = frame
-        if message_type != MESSAGE_TYPE_POSITION:
-            return SkippedMessage(message_type, data, "unknown message type")
-        if len(data) != CURRENT_POSITION_LENGTH:
-            return SkippedMessage(
-                message_type,
-                data,
-                f"a position is {CURRENT_POSITION_LENGTH} bytes long, not {len(data)}",
-            )
-        return CurrentPosition.decode(data)
+        body = self._next_body(CURRENT_POSITION_LENGTH, "position")
+        return CurrentPosition.decode(body) if isinstance(body, bytes) else body
 
     def send(self, goto: GotoMessage) -> bytes:
         return goto.encode()

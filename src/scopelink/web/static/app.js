@@ -6,6 +6,7 @@ const $ = (id) => document.getElementById(id);
 
 const view = {
   mount: null, // the hello's description: identity, capabilities, site, limits, sidereal rate
+  twilight: null, // the hello's twilight boundaries, {phase: the Sun's altitude it ends at}
   state: null,
   selected: null, // {name} of an object, or {alt, az} of a point
   connected: false,
@@ -240,6 +241,7 @@ function connect() {
     if (message.panel && message.state) Object.assign(message.state, message.panel);
     if (message.type === "hello") {
       view.mount = message.mount;
+      view.twilight = message.twilight_deg;
       view.session = message.session; // the pad's moves name it: they stop if this page goes
       $("traffic-off").hidden = message.traffic_enabled;
       $("traffic").tBodies[0].replaceChildren();
@@ -248,7 +250,9 @@ function connect() {
     }
     if (message.type === "update" && message.mount) { view.mount = message.mount; renderMount(); }
     if (message.state) { view.state = message.state; renderState(); }
-    Chart.update({ mount: view.mount, state: view.state, sky: message.sky, frame: message.sky_frame });
+    Chart.update({
+      mount: view.mount, state: view.state, sky: message.sky, frame: message.sky_frame, twilight: view.twilight,
+    });
     if (message.sky) renderSelection();
     appendTraffic(message.traffic);
   });

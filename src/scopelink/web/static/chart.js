@@ -10,7 +10,7 @@ import { loadSky, loadTrack, sky } from "./chart/data.js";
 import { placeLabels } from "./chart/labels.js";
 import {
   drawBackground, drawConstellations, drawDeepSky, drawGrid, drawGround, drawMilkyWay,
-  drawNamedObjects, drawStars, palettes,
+  drawNamedObjects, drawStars, palettes, skyLimit,
 } from "./chart/layers.js";
 import { drawLimits, drawMarkers, drawPaths, drawSunZone } from "./chart/overlay.js";
 import { attachControls, buildToolbar, followMount, loadField, view } from "./chart/view.js";
@@ -20,7 +20,7 @@ const LABEL_AREA_PX2 = 7000; // at most one label per this much canvas
 const SCREEN_MARGIN_PX = 20;
 const FOLLOW_STEP_PX = 2; // a followed mount is re-centred once it is this far off the centre
 
-const data = { mount: null, state: null, sky: [], selected: null, frame: null, track: null };
+const data = { mount: null, state: null, sky: [], selected: null, frame: null, track: null, twilight: null };
 const hooks = { onSelect: () => {} };
 const chart = { canvas: null, ctx: null, width: 0, height: 0, field: loadField(), twilight: "" };
 let cache = null; // the J2000 layers turned into the sky of data.frame
@@ -82,6 +82,7 @@ function scene() {
     // Without adaptive resampling, for dense outlines (the Milky Way): twice as fast.
     rough: make(0),
     sunAlt: data.state && data.state.sun ? data.state.sun.alt : null,
+    twilight: data.twilight, // the server's boundaries (web/almanac.py), {phase: degrees}
     project: (p) => projection(p),
     // Screen position of a [lon, lat] point (v: its unit vector, if known), or null when off the view.
     screen(p, v = null) {
@@ -113,7 +114,7 @@ function baseKey(s) {
   return [
     view.alt, view.az, view.fov, chart.width, chart.height, s.c === palettes.night, r(zenith[0]), r(zenith[1]),
     Math.round((sun.alt || 0) * 4), r(sun.alt), r(sun.az), sun.radius_deg, countData(), data.sky.length,
-    limits ? JSON.stringify(limits.horizon) + limits.max_altitude_deg : "",
+    limits ? JSON.stringify(limits.horizon) + limits.max_altitude_deg : "", data.twilight ? 1 : 0,
   ].join("|");
 }
 
@@ -256,10 +257,10 @@ const Chart = {
     loadSky(() => schedule());
     refreshTrack();
   },
-  // Any of {mount, state, sky, frame} from the live connection; draws if that changes the view.
+  // Any of {mount, state, sky, frame, twilight} from the live connection; draws if that changes the view.
   update(changes) {
     const before = targetKey(data.state);
-    for (const key of ["mount", "state", "sky", "frame"]) if (changes[key] !== undefined) data[key] = changes[key];
+    for (const key of ["mount", "state", "sky", "frame", "twilight"]) if (changes[key] !== undefined) data[key] = changes[key];
     if (targetKey(data.state) !== before) refreshTrack(); // a new target may have a new track
     if (chart.ctx) followMount(mountAltAz(), FOLLOW_STEP_PX / scene().pxPerDeg);
     schedule();
@@ -276,6 +277,8 @@ const Chart = {
     get ctx() { return chart.ctx; },
     get size() { return chart.width; },
     report: () => report,
+    // The faintest magnitude the sky lets through with the Sun at `sunAlt` (the server's twilight).
+    skyLimit: (sunAlt) => skyLimit(sunAlt, data.twilight),
     // The mean time of `n` full drawings (sky layers included), in milliseconds.
     benchmark(n = 5) {
       const started = performance.now();

@@ -49,12 +49,18 @@ export function skyColour(sunAlt, colours) {
 
 // The faintest magnitude the sky's brightness lets through: none by day, 8 by night, linear in
 // the Sun's depth in between (about 3.8 at the end of civil twilight, 5.9 of nautical).
-export function skyLimit(sunAlt) {
-  if (sunAlt == null) return 99;
-  if (sunAlt > -0.833) return -99;
-  return 2 + ((Math.min(18, -sunAlt) - 0.833) / (18 - 0.833)) * 6;
+// `twilight`: the server's boundaries ({phase: the Sun's altitude it holds above}, the hello's
+// twilight_deg from web/almanac.py); unknown, like the Sun, the sky hides nothing.
+export function skyLimit(sunAlt, twilight) {
+  if (sunAlt == null || !twilight) return 99;
+  const sunset = twilight.day, dark = twilight["astronomical twilight"];
+  if (sunAlt > sunset) return -99;
+  return 2 + ((Math.max(dark, sunAlt) - sunset) / (dark - sunset)) * 6;
 }
-const DEEP_SKY_DARKNESS = 6; // deep-sky objects and the Milky Way only once the Sun is 6° down
+// Deep-sky objects and the Milky Way only once the Sun is down by the end of civil twilight (6°).
+function tooBright(scene) {
+  return scene.sunAlt != null && !!scene.twilight && scene.sunAlt > scene.twilight["civil twilight"];
+}
 
 export function drawBackground(scene) {
   const { ctx, path, c } = scene;
@@ -64,7 +70,7 @@ export function drawBackground(scene) {
 
 export function drawMilkyWay(scene, levels) {
   const { ctx, roughPath, c } = scene;
-  if (scene.sunAlt != null && scene.sunAlt > -DEEP_SKY_DARKNESS) return 0;
+  if (tooBright(scene)) return 0;
   ctx.fillStyle = c.milkyway;
   for (const coordinates of levels) {
     ctx.beginPath(); roughPath({ type: "MultiPolygon", coordinates }); ctx.fill();
@@ -105,7 +111,7 @@ export function drawGrid(scene) {
 export function drawConstellations(scene, lines, names) {
   const { ctx, path, c } = scene;
   ctx.strokeStyle = c.constellation; ctx.lineWidth = 1;
-  ctx.globalAlpha = skyLimit(scene.sunAlt) < 0 ? 0.4 : 1; // faint by day
+  ctx.globalAlpha = skyLimit(scene.sunAlt, scene.twilight) < 0 ? 0.4 : 1; // faint by day
   ctx.beginPath();
   for (const [, coordinates] of lines) path({ type: "MultiLineString", coordinates });
   ctx.stroke();
@@ -142,7 +148,7 @@ function nearby(near, vectors, i, ra, dec) {
 // stars: a flat [ra, dec, mag, ...] list, brightest first; vectors: their J2000 unit vectors.
 export function drawStars(scene, stars, vectors, near) {
   const { ctx, c } = scene;
-  const limit = Math.min(starLimit(scene.fov), skyLimit(scene.sunAlt));
+  const limit = Math.min(starLimit(scene.fov), skyLimit(scene.sunAlt, scene.twilight));
   ctx.fillStyle = c.star;
   let count = 0;
   for (let i = 0; 3 * i < stars.length; i++) {
@@ -198,7 +204,7 @@ function deepSkySymbol(ctx, type, x, y, rx, ry, angle) {
 export function drawDeepSky(scene, objects, near) {
   const { ctx, c } = scene;
   const limit = deepSkyLimit(scene.fov);
-  if (scene.sunAlt != null && scene.sunAlt > -DEEP_SKY_DARKNESS) return { count: 0, clickable: [], labels: [] };
+  if (tooBright(scene)) return { count: 0, clickable: [], labels: [] };
   const pxPerDeg = scene.pxPerDeg;
   const clickable = [], labels = [];
   ctx.lineWidth = 1.1;
