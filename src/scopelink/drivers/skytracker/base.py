@@ -207,19 +207,31 @@ class SkyTrackerBase(Mount):
         *,
         first: Reply | None = None,
         expected: Reply | None = None,
+        known: Callable[[], Reply | None] | None = None,
     ) -> Reply:
         """The reply to ``command``, trusted: the status byte, the two ``k`` bytes and the ``s``
         floats have no redundancy (a garbled one still reads as some value), so a reply that is
         not ``expected`` (or with nothing expected) is read again until two readings in a row
-        agree, at most three readings; then :class:`BadReplyError`."""
+        agree, at most three readings; then :class:`BadReplyError`.
+
+        ``known`` gives the driver's own record of the value *now*, asked after each reading:
+        the status the driver's own presses and releases left (each confirmed by an ``R`` in
+        its turn), which may change between two readings of this check. A reading equal to it
+        is trusted as ``expected`` is (docs/drivers-skytracker.md, "The status check")."""
+
+        def trusted(reply: Reply) -> bool:
+            return (expected is not None and reply == expected) or (
+                known is not None and reply == known()
+            )
+
         reply = first if first is not None else await line.ask(command, priority)
         assert reply is not None
-        if expected is not None and reply == expected:
+        if trusted(reply):
             return reply
         for _ in range(2):
             again = await line.ask(command, priority)
             assert again is not None
-            if again == reply or (expected is not None and again == expected):
+            if again == reply or trusted(again):
                 if again != reply:
                     logger.info(
                         "garbled reply to %s: %s, then %s", command.describe(), reply, again

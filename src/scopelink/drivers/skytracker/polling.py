@@ -100,9 +100,15 @@ class SkyTrackerPolling(SkyTrackerConnection):
         return self._status
 
     async def _read_status(self, line: SkyTrackerLine, priority: Priority) -> Reply:
-        """``R``; a status other than the last one is read again (the byte has no redundancy)."""
-        last = StatusReply(self._status) if self._status is not None else None
-        return await self._read_agreed(line, ReadStatus(), priority, expected=last)
+        """``R``; a status other than the driver's record is read again (the byte has no
+        redundancy). The record is asked after every reading: the driver's own presses (the
+        custom-rate loop's, a move, a pulse) change the pressed arrows and the mode between two
+        readings, and each leaves its confirmed status as the record."""
+
+        def recorded() -> Reply | None:
+            return StatusReply(self._status) if self._status is not None else None
+
+        return await self._read_agreed(line, ReadStatus(), priority, known=recorded)
 
     async def wait_for_goto(self, timeout_s: float | None = None) -> MountState:
         """Poll ``R`` until the GOTO bit clears (TRACK follows), then refresh everything."""
