@@ -141,6 +141,10 @@ def utc_day_seconds(moment: datetime) -> tuple[float, float, float]:
     of an aware datetime: ``seconds / length`` is the day fraction of :func:`utc_jd` (ERFA's
     quasi Julian date), and within one UTC day UT1 = JD(0h) + (seconds + DUT1) / 86400 exactly
     (``erfa.utcut1``, leap-second days included)."""
+    global _last_day_seconds  # noqa: PLW0603 - a one-entry cache: one reading, two conversions
+    last = _last_day_seconds
+    if last is not None and last[0] is moment:  # a datetime is immutable: the same object
+        return last[1]
     offset = moment.utcoffset()
     if offset is None:
         raise ValueError(
@@ -153,7 +157,11 @@ def utc_day_seconds(moment: datetime) -> tuple[float, float, float]:
     # erfa.dtf2d's own expression, term for term (the same doubles): a poll's datetime costs a
     # cached day and one division instead of three ufunc calls.
     seconds = 60.0 * float(60 * utc.hour + utc.minute) + (utc.second + utc.microsecond * 1e-6)
+    _last_day_seconds = (moment, (day_jd, seconds, day_seconds))
     return day_jd, seconds, day_seconds
+
+
+_last_day_seconds: tuple[datetime, tuple[float, float, float]] | None = None
 
 
 @functools.lru_cache(maxsize=16)
