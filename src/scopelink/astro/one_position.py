@@ -2,12 +2,19 @@
 
 numpy and ERFA's ufuncs cost microseconds per call on single floats, which is most of the cost
 of converting one reading. Here the star-independent part is computed by ERFA once and kept as
-floats: the geocentric context (``erfa.apci13``) for 1 s, the observer's (``erfa.apco13``) for
-10 s with the Earth rotation angle advanced in closed form. The star-dependent steps are ERFA's
-own (light deflection by the Sun, annual aberration, bias-precession-nutation, Earth rotation,
-polar motion, diurnal aberration, the horizon frame), written out in floats; refraction is
-:class:`~scopelink.astro.refraction.RefractionModel`'s. ``tests/astro/test_astro_one_position.py``
-holds them to the array path (``erfa.atciqz``/``atioq``) within a milliarcsecond.
+floats: the geocentric context (``erfa.apci13``: precession-nutation, the Earth's position and
+velocity) for 1 s, the site's (``erfa.apio13``: Earth rotation, polar motion, diurnal aberration)
+for 10 s with the Earth rotation angle advanced in closed form. The star-dependent steps are
+ERFA's own, written out in floats: light deflection by the Sun, annual aberration and
+bias-precession-nutation to CIRS (``erfa.atciqz``), then Earth rotation, polar motion, diurnal
+aberration and the horizon frame (``erfa.atioq``); refraction is
+:class:`~scopelink.astro.refraction.RefractionModel`'s. One reading's CIRS direction serves both
+its alt/az and its RA/Dec of date.
+
+This is ERFA's CIRS route to the observed place (``atci13`` + ``atio13``); the array path goes
+through the site's own context (``apco13``: the site's velocity in the annual aberration). The two
+differ by the product of the two aberrations, 0.03 mas; ``tests/astro/test_astro_one_position.py``
+holds them within 1 mas of each other.
 
 :func:`~scopelink.astro.j2000_to_observed` and :func:`~scopelink.astro.j2000_to_apparent` come
 here for one float position at one aware ``datetime``; anything else takes the array path.
@@ -23,12 +30,11 @@ from typing import Any
 import erfa
 import numpy as np
 
-from scopelink.astro._arrays import FloatArray, as_float_array
 from scopelink.astro.refraction import RefractionModel
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import tt_pair, utc_day_seconds
 
-__all__ = ["apparent_of_j2000", "observed_of_j2000", "observer_context"]
+__all__ = ["GEOCENTRIC_REUSE_S", "OBSERVER_REUSE_S", "apparent_of_j2000", "observed_of_j2000"]
 
 GEOCENTRIC_REUSE_S = 1.0
 """A geocentric context serves instants up to 1 s away unchanged: in 1 s precession moves
@@ -154,11 +160,26 @@ def _geocentric(moment: datetime) -> _Geocentric:
     return cached
 
 
+_last_cirs: tuple[float, float, _Geocentric, _Vector] | None = None
+
+
+def _cirs(ra_hours: float, dec_deg: float, context: _Geocentric) -> _Vector:
+    """The CIRS direction of a J2000 position in ``context``: computed once for a reading's
+    alt/az and RA/Dec of date (the same position in the same context)."""
+    global _last_cirs  # noqa: PLW0603 - a one-entry cache: one reading, two conversions
+    last = _last_cirs
+    if last is not None and last[2] is context and last[0] == ra_hours and last[1] == dec_deg:
+        return last[3]
+    vector = context.natural.of_date(ra_hours, dec_deg)
+    _last_cirs = (ra_hours, dec_deg, context, vector)
+    return vector
+
+
 def apparent_of_j2000(ra_hours: float, dec_deg: float, moment: datetime) -> tuple[float, float]:
     """Apparent RA (hours, [0, 24)) and Dec (degrees) of date of one J2000 position at
     ``moment``: :func:`~scopelink.astro.j2000_to_apparent` in floats."""
     context = _geocentric(moment)
-    x, y, z = context.natural.of_date(ra_hours, dec_deg)
+    x, y, z = _cirs(ra_hours, dec_deg, context)
     across = x * x + y * y
     ra = math.atan2(y, x) if across != 0.0 else 0.0
     dec = math.atan2(z, math.sqrt(across)) if z != 0.0 else 0.0
@@ -169,28 +190,6 @@ def apparent_of_j2000(ra_hours: float, dec_deg: float, moment: datetime) -> tupl
 # --- the observer's context: observed alt/az --------------------------------------------------
 
 
-def observer_context(
-    utc1: FloatArray, utc2: FloatArray, site: Site, ut1_minus_utc_s: float
-) -> tuple[Any, FloatArray]:
-    """ERFA's star-independent context for ``site`` at UTC ``utc1 + utc2`` (``erfa.apco13``,
-    its refraction off: ours is applied to the altitude) and the equation of the origins."""
-    astrom, equation_of_origins = erfa.apco13(
-        utc1,
-        utc2,
-        ut1_minus_utc_s,
-        np.radians(site.longitude_deg),
-        np.radians(site.latitude_deg),
-        site.elevation_m,
-        0.0,  # polar motion x
-        0.0,  # polar motion y
-        0.0,  # pressure: ERFA refraction off, ours is applied to the altitude
-        site.temperature_c,
-        site.relative_humidity,
-        site.wavelength_um,
-    )
-    return astrom, as_float_array(equation_of_origins)
-
-
 @dataclass(frozen=True, slots=True)
 class _Observer:
     site: Site
@@ -199,9 +198,9 @@ class _Observer:
     seconds: float
     local_era: float
     """The local Earth rotation angle (ERA + longitude) at ``seconds``."""
-    natural: _Natural
     polar_motion: _Matrix
     diurnal: float
+    """The site's speed about the Earth's axis in units of c (``erfa.apio13``'s ``diurab``)."""
     sin_latitude: float
     cos_latitude: float
     refraction: RefractionModel
@@ -209,8 +208,20 @@ class _Observer:
     @classmethod
     def at(cls, moment: datetime, site: Site, ut1_minus_utc_s: float) -> _Observer:
         day_jd, seconds, day_seconds = utc_day_seconds(moment)
-        utc1, utc2 = np.asarray(day_jd), np.asarray(seconds / day_seconds)
-        astrom, _ = observer_context(utc1, utc2, site, ut1_minus_utc_s)
+        astrom = erfa.apio13(
+            day_jd,
+            seconds / day_seconds,
+            ut1_minus_utc_s,
+            math.radians(site.longitude_deg),
+            math.radians(site.latitude_deg),
+            site.elevation_m,
+            0.0,  # polar motion x
+            0.0,  # polar motion y
+            0.0,  # pressure: ERFA refraction off, ours is applied to the altitude
+            site.temperature_c,
+            site.relative_humidity,
+            site.wavelength_um,
+        )
         sin_x, cos_x = math.sin(float(astrom["xpl"])), math.cos(float(astrom["xpl"]))
         sin_y, cos_y = math.sin(float(astrom["ypl"])), math.cos(float(astrom["ypl"]))
         polar_motion = (
@@ -230,7 +241,6 @@ class _Observer:
             day_jd,
             seconds,
             float(astrom["eral"]),
-            _Natural.of(astrom),
             polar_motion,
             float(astrom["diurab"]),
             float(astrom["sphi"]),
@@ -267,8 +277,8 @@ def observed_of_j2000(
     """Observed (altitude, azimuth) in degrees of one J2000 position at ``moment`` and
     ``site``: :func:`~scopelink.astro.j2000_to_observed` in floats (``ut1_minus_utc_s`` checked
     by the caller)."""
+    x, y, z = _cirs(ra_hours, dec_deg, _geocentric(moment))
     context, seconds = _observer(moment, site, ut1_minus_utc_s)
-    x, y, z = context.natural.of_date(ra_hours, dec_deg)
     # Within one UTC day UT1 advances with UTC's seconds (utc_day_seconds): ERA is linear in it.
     era = context.local_era + _ERA_RAD_PER_UT1_S * (seconds - context.seconds)
     cos_era, sin_era = math.cos(era), math.sin(era)
