@@ -2,9 +2,9 @@
 
 numpy and ERFA's ufuncs cost microseconds per call on single floats, which is most of the cost
 of converting one reading. Here the star-independent part is computed by ERFA once and kept as
-floats: the geocentric context (``erfa.apci13``: precession-nutation, the Earth's position and
-velocity) for 1 s, the site's (``erfa.apio13``: Earth rotation, polar motion, diurnal aberration)
-for 10 s with the Earth rotation angle advanced in closed form. The star-dependent steps are
+floats for 10 s: the geocentric context (``erfa.apci13``: precession-nutation, the Earth's
+position and velocity) and the site's (``erfa.apio13``: Earth rotation, polar motion, diurnal
+aberration), its Earth rotation angle advanced in closed form. The star-dependent steps are
 ERFA's own, written out in floats: light deflection by the Sun, annual aberration and
 bias-precession-nutation to CIRS (``erfa.atciqz``), then Earth rotation, polar motion, diurnal
 aberration and the horizon frame (``erfa.atioq``); refraction is
@@ -13,8 +13,8 @@ its alt/az and its RA/Dec of date.
 
 This is ERFA's CIRS route to the observed place (``atci13`` + ``atio13``); the array path goes
 through the site's own context (``apco13``: the site's velocity in the annual aberration). The two
-differ by the product of the two aberrations, 0.03 mas; ``tests/astro/test_astro_one_position.py``
-holds them within 1 mas of each other.
+differ by second-order terms of the two aberrations, 0.2 mas at most;
+``tests/astro/test_astro_one_position.py`` holds them within 1 mas of each other.
 
 :func:`~scopelink.astro.j2000_to_observed` and :func:`~scopelink.astro.j2000_to_apparent` come
 here for one float position at one aware ``datetime``; anything else takes the array path.
@@ -37,13 +37,14 @@ from scopelink.astro.timescales import tt_pair, utc_day_seconds
 __all__ = ["GEOCENTRIC_REUSE_S", "OBSERVER_REUSE_S", "apparent_of_j2000", "observed_of_j2000"]
 
 GEOCENTRIC_REUSE_S = 1.0
-"""A geocentric context serves instants up to 1 s away unchanged: in 1 s precession moves
-2e-6 arcsec, nutation 1e-6, annual aberration 4e-6, far below the 0.077 arcsec of the finest
-SynScan unit. It has no Earth rotation in it, so one context serves every site."""
+"""The array path's geocentric context (``frames``) serves instants up to 1 s away unchanged: in
+1 s precession moves 2e-6 arcsec, nutation 1e-6, annual aberration 4e-6. It has no Earth
+rotation in it, so one context serves every site."""
 OBSERVER_REUSE_S = 10.0
-"""An observer context serves instants up to 10 s away with only the Earth rotation angle
-advanced (as ``erfa.aper13`` does): precession-nutation, annual aberration and the site's
-velocity change by well under a milliarcsecond in that time."""
+"""A context serves instants up to 10 s away, the Earth rotation angle advanced (as
+``erfa.aper13`` does): the array path's observer context (``horizontal``) and both of this
+module's. In 10 s precession moves 2e-5 arcsec, nutation 3e-5, annual aberration 4e-5 and the
+site's velocity less: well under a milliarcsecond."""
 
 _SCHWARZSCHILD_AU = erfa.SRS
 """The Sun's Schwarzschild radius in au (ERFA's constant, for deflection and aberration)."""
@@ -151,7 +152,7 @@ def _geocentric(moment: datetime) -> _Geocentric:
     if (
         cached is not None
         and cached.day_jd == day_jd
-        and abs(seconds - cached.seconds) <= GEOCENTRIC_REUSE_S
+        and abs(seconds - cached.seconds) <= OBSERVER_REUSE_S
     ):
         return cached
     astrom, equation_of_origins = erfa.apci13(*tt_pair(moment))
