@@ -23,7 +23,7 @@ import numpy.typing as npt
 from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
 from scopelink.astro.angles import wrap_degrees, wrap_hour_angle
 from scopelink.astro.frames import radec_public, radec_radians
-from scopelink.astro.one_position import OBSERVER_REUSE_S, observed_of_j2000
+from scopelink.astro.one_position import OBSERVER_REUSE_S, erfa_site, observed_of_j2000
 from scopelink.astro.refraction import RefractionModel
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import ScalarTime, TimeLike, check_ut1_minus_utc, utc_pair
@@ -89,20 +89,7 @@ def _observer(t: TimeLike, site: Site, ut1_minus_utc_s: float) -> tuple[Any, Flo
 def _observer_now(
     utc1: FloatArray, utc2: FloatArray, site: Site, ut1_minus_utc_s: float
 ) -> tuple[Any, FloatArray]:
-    astrom, equation_of_origins = erfa.apco13(
-        utc1,
-        utc2,
-        ut1_minus_utc_s,
-        np.radians(site.longitude_deg),
-        np.radians(site.latitude_deg),
-        site.elevation_m,
-        0.0,  # polar motion x
-        0.0,  # polar motion y
-        0.0,  # pressure: ERFA refraction off, ours is applied to the altitude below
-        site.temperature_c,
-        site.relative_humidity,
-        site.wavelength_um,
-    )
+    astrom, equation_of_origins = erfa.apco13(utc1, utc2, ut1_minus_utc_s, *erfa_site(site))
     return astrom, as_float_array(equation_of_origins)
 
 

@@ -34,7 +34,13 @@ from scopelink.astro.refraction import RefractionModel
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import tt_pair, utc_day_seconds
 
-__all__ = ["GEOCENTRIC_REUSE_S", "OBSERVER_REUSE_S", "apparent_of_j2000", "observed_of_j2000"]
+__all__ = [
+    "GEOCENTRIC_REUSE_S",
+    "OBSERVER_REUSE_S",
+    "apparent_of_j2000",
+    "erfa_site",
+    "observed_of_j2000",
+]
 
 GEOCENTRIC_REUSE_S = 1.0
 """The array path's geocentric context (``frames``) serves instants up to 1 s away unchanged: in
@@ -191,6 +197,23 @@ def apparent_of_j2000(ra_hours: float, dec_deg: float, moment: datetime) -> tupl
 # --- the observer's context: observed alt/az --------------------------------------------------
 
 
+def erfa_site(site: Site) -> tuple[float, ...]:
+    """``site`` as ERFA's observer contexts (``apco13``, ``apio13``) take it after the time and
+    DUT1: longitude and latitude in radians, height, no polar motion, no pressure (ERFA's
+    refraction off: ours is applied to the altitude), temperature, humidity, wavelength."""
+    return (
+        math.radians(site.longitude_deg),
+        math.radians(site.latitude_deg),
+        site.elevation_m,
+        0.0,  # polar motion x
+        0.0,  # polar motion y
+        0.0,  # pressure
+        site.temperature_c,
+        site.relative_humidity,
+        site.wavelength_um,
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class _Observer:
     site: Site
@@ -209,20 +232,7 @@ class _Observer:
     @classmethod
     def at(cls, moment: datetime, site: Site, ut1_minus_utc_s: float) -> _Observer:
         day_jd, seconds, day_seconds = utc_day_seconds(moment)
-        astrom = erfa.apio13(
-            day_jd,
-            seconds / day_seconds,
-            ut1_minus_utc_s,
-            math.radians(site.longitude_deg),
-            math.radians(site.latitude_deg),
-            site.elevation_m,
-            0.0,  # polar motion x
-            0.0,  # polar motion y
-            0.0,  # pressure: ERFA refraction off, ours is applied to the altitude
-            site.temperature_c,
-            site.relative_humidity,
-            site.wavelength_um,
-        )
+        astrom = erfa.apio13(day_jd, seconds / day_seconds, ut1_minus_utc_s, *erfa_site(site))
         sin_x, cos_x = math.sin(float(astrom["xpl"])), math.cos(float(astrom["xpl"]))
         sin_y, cos_y = math.sin(float(astrom["ypl"])), math.cos(float(astrom["ypl"]))
         polar_motion = (
