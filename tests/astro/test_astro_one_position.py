@@ -131,3 +131,7 @@ def test_the_scalar_path_refuses_what_the_array_path_refuses() -> None:
         j2000_to_apparent(7.5, 12.0, naive)
     with pytest.raises(ValueError, match="UT1-UTC"):
         j2000_to_observed(7.5, 12.0, datetime.now(UTC), SITES[0], ut1_minus_utc_s=1.5)
+    when = datetime(2026, 11, 25, 2, 0, tzinfo=UTC)
+    for ra, dec in [(math.inf, 12.0), (7.5, -math.inf), (math.nan, 12.0)]:
+        assert all(math.isnan(v) for v in j2000_to_observed(ra, dec, when, SITES[0]))
+        assert all(math.isnan(v) for v in j2000_to_apparent(ra, dec, when))

@@ -94,7 +94,10 @@ class _Natural:
 
     def of_date(self, ra_hours: float, dec_deg: float) -> _Vector:
         """The unit vector of a J2000 (ICRS) position in the intermediate frame of date (CIRS):
-        light deflection by the Sun, annual aberration, then bias-precession-nutation."""
+        light deflection by the Sun, annual aberration, then bias-precession-nutation; NaNs for
+        a position that is not finite (as the array path gives)."""
+        if not (math.isfinite(ra_hours) and math.isfinite(dec_deg)):
+            return math.nan, math.nan, math.nan
         ra, dec = ra_hours * _RADIANS_PER_HOUR, math.radians(dec_deg)
         cos_dec = math.cos(dec)
         px, py, pz = math.cos(ra) * cos_dec, math.sin(ra) * cos_dec, math.sin(dec)
