@@ -131,12 +131,12 @@ class _Natural:
 
 
 def _vector(values: Any) -> _Vector:
-    x, y, z = (float(v) for v in np.asarray(values).reshape(3))
+    x, y, z = np.asarray(values, dtype=np.float64).reshape(3).tolist()
     return x, y, z
 
 
 def _matrix(values: Any) -> _Matrix:
-    a, b, c, d, e, f, g, h, i = (float(v) for v in np.asarray(values).reshape(9))
+    a, b, c, d, e, f, g, h, i = np.asarray(values, dtype=np.float64).reshape(9).tolist()
     return a, b, c, d, e, f, g, h, i
 
 
