@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from datetime import UTC, datetime, timedelta, timezone
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -121,6 +122,12 @@ def test_a_new_site_or_dut1_gets_its_own_context_at_once() -> None:
     moved = j2000_to_observed(7.5, 12.0, when, SITES[0], ut1_minus_utc_s=0.9)
     still = j2000_to_observed(7.5, 12.0, when, SITES[0])
     assert _apart_arcsec(*moved, *still) > 5.0
+
+
+def test_the_documented_reuse_window_is_the_code_s() -> None:
+    astronomy = (Path(__file__).resolve().parents[2] / "docs" / "astronomy.md").read_text()
+    assert f"floats for **{OBSERVER_REUSE_S:g} s**" in astronomy
+    assert "within **1 mas**" in astronomy
 
 
 def test_the_scalar_path_refuses_what_the_array_path_refuses() -> None:
