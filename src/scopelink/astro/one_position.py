@@ -154,9 +154,10 @@ class _Geocentric:
 _last_geocentric: _Geocentric | None = None
 
 
-def _geocentric(moment: datetime) -> _Geocentric:
+def _geocentric(moment: datetime, day_jd: float, seconds: float) -> _Geocentric:
+    """The geocentric context serving ``moment`` (``day_jd``, ``seconds``: its UTC day and
+    seconds, :func:`~scopelink.astro.timescales.utc_day_seconds`)."""
     global _last_geocentric  # noqa: PLW0603 - a one-entry cache of the most recent instant
-    day_jd, seconds, _ = utc_day_seconds(moment)
     cached = _last_geocentric
     if (
         cached is not None
@@ -188,7 +189,8 @@ def _cirs(ra_hours: float, dec_deg: float, context: _Geocentric) -> _Vector:
 def apparent_of_j2000(ra_hours: float, dec_deg: float, moment: datetime) -> tuple[float, float]:
     """Apparent RA (hours, [0, 24)) and Dec (degrees) of date of one J2000 position at
     ``moment``: :func:`~scopelink.astro.j2000_to_apparent` in floats."""
-    context = _geocentric(moment)
+    day_jd, seconds, _ = utc_day_seconds(moment)
+    context = _geocentric(moment, day_jd, seconds)
     x, y, z = _cirs(ra_hours, dec_deg, context)
     across = x * x + y * y
     ra = math.atan2(y, x) if across != 0.0 else 0.0
@@ -225,7 +227,8 @@ class _Observer:
     seconds: float
     local_era: float
     """The local Earth rotation angle (ERA + longitude) at ``seconds``."""
-    polar_motion: _Matrix
+    polar_motion: _Matrix | None
+    """None without polar motion (the identity)."""
     diurnal: float
     """The site's speed about the Earth's axis in units of c (``erfa.apio13``'s ``diurab``)."""
     sin_latitude: float
@@ -236,18 +239,22 @@ class _Observer:
     def at(cls, moment: datetime, site: Site, ut1_minus_utc_s: float) -> _Observer:
         day_jd, seconds, day_seconds = utc_day_seconds(moment)
         astrom = erfa.apio13(day_jd, seconds / day_seconds, ut1_minus_utc_s, *erfa_site(site))
-        sin_x, cos_x = math.sin(float(astrom["xpl"])), math.cos(float(astrom["xpl"]))
-        sin_y, cos_y = math.sin(float(astrom["ypl"])), math.cos(float(astrom["ypl"]))
-        polar_motion = (
-            cos_x,
-            0.0,
-            sin_x,
-            sin_x * sin_y,
-            cos_y,
-            -cos_x * sin_y,
-            -sin_x * cos_y,
-            sin_y,
-            cos_x * cos_y,
+        xpl, ypl = float(astrom["xpl"]), float(astrom["ypl"])
+        sin_x, cos_x, sin_y, cos_y = math.sin(xpl), math.cos(xpl), math.sin(ypl), math.cos(ypl)
+        polar_motion: _Matrix | None = (
+            None  # none given (erfa_site): the identity, skipped
+            if xpl == 0.0 and ypl == 0.0
+            else (
+                cos_x,
+                0.0,
+                sin_x,
+                sin_x * sin_y,
+                cos_y,
+                -cos_x * sin_y,
+                -sin_x * cos_y,
+                sin_y,
+                cos_x * cos_y,
+            )
         )
         return cls(
             site,
@@ -262,27 +269,26 @@ class _Observer:
             RefractionModel.for_site(site),
         )
 
-    def serves(self, day_jd: float, seconds: float, site: Site, ut1_minus_utc_s: float) -> bool:
-        return (
-            self.day_jd == day_jd
-            and abs(seconds - self.seconds) <= OBSERVER_REUSE_S
-            and (self.site is site or self.site == site)
-            and self.ut1_minus_utc_s == ut1_minus_utc_s
-        )
-
 
 _last_observer: _Observer | None = None
 
 
-def _observer(moment: datetime, site: Site, ut1_minus_utc_s: float) -> tuple[_Observer, float]:
-    """The observer's context serving ``moment``, and ``moment``'s UTC seconds of its day."""
+def _observer(
+    moment: datetime, day_jd: float, seconds: float, site: Site, ut1_minus_utc_s: float
+) -> _Observer:
+    """The site's context serving ``moment`` (``day_jd``, ``seconds`` as for _geocentric)."""
     global _last_observer  # noqa: PLW0603 - a one-entry cache of the most recent instant
-    day_jd, seconds, _ = utc_day_seconds(moment)
     cached = _last_observer
-    if cached is None or not cached.serves(day_jd, seconds, site, ut1_minus_utc_s):
+    if (
+        cached is None
+        or cached.day_jd != day_jd
+        or abs(seconds - cached.seconds) > OBSERVER_REUSE_S
+        or (cached.site is not site and cached.site != site)
+        or cached.ut1_minus_utc_s != ut1_minus_utc_s
+    ):
         cached = _Observer.at(moment, site, ut1_minus_utc_s)
         _last_observer = cached
-    return cached, seconds
+    return cached
 
 
 def observed_of_j2000(
@@ -291,18 +297,20 @@ def observed_of_j2000(
     """Observed (altitude, azimuth) in degrees of one J2000 position at ``moment`` and
     ``site``: :func:`~scopelink.astro.j2000_to_observed` in floats (``ut1_minus_utc_s`` checked
     by the caller)."""
-    x, y, z = _cirs(ra_hours, dec_deg, _geocentric(moment))
-    context, seconds = _observer(moment, site, ut1_minus_utc_s)
+    day_jd, seconds, _ = utc_day_seconds(moment)
+    x, y, z = _cirs(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
+    context = _observer(moment, day_jd, seconds, site, ut1_minus_utc_s)
     # Within one UTC day UT1 advances with UTC's seconds (utc_day_seconds): ERA is linear in it.
     era = context.local_era + _ERA_RAD_PER_UT1_S * (seconds - context.seconds)
     cos_era, sin_era = math.cos(era), math.sin(era)
     x, y = cos_era * x + sin_era * y, cos_era * y - sin_era * x  # CIRS -> (-HA, Dec)
     m = context.polar_motion
-    x, y, z = (
-        m[0] * x + m[1] * y + m[2] * z,
-        m[3] * x + m[4] * y + m[5] * z,
-        m[6] * x + m[7] * y + m[8] * z,
-    )
+    if m is not None:
+        x, y, z = (
+            m[0] * x + m[1] * y + m[2] * z,
+            m[3] * x + m[4] * y + m[5] * z,
+            m[6] * x + m[7] * y + m[8] * z,
+        )
     diurnal = context.diurnal
     shrink = 1.0 - diurnal * y
     x, y, z = shrink * x, shrink * (y + diurnal), shrink * z

@@ -67,7 +67,9 @@ LOOP_TRACKING_MODES = (TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING
 """Sidereal plus an RA offset, by the custom-rate loop (rates.py): it needs the Sky Commander's
 positions."""
 
-BOX_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
+BOX_TRACKING = (TrackerMode.TRACK, TrackerMode.GUIDE)
+"""The box's modes that track (a tuple: read on every publish, and a tuple's ``in`` compares by
+identity first, where a set would call ``Enum.__hash__``, Python code)."""
 
 NOTHING_PRESSED = Direction(0)
 
