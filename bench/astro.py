@@ -8,7 +8,8 @@ Two comparisons, each row the best of N repeats (the least disturbed by a shared
    frames and SkyCoord are built before the clock starts (only ``transform_to`` is timed).
 2. **One position per call at changing instants** (a mount poll, an emulator reply): each call a
    new position at a new instant. Ours at 0.5-s steps (a poll's cadence: the context is reused,
-   only the Earth rotation updated) and at 60-s steps (a fresh ERFA ``apco13`` every call);
+   only the Earth rotation updated) and at 60-s steps (fresh contexts every call: ERFA's
+   ``apci13`` + ``apio13``, the route of one float position, ``astro.one_position``);
    astropy with its frames built before the clock starts (its frame reused as far as astropy
    allows: a frame is tied to its obstime) and ``transform_to`` timed per call.
 
@@ -201,7 +202,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"   {'path':<56} {'us/call':>9}")
     for name, seconds in (
         ("scopelink, instants 0.5 s apart (context reused)", polled),
-        ("scopelink, instants 60 s apart (fresh apco13 each)", fresh),
+        ("scopelink, instants 60 s apart (fresh contexts each)", fresh),
         ("astropy transform_to, frames pre-built, 0.5 s apart", peer_single),
     ):
         print(f"   {name:<56} {seconds * 1e6:9.1f}")

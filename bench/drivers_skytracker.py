@@ -202,7 +202,14 @@ async def measure(sizes: Sizes, data_dir: Path, *, pace: bool) -> list[Row]:
                 driver_figure, peer_figure = await compare(
                     count, driver_refresh_exchanges, peer_refresh, measure_one
                 )
-                rows.insert(2, Row(REFRESH_EXCHANGES, driver_figure, peer_figure, goal=False))
+                # The bare refresh is measured twice (beside the refresh and beside its exchanges):
+                # both rows take the cheaper, so a burst of load on the bare client's blocks of
+                # one comparison cannot make the driver look better than it is.
+                refresh = rows[1]
+                assert refresh.what.startswith("refresh")
+                bare_refresh = min(refresh.peer, peer_figure)
+                rows[1] = Row(refresh.what, refresh.driver, bare_refresh, refresh.limit)
+                rows.insert(2, Row(REFRESH_EXCHANGES, driver_figure, bare_refresh, goal=False))
             await mount.disconnect()
     return rows
 

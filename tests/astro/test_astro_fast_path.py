@@ -49,17 +49,23 @@ def _separation_deg(
     return separation
 
 
+def _floats(pair: tuple[object, object]) -> tuple[float, float]:
+    return float(pair[0]), float(pair[1])  # type: ignore[arg-type]
+
+
 Convert = Callable[[float, float, datetime, Site], tuple[float, float]]
 
 
 def _one_by_one(
     convert: Convert, ra: npt.ArrayLike, dec: npt.ArrayLike, when: datetime, site: Site
 ) -> tuple[FloatArray, FloatArray]:
+    # 0-d arrays: ERFA's atciqz + atioq one position at a time (floats take the float path,
+    # astro.one_position, held to this one in test_astro_one_position.py).
     pairs = [
-        convert(float(r), float(d), when, site)
+        convert(np.asarray(r), np.asarray(d), when, site)  # type: ignore[arg-type]
         for r, d in zip(np.asarray(ra), np.asarray(dec), strict=True)
     ]
-    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+    return np.array([float(p[0]) for p in pairs]), np.array([float(p[1]) for p in pairs])
 
 
 @pytest.mark.parametrize("site", SITES, ids=lambda s: f"lat{s.latitude_deg:+.0f}")
@@ -125,12 +131,13 @@ def test_a_geocentric_context_reused_within_a_second_matches_a_fresh_one() -> No
     rng = np.random.default_rng(5)
     for seconds in (0.0, 0.013, 0.5, 0.999):
         when = WHEN + timedelta(seconds=seconds)
-        ra, dec = float(rng.uniform(0, 24)), float(rng.uniform(-89, 89))
+        # A 0-d RA: the array path and its context cache (floats have one_position's own).
+        ra, dec = np.asarray(rng.uniform(0, 24)), float(rng.uniform(-89, 89))
         frames._last_geocentric = None
         frames.j2000_to_apparent(ra, dec, WHEN)  # the context is computed here
-        reused = frames.j2000_to_apparent(ra, dec, when)
+        reused = _floats(frames.j2000_to_apparent(ra, dec, when))
         frames._last_geocentric = None
-        fresh = frames.j2000_to_apparent(ra, dec, when)
+        fresh = _floats(frames.j2000_to_apparent(ra, dec, when))
         assert abs(reused[1] - fresh[1]) * 3600 < 1e-5
         assert abs(reused[0] - fresh[0]) * 15 * 3600 * math.cos(math.radians(dec)) < 1e-5
         back = frames.apparent_to_j2000(*reused, when)

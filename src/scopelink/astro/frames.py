@@ -21,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
+from scopelink.astro.one_position import GEOCENTRIC_REUSE_S, apparent_of_j2000
 from scopelink.astro.timescales import ScalarTime, TimeLike, tt_pair, utc_pair
 
 __all__ = [
@@ -53,11 +54,7 @@ def radec_public(
     return scalar_or_array(hours), scalar_or_array(np.degrees(as_float_array(dec_rad)))
 
 
-_REUSE_WITHIN_DAYS = 1.0 / 86400.0
-"""A geocentric context (``erfa.apci13``: precession-nutation, the Earth's position and velocity)
-serves instants up to 1 s away unchanged: in 1 s precession moves 2e-6 arcsec, nutation 1e-6,
-annual aberration 4e-6, far below the 0.077 arcsec of the finest SynScan unit. It has no Earth
-rotation in it, so one entry serves every site."""
+_REUSE_WITHIN_DAYS = GEOCENTRIC_REUSE_S / 86400.0
 
 _last_geocentric: tuple[tuple[bool, float], Any, FloatArray] | None = None
 
@@ -93,6 +90,10 @@ def j2000_to_apparent(
     ra_hours: npt.ArrayLike, dec_deg: npt.ArrayLike, t: TimeLike
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """J2000 (ICRS) RA/Dec -> apparent RA/Dec of date (true equator and equinox)."""
+    ra_one: object = ra_hours
+    dec_one: object = dec_deg
+    if isinstance(ra_one, float) and isinstance(dec_one, float) and isinstance(t, datetime):
+        return apparent_of_j2000(ra_one, dec_one, t)  # a poll's: one position, in floats
     astrom, equation_of_origins = _geocentric(t)
     ra, dec = radec_radians(ra_hours, dec_deg)
     cirs_ra, cirs_dec = erfa.atciqz(ra, dec, astrom)

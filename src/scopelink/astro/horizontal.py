@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any, overload
 
 import erfa
@@ -22,6 +23,7 @@ import numpy.typing as npt
 from scopelink.astro._arrays import FloatArray, FloatOrArray, as_float_array, scalar_or_array
 from scopelink.astro.angles import wrap_degrees, wrap_hour_angle
 from scopelink.astro.frames import radec_public, radec_radians
+from scopelink.astro.one_position import OBSERVER_REUSE_S, erfa_site, observed_of_j2000
 from scopelink.astro.refraction import RefractionModel
 from scopelink.astro.site import Site
 from scopelink.astro.timescales import ScalarTime, TimeLike, check_ut1_minus_utc, utc_pair
@@ -38,10 +40,7 @@ __all__ = [
 _HOURS_PER_RADIAN = 12.0 / np.pi
 
 
-_REUSE_WITHIN_DAYS = 10.0 / 86400.0
-"""An observer context computed for one instant serves instants up to 10 s away with only the
-Earth rotation angle updated (``erfa.aper13``): precession-nutation, annual aberration and the
-site's velocity change by well under a milliarcsecond in that time."""
+_REUSE_WITHIN_DAYS = OBSERVER_REUSE_S / 86400.0
 
 
 @dataclass(slots=True)
@@ -90,20 +89,7 @@ def _observer(t: TimeLike, site: Site, ut1_minus_utc_s: float) -> tuple[Any, Flo
 def _observer_now(
     utc1: FloatArray, utc2: FloatArray, site: Site, ut1_minus_utc_s: float
 ) -> tuple[Any, FloatArray]:
-    astrom, equation_of_origins = erfa.apco13(
-        utc1,
-        utc2,
-        ut1_minus_utc_s,
-        np.radians(site.longitude_deg),
-        np.radians(site.latitude_deg),
-        site.elevation_m,
-        0.0,  # polar motion x
-        0.0,  # polar motion y
-        0.0,  # pressure: ERFA refraction off, ours is applied to the altitude below
-        site.temperature_c,
-        site.relative_humidity,
-        site.wavelength_um,
-    )
+    astrom, equation_of_origins = erfa.apco13(utc1, utc2, ut1_minus_utc_s, *erfa_site(site))
     return astrom, as_float_array(equation_of_origins)
 
 
@@ -196,6 +182,11 @@ def j2000_to_observed(
     ut1_minus_utc_s: float = 0.0,
 ) -> tuple[FloatOrArray, FloatOrArray]:
     """J2000 (ICRS) RA/Dec -> observed (altitude, azimuth) in degrees at ``site``."""
+    ra_one: object = ra_hours
+    dec_one: object = dec_deg
+    if isinstance(ra_one, float) and isinstance(dec_one, float) and isinstance(t, datetime):
+        check_ut1_minus_utc(ut1_minus_utc_s)
+        return observed_of_j2000(ra_one, dec_one, t, site, ut1_minus_utc_s)  # a poll's
     astrom, _ = _observer(t, site, ut1_minus_utc_s)
     ra, dec = radec_radians(ra_hours, dec_deg)
     if _one_observer(astrom, ra) or _one_observer(astrom, dec):

@@ -82,17 +82,27 @@ class RefractionModel:
     def amount_scalar_deg(self, altitude: float) -> float:
         """:meth:`amount_deg` for one altitude, with ``math`` (a poll's single position costs
         a tenth of the array path's overhead); the same formula, term for term."""
+        # Outside the blend one term has weight 0: skipping it gives the same double (both
+        # terms are finite, so 1 * a + 0 * b == a).
+        if altitude >= BLEND_HIGH_DEG:
+            return self._erfa_deg(altitude)
+        if altitude <= BLEND_LOW_DEG:
+            return self._horizon_deg(altitude)
         x = min(max((altitude - BLEND_LOW_DEG) / (BLEND_HIGH_DEG - BLEND_LOW_DEG), 0.0), 1.0)
         weight = x * x * (3.0 - 2.0 * x)
+        return weight * self._erfa_deg(altitude) + (1.0 - weight) * self._horizon_deg(altitude)
+
+    def _erfa_deg(self, altitude: float) -> float:
         erfa_altitude = math.radians(min(max(altitude, BLEND_LOW_DEG), 90.0))
         tan_z = math.cos(erfa_altitude) / math.sin(erfa_altitude)
-        erfa_rad = (self.a_rad + self.b_rad * tan_z * tan_z) * tan_z
+        return math.degrees((self.a_rad + self.b_rad * tan_z * tan_z) * tan_z)
+
+    def _horizon_deg(self, altitude: float) -> float:
         horizon_altitude = min(max(altitude, LOWEST_MODELLED_DEG), BLEND_HIGH_DEG)
         bennett_arcmin = 1.0 / math.tan(
             math.radians(horizon_altitude + 7.31 / (horizon_altitude + 4.4))
         )
-        horizon_deg = self.horizon_scale * bennett_arcmin / 60.0
-        return weight * math.degrees(erfa_rad) + (1.0 - weight) * horizon_deg
+        return self.horizon_scale * bennett_arcmin / 60.0
 
     def amount_deg(self, observed_alt_deg: npt.ArrayLike) -> FloatArray:
         """Refraction in degrees (observed minus true altitude) at an observed altitude."""
@@ -121,7 +131,7 @@ class RefractionModel:
     def refract(self, true_alt_deg: npt.ArrayLike) -> FloatArray:
         """Observed altitude for a true altitude: the exact inverse of :meth:`unrefract`."""
         if isinstance(true_alt_deg, float | int) or np.ndim(true_alt_deg) == 0:
-            return np.asarray(self._refract_scalar(float(true_alt_deg)))  # type: ignore[arg-type]
+            return np.asarray(self.refract_scalar_deg(float(true_alt_deg)))  # type: ignore[arg-type]
         true = as_float_array(true_alt_deg)
         observed = true + self.amount_deg(true)
         # Below LOWEST_MODELLED_DEG the refraction is constant, so there true + R is exact.
@@ -177,7 +187,11 @@ class RefractionModel:
         )
         return amount, slope
 
-    def _refract_scalar(self, true: float) -> float:
+    def refract_scalar_deg(self, true: float) -> float:
+        """:meth:`refract` for one altitude, in floats (the plain fixed point ``observed = true +
+        R(observed)`` to 1e-12 degrees); ``true`` itself when refraction is off."""
+        if not self.horizon_scale and not self.a_rad and not self.b_rad:
+            return true
         observed = true + self.amount_scalar_deg(true)
         for _ in range(_MAX_ITERATIONS):
             updated = true + self.amount_scalar_deg(observed)

@@ -40,6 +40,7 @@ __all__ = [
     "tai_minus_utc_s",
     "tt_jd",
     "ut1_jd",
+    "utc_day_seconds",
     "utc_jd",
 ]
 
@@ -131,6 +132,19 @@ def utc_pair(t: TimeLike) -> tuple[FloatArray, FloatArray]:
 
 
 def _utc_pair_from_datetime(moment: datetime) -> tuple[FloatArray, FloatArray]:
+    day_jd, seconds, day_seconds = utc_day_seconds(moment)
+    return np.asarray(day_jd), np.asarray(seconds / day_seconds)
+
+
+def utc_day_seconds(moment: datetime) -> tuple[float, float, float]:
+    """(Julian date of the UTC day's 0h, UTC seconds since then, the day's length in SI seconds)
+    of an aware datetime: ``seconds / length`` is the day fraction of :func:`utc_jd` (ERFA's
+    quasi Julian date), and within one UTC day UT1 = JD(0h) + (seconds + DUT1) / 86400 exactly
+    (``erfa.utcut1``, leap-second days included)."""
+    global _last_day_seconds  # noqa: PLW0603 - a one-entry cache: one reading, two conversions
+    last = _last_day_seconds
+    if last is not None and last[0] is moment:  # a datetime is immutable: the same object
+        return last[1]
     offset = moment.utcoffset()
     if offset is None:
         raise ValueError(
@@ -138,13 +152,16 @@ def _utc_pair_from_datetime(moment: datetime) -> tuple[FloatArray, FloatArray]:
             "e.g. datetime(..., tzinfo=timezone.utc) or "
             "moment.replace(tzinfo=zoneinfo.ZoneInfo(...))"
         )
-    utc = moment.astimezone(UTC)
-    seconds = utc.second + utc.microsecond * 1e-6
+    utc = moment.astimezone(UTC) if offset else moment  # a zero offset: the fields are UTC's
     day_jd, day_seconds = _utc_day(utc.year, utc.month, utc.day)
     # erfa.dtf2d's own expression, term for term (the same doubles): a poll's datetime costs a
     # cached day and one division instead of three ufunc calls.
-    fraction = (60.0 * float(60 * utc.hour + utc.minute) + seconds) / day_seconds
-    return np.asarray(day_jd), np.asarray(fraction)
+    seconds = 60.0 * float(60 * utc.hour + utc.minute) + (utc.second + utc.microsecond * 1e-6)
+    _last_day_seconds = (moment, (day_jd, seconds, day_seconds))
+    return day_jd, seconds, day_seconds
+
+
+_last_day_seconds: tuple[datetime, tuple[float, float, float]] | None = None
 
 
 @functools.lru_cache(maxsize=16)

@@ -9,6 +9,7 @@ The layer between the state cache and the checked commands of :class:`~scopelink
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from datetime import datetime
 
@@ -49,6 +50,8 @@ class PointedMount(StateCache):
         super().__init__(clock=clock)
         self._sync_frame = SyncFrame()
         self._pointing = PointingCorrection()
+        self._model_frame = ModelFrame(equatorial=False, latitude_deg=math.nan)
+        """The pointing model's frame as last given (a NaN latitude: none yet)."""
 
     @property
     def site(self) -> Site:
@@ -83,7 +86,11 @@ class PointedMount(StateCache):
 
     def _corrected(self, state: MountState) -> MountState:
         equatorial = self.capabilities.alignment_mode is not AlignmentMode.ALT_AZ
-        self._pointing.set_frame(ModelFrame(equatorial, self._site.latitude_deg))
+        frame = self._model_frame
+        if frame.equatorial is not equatorial or frame.latitude_deg != self._site.latitude_deg:
+            # Once per change of the mount's kind or the site (not per reading).
+            frame = self._model_frame = ModelFrame(equatorial, self._site.latitude_deg)
+        self._pointing.set_frame(frame)
         self._pointing.observe_alignment(state)
         return self._pointing.correct(state, self._site)
 

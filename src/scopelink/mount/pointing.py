@@ -132,7 +132,7 @@ class PointingCorrection:
         """The mount's kind and latitude (the model is refitted when they change). Syncs taken
         at another latitude are dropped from use (their record is left alone: a command run with
         another configured site must not wipe the model of the observatory's)."""
-        if frame == self._frame:
+        if frame is self._frame or frame == self._frame:  # once per reading: identity first
             return
         self._frame = frame
         known = self._latitude_deg

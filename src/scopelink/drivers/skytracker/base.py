@@ -67,9 +67,38 @@ LOOP_TRACKING_MODES = (TrackingMode.LUNAR, TrackingMode.SOLAR, TrackingMode.KING
 """Sidereal plus an RA offset, by the custom-rate loop (rates.py): it needs the Sky Commander's
 positions."""
 
-BOX_TRACKING = {TrackerMode.TRACK, TrackerMode.GUIDE}
+BOX_TRACKING = (TrackerMode.TRACK, TrackerMode.GUIDE)
+"""The box's modes that track (a tuple: read on every publish, and a tuple's ``in`` compares by
+identity first, where a set would call ``Enum.__hash__``, Python code)."""
 
 NOTHING_PRESSED = Direction(0)
+
+
+def capabilities_for(*, commander: bool) -> Capabilities:
+    """What a Sky Tracker can do, with or without a Sky Commander on its bus (GOTO, syncs and
+    the custom tracking rates need its positions)."""
+    return Capabilities(
+        alignment_mode=AlignmentMode.ALT_AZ,
+        can_goto=commander,
+        can_goto_altaz=False,
+        can_sync=commander,
+        can_park=False,
+        can_set_park=False,
+        can_pulse_guide=True,
+        can_move_axis=(True, True),
+        max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
+        tracking_modes=frozenset(
+            {TrackingMode.OFF, *TRACKING_MODES, *(LOOP_TRACKING_MODES if commander else ())}
+        ),
+        max_tracking_offset_arcsec_s=MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S if commander else 0.0,
+        can_set_site=True,
+        can_set_time=False,
+        can_report_pier_side=False,
+    )
+
+
+_WITH_COMMANDER = capabilities_for(commander=True)
+_WITHOUT_COMMANDER = capabilities_for(commander=False)
 
 
 def pointing_of(reply: object, read_at: datetime, site: Site) -> Pointing:
@@ -145,27 +174,9 @@ class SkyTrackerBase(Mount):
 
     @property
     def capabilities(self) -> Capabilities:
-        commander = self._commander_present is not False
-        return Capabilities(
-            alignment_mode=AlignmentMode.ALT_AZ,
-            can_goto=commander,
-            can_goto_altaz=False,
-            can_sync=commander,
-            can_park=False,
-            can_set_park=False,
-            can_pulse_guide=True,
-            can_move_axis=(True, True),
-            max_axis_rate_deg_s=UTILITY_ARROW_ARCSEC_S / 3600.0,
-            tracking_modes=frozenset(
-                {TrackingMode.OFF, *TRACKING_MODES, *(LOOP_TRACKING_MODES if commander else ())}
-            ),
-            max_tracking_offset_arcsec_s=MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S
-            if commander
-            else 0.0,
-            can_set_site=True,
-            can_set_time=False,
-            can_report_pier_side=False,
-        )
+        # Read on every publish (the pointing correction asks the alignment mode): one object
+        # per value of the one thing it depends on, so it can never be stale.
+        return _WITH_COMMANDER if self._commander_present is not False else _WITHOUT_COMMANDER
 
     @property
     def identity(self) -> Identity:
@@ -262,23 +273,31 @@ class SkyTrackerBase(Mount):
     def _publish_now(self) -> MountState:
         position = self._position
         status = self._status
-        pulsing = Direction(0)
+        # The arrows as plain ints: IntFlag arithmetic costs a microsecond per operation, and
+        # this runs on every poll.
+        pulsing = 0
         for direction, _ in self._pulses.values():
-            pulsing |= direction
+            pulsing |= int(direction)
         if self._loop_on and not self._held:  # arrows pressed now are the loop's (or pulses)
-            pulsing = ~Direction(0)
-        pressed = status.directions if status is not None else Direction(0)
+            pulsing = ~0
+        pressed = int(status.directions) if status is not None else 0
         line = self._line
         read_at, received_s = self._status_at
+        if position is None:
+            ra = dec = ra_of_date = dec_of_date = alt = az = position_received_s = None
+        else:
+            ra, dec = position.ra_j2000_hours, position.dec_j2000_deg
+            alt, az, ra_of_date, dec_of_date = position.compute()
+            position_received_s = position.received_s
         state = MountState(
             read_at=read_at,
             connected=line is not None and not line.link.closed and not self._link_lost,
-            ra_j2000_hours=position.ra_j2000_hours if position else None,
-            dec_j2000_deg=position.dec_j2000_deg if position else None,
-            ra_of_date_hours=position.ra_of_date_hours if position else None,
-            dec_of_date_deg=position.dec_of_date_deg if position else None,
-            alt_deg=position.alt_deg if position else None,
-            az_deg=position.az_deg if position else None,
+            ra_j2000_hours=ra,
+            dec_j2000_deg=dec,
+            ra_of_date_hours=ra_of_date,
+            dec_of_date_deg=dec_of_date,
+            alt_deg=alt,
+            az_deg=az,
             slewing=self._mode is TrackerMode.GOTO or bool(pressed & ~pulsing),
             tracking=self._tracking_choice if self._mode in BOX_TRACKING else TrackingMode.OFF,
             parked=False,
@@ -286,7 +305,7 @@ class SkyTrackerBase(Mount):
             pulse_guiding=bool(self._pulses),
             problems=self._problems + self._loop_problems,
             received_s=received_s,
-            position_received_s=position.received_s if position else None,
+            position_received_s=position_received_s,
         )
         self._publish(state)
         return state

@@ -58,6 +58,9 @@ __all__ = ["SkyCommanderMount"]
 
 logger = logging.getLogger(__name__)
 
+_CAPABILITIES = Capabilities(alignment_mode=AlignmentMode.ALT_AZ, can_sync=True, can_set_site=True)
+"""A Sky Commander alone: positions and syncs, the same whatever it answers (read per publish)."""
+
 
 class SkyCommanderMount(Mount):
     """A Sky Commander on ``link`` (a serial port, ``tcp://HOST:PORT``, a pty path).
@@ -108,7 +111,7 @@ class SkyCommanderMount(Mount):
 
     @property
     def capabilities(self) -> Capabilities:
-        return Capabilities(alignment_mode=AlignmentMode.ALT_AZ, can_sync=True, can_set_site=True)
+        return _CAPABILITIES
 
     @property
     def identity(self) -> Identity:
