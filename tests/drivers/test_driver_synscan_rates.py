@@ -12,7 +12,8 @@ from scopelink.astro import angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.drivers.synscan.rates import RateLoopStatistics
 from scopelink.mount import GuideDirection, NotSupportedError, TrackingMode
-from scopelink.servers.synscan import SynScanConfig
+from scopelink.protocol.synscan import AnyCommand, AnyReply, FixedRateSlew, SetTrackingMode
+from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, SimClock
 from tests.support.rates import loop_anchor
 from tests.support.synscan_driver import START, rig
@@ -38,6 +39,78 @@ def _truth_error_arcsec(
     ideal_dec = start[2] + dec_arcsec_s * dt / 3600.0
     ra, dec = sim_j2000
     return 3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
+
+
+def _record_commands(emulator: SynScanEmulator) -> list[AnyCommand]:
+    """Every command the emulated hand control answers from now on, in order (observed, not
+    changed: the real handler answers each)."""
+    seen: list[AnyCommand] = []
+    answer = emulator.hand_control.answer
+
+    async def recorded(command: AnyCommand) -> AnyReply:
+        seen.append(command)
+        return await answer(command)
+
+    emulator.hand_control.answer = recorded  # type: ignore[method-assign]
+    return seen
+
+
+UPDATES = [(32.0, -6.0), (28.0, -10.0), (33.0, -7.0), (30.0, -9.0), (31.0, -8.0)]
+"""A rate update every 0.3 s of real time (3 s of the mount's): a satellite's every second at
+3x the pace."""
+
+
+@pytest.mark.solo
+async def test_rate_updates_change_the_running_loop_without_stopping_it() -> None:
+    """A new rate while the loop runs: no axis stop, no tracking hand-back, the target going on
+    from where it was (issue #16: at a satellite's 1 s updates the restarts lost ground)."""
+    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
+        await r.mount.goto_equatorial(7.5, 35.0)
+        await r.mount.wait_for_slew(timeout_s=15.0)
+        async with r.mount.watching():
+            await r.mount.set_tracking_rates(30.0, -8.0)
+            _, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
+            await asyncio.sleep(2.0)  # 20 s of the mount's: four loop time constants
+            commands = _record_commands(r.emulator)
+            # The ideal: integrated piecewise from the loop's start, each piece from the
+            # update's time on the mount's clock.
+            pieces = [(t0, ra0, dec0, 30.0, -8.0)]
+
+            def ideal(t: float) -> tuple[float, float]:
+                start, ra, dec, ra_rate, dec_rate = next(p for p in reversed(pieces) if p[0] <= t)
+                return ra + ra_rate * (t - start) / 54000.0, dec + dec_rate * (t - start) / 3600.0
+
+            errors: list[float] = []
+
+            def sample() -> None:
+                t = r.sim.elapsed()
+                (ra, dec), (ideal_ra, ideal_dec) = r.sim.j2000_at(t), ideal(t)
+                errors.append(
+                    3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
+                )
+
+            for ra_rate, dec_rate in UPDATES:
+                t = r.sim.elapsed()
+                pieces.append((t, *ideal(t), ra_rate, dec_rate))
+                await r.mount.set_tracking_rates(ra_rate, dec_rate)
+                for _ in range(6):
+                    await asyncio.sleep(0.05)
+                    sample()
+            assert _running(r.mount)
+        stops = [c for c in commands if isinstance(c, FixedRateSlew) and c.rate == 0]
+        hand_backs = [c for c in commands if isinstance(c, SetTrackingMode)]
+        worst = max(errors)
+        print(
+            f"{len(UPDATES)} rate updates: truth max {worst:.2f}″ across them, "
+            f"{r.mount.rate_updates} taken by the running loop, {len(commands)} commands"
+        )
+        assert not stops, f"an axis was stopped between updates: {stops}"
+        assert not hand_backs, f"tracking was handed back between updates: {hand_backs}"
+        assert r.mount.rate_updates == len(UPDATES)
+        assert worst < 5.0, f"{worst:.2f}″ off the integrated target across an update ({errors})"
+        await r.mount.set_tracking_rates(0.0, 0.0)
+        assert not _running(r.mount)
+        assert not r.mount.guard.rate_motions
 
 
 @pytest.mark.solo
@@ -119,6 +192,8 @@ async def test_a_client_that_leaves_takes_its_rates_with_it() -> None:
         async with r.mount.watching(), r.mount.motion_client("phone"):
             await r.mount.set_tracking_rates(10.0, 10.0)
             assert _running(r.mount)
+            await r.mount.set_tracking_rates(12.0, 8.0)  # the running loop takes it: still its
+            assert r.mount.rate_updates == 1
         assert not _running(r.mount)
         assert r.mount.tracking_rates.zero
         assert r.sim.tracking is TrackingMode.SIDEREAL

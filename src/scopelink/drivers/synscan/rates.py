@@ -18,7 +18,7 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from datetime import datetime
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
@@ -28,12 +28,14 @@ from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
     GuideDirection,
     InvalidValueError,
+    LimitError,
     MountAxis,
     MountError,
     MountState,
     Priority,
     TrackingMode,
 )
+from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
@@ -90,6 +92,28 @@ def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
+@dataclass(frozen=True, slots=True)
+class LoopTarget:
+    """The loop's integrated target: J2000 RA (h) and Dec (°) at ``since_s`` (seconds of the
+    mount's clock after the loop began), moving at ``rates`` from there. A rate update moves the
+    anchor to where the target is then (:meth:`moved_to`), so the target never jumps."""
+
+    since_s: float
+    ra_hours: float
+    dec_deg: float
+    rates: TrackingRates
+
+    def at(self, t_s: float) -> tuple[float, float]:
+        dt = t_s - self.since_s
+        return self.ra_hours + self.rates.ra_hours_per_s * dt, self.dec_deg + (
+            self.rates.dec_deg_per_s * dt
+        )
+
+    def moved_to(self, t_s: float, rates: TrackingRates) -> LoopTarget:
+        """The same target from ``t_s`` on, at ``rates``."""
+        return LoopTarget(t_s, *self.at(t_s), rates)
+
+
 class SynScanRates(SynScanParking):
     """Custom tracking rates by a PC loop (module docstring); between parking and the commands."""
 
@@ -105,6 +129,11 @@ class SynScanRates(SynScanParking):
     _loop_shifts: GuideShifts | None = None
     _loop_drive: tuple[TrackingRates, float, float] | None = None
     """The loop's rates in force and the last errors (RA, Dec degrees): to drive between polls."""
+    _loop_target: LoopTarget | None = None
+    _loop_owner: MotionClient | None = None
+    """Who set the rates last: the owner of the loop's axes for the dead-man."""
+    rate_updates = 0
+    """Rate changes the running loop took without a restart (all loops of this driver)."""
     _loop_clock: tuple[datetime, float] | None = None
     """The loop's start on the mount clock and on the PC's (``loop.time()``)."""
     rate_loop_statistics: RateLoopStatistics | None = None
@@ -158,8 +187,49 @@ class SynScanRates(SynScanParking):
         return self._loop_mode is not None
 
     async def _set_tracking_rates(self, rates: TrackingRates) -> None:
+        mode = self._loop_mode
+        if (
+            mode is not None
+            and self._rate_loop is not None
+            and self._loop_still_ours()
+            and not (rates.zero and mode in HAND_CONTROL_MODES)
+        ):
+            await self._change_loop_rates(rates.plus_mode(mode))
+            return
         await self._end_custom_rates()
         await self._start_custom_rates(rates)
+
+    async def _change_loop_rates(self, rates: TrackingRates) -> None:
+        """New rates for the running loop, without stopping it (a satellite's updates every
+        second): its target goes on from where it is now at the new rates, and the axes get
+        the new rates at once. The axis rates are checked by the horizon guard first, as a
+        loop's first rates are: one heading out at a limit is refused, nothing changed."""
+        assert self._loop_drive is not None
+        assert self._loop_target is not None
+        statistics = self.rate_loop_statistics
+        assert statistics is not None
+        _, ra_error, dec_error = self._loop_drive
+        wanted = self._axis_rates_for(self._with_pulses(rates), ra_error, dec_error)
+        changed = {
+            axis: rate
+            for axis, rate in wanted.items()
+            if (self._loop_rates or {}).get(axis) != rate
+        }
+        for axis, rate in changed.items():
+            try:
+                self._guard.check_move(axis, rate, self.state)
+            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
+                self._guard.check_move(axis, rate, await self.refresh())
+        if self._loop_target is None or not self._loop_still_ours():
+            return  # ended meanwhile (a goto, an abort): the rates are recorded, not started
+        self._loop_target = self._loop_target.moved_to(self._loop_time_s()[0], rates)
+        self._loop_drive = (rates, ra_error, dec_error)
+        self._loop_owner = current_client()
+        self.rate_updates += 1
+        await self._drive_now(statistics)
+        if self._loop_still_ours():  # the axes are the new owner's, changed or not
+            for axis, rate in (self._loop_rates or {}).items():
+                self._guard.motion_commanded(axis, rate)
 
     async def _start_custom_rates(
         self, rates: TrackingRates | None = None, mode: TrackingMode | None = None
@@ -179,7 +249,8 @@ class SynScanRates(SynScanParking):
         self._loop_mode = mode
         self._loop_rates = {}
         self._loop_taken = False
-        anchor = (state, state.ra_j2000_hours, state.dec_j2000_deg)
+        self._loop_owner = current_client()
+        self._loop_target = LoopTarget(0.0, state.ra_j2000_hours, state.dec_j2000_deg, rates)
         statistics = RateLoopStatistics(
             started_at=state.read_at, anchor=(state.ra_j2000_hours, state.dec_j2000_deg)
         )
@@ -196,7 +267,7 @@ class SynScanRates(SynScanParking):
         finally:
             self._loop_starting = False
         self._rate_loop = asyncio.create_task(
-            self._run(rates, anchor, statistics), name="synscan custom tracking rates"
+            self._run(state, statistics), name="synscan custom tracking rates"
         )
 
     def _axis_rates_for(
@@ -253,7 +324,9 @@ class SynScanRates(SynScanParking):
                     with self._stops_owed_on_failure(axes={axis}):
                         await self._ask_passthrough(command)
                     self._axis_rates[axis] = rate
-                    self._guard.motion_commanded(axis, rate)
+                    owner = self._loop_owner
+                    with self.acting_for(owner.token if owner is not None else None):
+                        self._guard.motion_commanded(axis, rate)
             self._loop_rates[axis] = rate
             statistics.commands += 1
 
@@ -276,13 +349,7 @@ class SynScanRates(SynScanParking):
             return False
         return all(self._axis_rates.get(axis) == rate for axis, rate in self._loop_rates.items())
 
-    async def _run(
-        self,
-        rates: TrackingRates,
-        anchor: tuple[MountState, float, float],
-        statistics: RateLoopStatistics,
-    ) -> None:
-        first, ra0, dec0 = anchor
+    async def _run(self, first: MountState, statistics: RateLoopStatistics) -> None:
         try:
             async with aclosing(self.states()) as states:
                 async for state in states:
@@ -295,12 +362,15 @@ class SynScanRates(SynScanParking):
                     dt -= self._reading_lag_s(first, state, dt)
                     shifts = self._loop_shifts or GuideShifts()
                     ra_shift, dec_shift = shifts.at(dt)
-                    target_ra = ra0 + rates.ra_hours_per_s * dt + ra_shift
-                    target_dec = dec0 + rates.dec_deg_per_s * dt + dec_shift
-                    ra_error = wrap_signed_degrees((target_ra - state.ra_j2000_hours) * 15.0)
-                    dec_error = target_dec - state.dec_j2000_deg
+                    target = self._loop_target
+                    assert target is not None
+                    target_ra, target_dec = target.at(dt)
+                    ra_error = wrap_signed_degrees(
+                        (target_ra + ra_shift - state.ra_j2000_hours) * 15.0
+                    )
+                    dec_error = target_dec + dec_shift - state.dec_j2000_deg
                     statistics.add_error(_sky_error_arcsec(ra_error, dec_error, state))
-                    self._loop_drive = (rates, ra_error, dec_error)
+                    self._loop_drive = (target.rates, ra_error, dec_error)
                     await self._drive_now(statistics)
         except MountError as error:
             logger.warning("%s: custom tracking rates: %s", self.wire.name, error)
@@ -326,12 +396,17 @@ class SynScanRates(SynScanParking):
         """Drive at the rates in force, the running pulses and the last errors."""
         assert self._loop_drive is not None
         rates, ra_error, dec_error = self._loop_drive
+        await self._drive(
+            self._axis_rates_for(self._with_pulses(rates), ra_error, dec_error), statistics
+        )
+
+    def _with_pulses(self, rates: TrackingRates) -> TrackingRates:
+        """``rates`` plus the guide pulses running now."""
         t, _ = self._loop_time_s()
         ra_pulse, dec_pulse = (self._loop_shifts or GuideShifts()).rates_at(t)
-        with_pulses = TrackingRates(
+        return TrackingRates(
             rates.ra_arcsec_per_s + ra_pulse * 54000.0, rates.dec_arcsec_per_s + dec_pulse * 3600.0
         )
-        await self._drive(self._axis_rates_for(with_pulses, ra_error, dec_error), statistics)
 
     async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
         """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it (its
