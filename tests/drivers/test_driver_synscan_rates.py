@@ -11,12 +11,11 @@ import pytest
 from scopelink.astro import angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.drivers.synscan.rates import RateLoopStatistics
-from scopelink.mount import GuideDirection, NotSupportedError, TrackingMode
-from scopelink.protocol.synscan import AnyCommand, AnyReply, FixedRateSlew, SetTrackingMode
-from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
-from scopelink.sim import AZ_GTI, SimClock
+from scopelink.mount import GuideDirection, TrackingMode
+from scopelink.protocol.synscan import FixedRateSlew, SetTrackingMode
+from scopelink.sim import SimClock
 from tests.support.rates import loop_anchor
-from tests.support.synscan_driver import START, rig
+from tests.support.synscan_driver import START, record_commands, rig
 
 SPEED_UP = 10.0
 """Simulated seconds per real second (the emulator's simulator costs CPU per rate command)."""
@@ -41,20 +40,6 @@ def _truth_error_arcsec(
     return 3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
 
 
-def _record_commands(emulator: SynScanEmulator) -> list[AnyCommand]:
-    """Every command the emulated hand control answers from now on, in order (observed, not
-    changed: the real handler answers each)."""
-    seen: list[AnyCommand] = []
-    answer = emulator.hand_control.answer
-
-    async def recorded(command: AnyCommand) -> AnyReply:
-        seen.append(command)
-        return await answer(command)
-
-    emulator.hand_control.answer = recorded  # type: ignore[method-assign]
-    return seen
-
-
 UPDATES = [(32.0, -6.0), (28.0, -10.0), (33.0, -7.0), (30.0, -9.0), (31.0, -8.0)]
 """A rate update every 0.3 s of real time (3 s of the mount's): a satellite's every second at
 3x the pace."""
@@ -71,7 +56,7 @@ async def test_rate_updates_change_the_running_loop_without_stopping_it() -> Non
             await r.mount.set_tracking_rates(30.0, -8.0)
             _, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
             await asyncio.sleep(2.0)  # 20 s of the mount's: four loop time constants
-            commands = _record_commands(r.emulator)
+            commands = record_commands(r.emulator)
             # The ideal: integrated piecewise from the loop's start, each piece from the
             # update's time on the mount's clock.
             pieces = [(t0, ra0, dec0, 30.0, -8.0)]
@@ -198,13 +183,6 @@ async def test_a_client_that_leaves_takes_its_rates_with_it() -> None:
         assert r.mount.tracking_rates.zero
         assert r.sim.tracking is TrackingMode.SIDEREAL
         assert not r.mount.guard.rate_motions
-
-
-async def test_an_alt_az_hand_control_refuses_custom_rates() -> None:
-    async with rig("tcp", model=AZ_GTI, config=SynScanConfig(model=165)) as r:
-        assert r.mount.capabilities.max_tracking_offset_arcsec_s == 0.0
-        with pytest.raises(NotSupportedError, match="custom rates"):
-            await r.mount.set_tracking_rates(1.0, 0.0)
 
 
 async def test_a_goto_ends_the_loop_and_is_never_overridden() -> None:

@@ -18,16 +18,14 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import dataclass, replace
-from datetime import datetime
+from dataclasses import dataclass
+from datetime import datetime, timedelta
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
-from scopelink.drivers.synscan.base import AXES, MAX_GUIDE_RATE_DEG_S
+from scopelink.drivers.synscan.base import AXES
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
-    GuideDirection,
-    InvalidValueError,
     LimitError,
     MountAxis,
     MountError,
@@ -40,15 +38,16 @@ from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
     TrackingRates,
-    pulse_joining_loop,
 )
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
 __all__ = [
     "LOOP_GAIN_PER_S",
     "MAX_CORRECTION_ARCSEC_S",
+    "LoopTarget",
     "RateLoopStatistics",
     "SynScanRates",
+    "quantised",
 ]
 
 logger = logging.getLogger(__name__)
@@ -75,16 +74,18 @@ LOOP_MODES = frozenset(
         TrackingMode.LUNAR,
         TrackingMode.SOLAR,
         TrackingMode.KING,
+        TrackingMode.ALT_AZ,
     }
 )
-"""The modes the loop runs in: sidereal and PEC with custom rates; lunar, solar and King always
-(the hand control has none of them: sidereal plus their RA offset)."""
+"""The modes the loop runs in: sidereal, PEC and alt-az with custom rates; lunar, solar and King
+always (the hand control has none of them: sidereal plus their RA offset)."""
 
-HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
-"""The equatorial modes the hand control tracks in by itself."""
+HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC, TrackingMode.ALT_AZ})
+"""The modes the hand control tracks in by itself (alt-az: an alt-az mount's)."""
 
 
-def _quantised(arcsec_per_s: float) -> float:
+def quantised(arcsec_per_s: float) -> float:
+    """A rate (arcsec/s) rounded to the variable-rate slew's ¼″/s step."""
     return round(arcsec_per_s / QUANTUM_ARCSEC_S) * QUANTUM_ARCSEC_S
 
 
@@ -161,26 +162,6 @@ class SynScanRates(SynScanParking):
         if self._loop_mode is not None and not (self._loop_starting or self._loop_joining):
             self._loop_taken = True
 
-    _guide_rate_dec_deg_s: float | None = None
-
-    @property
-    def guide_rates_deg_s(self) -> tuple[float, float]:
-        """(RA, Dec) pulse-guide rates (°/s): ``guide_rate_deg_s`` unless Dec's was set apart."""
-        dec = self._guide_rate_dec_deg_s
-        return self.guide_rate_deg_s, self.guide_rate_deg_s if dec is None else dec
-
-    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
-        """Pulse-guide rates (°/s) in RA and Dec, each within (0, 10x sidereal]: the hand
-        control's rate slews take ¼″/s steps (the PC times the pulses)."""
-        for name, value in (("RA", ra_deg_s), ("Dec", dec_deg_s)):
-            if not (isinstance(value, int | float) and 0.0 < value <= MAX_GUIDE_RATE_DEG_S):
-                raise InvalidValueError(
-                    f"{name} guide rate {value!r}°/s must lie in (0, {MAX_GUIDE_RATE_DEG_S:.5f}] "
-                    "(10x sidereal)"
-                )
-        self.guide_rate_deg_s = float(ra_deg_s)
-        self._guide_rate_dec_deg_s = float(dec_deg_s)
-
     @property
     def custom_rates_running(self) -> bool:
         """Whether the PC loop drives the axes now."""
@@ -209,7 +190,9 @@ class SynScanRates(SynScanParking):
         statistics = self.rate_loop_statistics
         assert statistics is not None
         _, ra_error, dec_error = self._loop_drive
-        wanted = self._axis_rates_for(self._with_pulses(rates), ra_error, dec_error)
+        t = self._loop_time_s()[0]
+        target = self._loop_target.moved_to(t, rates)
+        wanted = self._axis_rates_for(target, self._with_pulses(rates), ra_error, dec_error)
         changed = {
             axis: rate
             for axis, rate in wanted.items()
@@ -222,7 +205,11 @@ class SynScanRates(SynScanParking):
                 self._guard.check_move(axis, rate, await self.refresh())
         if self._loop_target is None or not self._loop_still_ours():
             return  # ended meanwhile (a goto, an abort): the rates are recorded, not started
-        self._loop_target = self._loop_target.moved_to(self._loop_time_s()[0], rates)
+        self._loop_target = self._loop_target.moved_to(t, rates)
+        # The statistics' anchor: where and when the target is integrated from at these rates.
+        assert self._loop_clock is not None
+        statistics.started_at = self._loop_clock[0] + timedelta(seconds=t)
+        statistics.anchor = (self._loop_target.ra_hours, self._loop_target.dec_deg)
         self._loop_drive = (rates, ra_error, dec_error)
         self._loop_owner = current_client()
         self.rate_updates += 1
@@ -260,7 +247,8 @@ class SynScanRates(SynScanParking):
         self._loop_clock = (state.read_at, asyncio.get_running_loop().time())
         self._loop_starting = True
         try:
-            await self._drive(self._axis_rates_for(rates, 0.0, 0.0), statistics, first=True)
+            first = self._axis_rates_for(self._loop_target, rates, 0.0, 0.0)
+            await self._drive(first, statistics, first=True)
         except BaseException:
             await self._end_custom_rates(force=True)
             raise
@@ -271,9 +259,10 @@ class SynScanRates(SynScanParking):
         )
 
     def _axis_rates_for(
-        self, rates: TrackingRates, ra_error_deg: float, dec_error_deg: float
+        self, target: LoopTarget, rates: TrackingRates, ra_error_deg: float, dec_error_deg: float
     ) -> dict[MountAxis, float]:
-        """Axis rates (°/s, signed as the driver's rate slews) for the rates and the errors."""
+        """Axis rates (°/s, signed as the driver's rate slews) for the rates (with the guide
+        pulses running) and the errors; ``target`` is the loop's (an alt-az loop's path)."""
         hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
         ra_arcsec = rates.ra_arcsec_per_s + _clamp(
             LOOP_GAIN_PER_S * ra_error_deg * 3600.0, MAX_CORRECTION_ARCSEC_S
@@ -285,8 +274,8 @@ class SynScanRates(SynScanParking):
         primary = hemisphere * (SIDEREAL_RATE_DEG_S * 3600.0 - ra_arcsec)
         dec_sign = -hemisphere if self._pier_side is PierSide.WEST else hemisphere
         return {
-            MountAxis.PRIMARY: _quantised(primary) / 3600.0,
-            MountAxis.SECONDARY: _quantised(dec_sign * dec_arcsec) / 3600.0,
+            MountAxis.PRIMARY: quantised(primary) / 3600.0,
+            MountAxis.SECONDARY: quantised(dec_sign * dec_arcsec) / 3600.0,
         }
 
     async def _drive(
@@ -360,17 +349,11 @@ class SynScanRates(SynScanParking):
                     assert state.dec_j2000_deg is not None
                     dt = (state.read_at - first.read_at).total_seconds()
                     dt -= self._reading_lag_s(first, state, dt)
-                    shifts = self._loop_shifts or GuideShifts()
-                    ra_shift, dec_shift = shifts.at(dt)
                     target = self._loop_target
                     assert target is not None
-                    target_ra, target_dec = target.at(dt)
-                    ra_error = wrap_signed_degrees(
-                        (target_ra + ra_shift - state.ra_j2000_hours) * 15.0
-                    )
-                    dec_error = target_dec + dec_shift - state.dec_j2000_deg
-                    statistics.add_error(_sky_error_arcsec(ra_error, dec_error, state))
-                    self._loop_drive = (target.rates, ra_error, dec_error)
+                    first_error, second_error, sky = self._loop_errors(target, state, dt)
+                    statistics.add_error(sky)
+                    self._loop_drive = (target.rates, first_error, second_error)
                     await self._drive_now(statistics)
         except MountError as error:
             logger.warning("%s: custom tracking rates: %s", self.wire.name, error)
@@ -382,6 +365,20 @@ class SynScanRates(SynScanParking):
                 # After the command that took over, which has the wire before the hand-back.
                 with contextlib.suppress(MountError):  # a failed stop is owed, sent later
                     await asyncio.shield(self._hand_back())
+
+    def _loop_errors(
+        self, target: LoopTarget, state: MountState, dt: float
+    ) -> tuple[float, float, float]:
+        """The reading's errors against the target ``dt`` s after the loop began (the guide
+        pulses' shifts added): RA and Dec (°) as :meth:`_axis_rates_for` takes them, and the
+        error on the sky (arcsec)."""
+        assert state.ra_j2000_hours is not None
+        assert state.dec_j2000_deg is not None
+        ra_shift, dec_shift = (self._loop_shifts or GuideShifts()).at(dt)
+        target_ra, target_dec = target.at(dt)
+        ra_error = wrap_signed_degrees((target_ra + ra_shift - state.ra_j2000_hours) * 15.0)
+        dec_error = target_dec + dec_shift - state.dec_j2000_deg
+        return ra_error, dec_error, _sky_error_arcsec(ra_error, dec_error, state)
 
     def _loop_time_s(self) -> tuple[float, float]:
         """Seconds since the loop started on the mount's clock, and the mount clock's rate
@@ -395,9 +392,11 @@ class SynScanRates(SynScanParking):
     async def _drive_now(self, statistics: RateLoopStatistics) -> None:
         """Drive at the rates in force, the running pulses and the last errors."""
         assert self._loop_drive is not None
-        rates, ra_error, dec_error = self._loop_drive
+        assert self._loop_target is not None
+        rates, first_error, second_error = self._loop_drive
+        target, with_pulses = self._loop_target, self._with_pulses(rates)
         await self._drive(
-            self._axis_rates_for(self._with_pulses(rates), ra_error, dec_error), statistics
+            self._axis_rates_for(target, with_pulses, first_error, second_error), statistics
         )
 
     def _with_pulses(self, rates: TrackingRates) -> TrackingRates:
@@ -407,54 +406,6 @@ class SynScanRates(SynScanParking):
         return TrackingRates(
             rates.ra_arcsec_per_s + ra_pulse * 54000.0, rates.dec_arcsec_per_s + dec_pulse * 3600.0
         )
-
-    async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
-        """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it (its
-        guide rate on top of the loop's, the target moved along: docs/tracking.md)."""
-        await pulse_joining_loop(self, super().pulse_guide, direction, duration_ms)
-
-    async def _pulse_into_loop(
-        self, axis: MountAxis, axis_rate_deg_s: float, duration_ms: int
-    ) -> None:
-        """The guide rate on ``axis`` added to the loop's for ``duration_ms`` (PC time), and the
-        loop's target moved along with it, so the loop keeps the correction."""
-        statistics, shifts = self.rate_loop_statistics, self._loop_shifts
-        assert statistics is not None
-        assert shifts is not None
-        hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
-        arcsec = axis_rate_deg_s * 3600.0
-        if axis is MountAxis.PRIMARY:  # the polar axis turning faster: RA decreasing
-            ra_rate, dec_rate = -hemisphere * arcsec / 54000.0, 0.0
-        else:
-            dec_sign = -hemisphere if self._pier_side is PierSide.WEST else hemisphere
-            ra_rate, dec_rate = 0.0, dec_sign * arcsec / 3600.0
-        previous = self._pulses.pop(axis, None)
-        if previous is not None:
-            previous.cancel()
-        t, ratio = self._loop_time_s()
-        shifts.add(axis.value, t, duration_ms / 1000.0 * ratio, ra_rate, dec_rate)
-        statistics.pulses += 1
-        await self._drive_now(statistics)
-        self._pulses[axis] = asyncio.create_task(
-            self._end_loop_pulse(axis, duration_ms / 1000.0), name=f"end guide pulse {axis.name}"
-        )
-        self._publish(replace(self.state, pulse_guiding=True))
-
-    async def _end_loop_pulse(self, axis: MountAxis, duration_s: float) -> None:
-        try:
-            await asyncio.sleep(duration_s)
-            statistics = self.rate_loop_statistics
-            if statistics is not None and self._loop_still_ours():
-                assert self._loop_shifts is not None
-                self._loop_shifts.cut(axis.value, self._loop_time_s()[0])
-                await self._drive_now(statistics)
-        except MountError as error:
-            logger.warning("%s: ending a guide pulse in the loop: %s", self.wire.name, error)
-        finally:
-            if self._pulses.get(axis) is asyncio.current_task():
-                del self._pulses[axis]
-            if not self._pulses:
-                self._publish(replace(self.state, pulse_guiding=False))
 
     async def _end_custom_rates(self, *, force: bool = False) -> None:
         """Stop the loop (rates zeroed, a tracking change, a disconnect): both axes stopped and
