@@ -11,6 +11,7 @@ moved to the run's date, and is scored while the rates allow (the followed stret
 
 Devices: ``sim`` (the simulator, 100x clock), ``synscan`` (the SynScan driver over TCP at 9600
 baud to the SynScan emulator in front of the simulator, 10x clock; the ISS in real time),
+``synscan-altaz`` (the same with an AZ GTi: the driver's alt-az loop),
 ``skytracker`` (the Sky Tracker driver over TCP to its emulator in front of the simulator,
 10x), or any device string ``scopelink --device`` takes (a real mount, a ``scopelink
 emulate`` on a port: its own clock, its own readings as the measure). A mount without custom
@@ -22,6 +23,7 @@ on it (its status polls: docs/tracking.md, "Limits found").
     .venv/bin/python -m bench.tracking --device skytracker:tcp://127.0.0.1:11880
     .venv/bin/python -m bench.tracking --quick               # sim, the Moon, 4 min (smoke test)
     .venv/bin/python -m bench.tracking --device synscan --target iss --iss-clock 5
+    .venv/bin/python -m bench.tracking --device synscan-altaz --minutes 20   # an AZ GTi
 """
 
 from __future__ import annotations
@@ -54,8 +56,8 @@ from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Mount, MountError, TrackingMode
 from scopelink.mount.follow import TargetFollower
 from scopelink.servers.skytracker import SkyTrackerEmulator
-from scopelink.servers.synscan import SynScanEmulator
-from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
+from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
+from scopelink.sim import AZ_GTI, EQ6, SKY_TRACKER, SimClock, SimulatedMount
 
 START = datetime(2026, 3, 3, 21, 0, tzinfo=UTC)
 """The Moon five days old at dusk, Jupiter high; the comet is far and faint but moves."""
@@ -75,8 +77,8 @@ def goal_arcsec(device: str, kind: str) -> float:
 SETTLE_S = 120.0
 """Left out of the score: the goto's landing error being closed (four loop time constants)."""
 
-CLOCK = {"sim": 100.0, "synscan": 10.0, "skytracker": 10.0}
-ISS_CLOCK = {"sim": 10.0, "synscan": 1.0}
+CLOCK = {"sim": 100.0, "synscan": 10.0, "skytracker": 10.0, "synscan-altaz": 10.0}
+ISS_CLOCK = {"sim": 10.0, "synscan": 1.0, "synscan-altaz": 1.0}
 """The ISS on SynScan in real time by default (``--iss-clock`` for another rate): the running
 loop takes each rate update in place now, so 5x works too (docs/tracking.md)."""
 
@@ -95,8 +97,10 @@ async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIte
         async with _skytracker(site, start, rate) as sky:
             yield sky
         return
-    if device in ("sim", "synscan"):
-        sim = SimulatedMount(EQ6, site=site, clock=SimClock(start=start, rate=rate))
+    if device in ("sim", "synscan", "synscan-altaz"):
+        altaz = device == "synscan-altaz"  # an AZ GTi: the driver's alt-az loop
+        model = AZ_GTI if altaz else EQ6
+        sim = SimulatedMount(model, site=site, clock=SimClock(start=start, rate=rate))
 
         def truth() -> tuple[datetime, float, float]:
             t = sim.elapsed()
@@ -111,7 +115,7 @@ async def rig(device: str, site: Site, start: datetime, rate: float) -> AsyncIte
                 await sim.disconnect()
             return
 
-        async with SynScanEmulator(sim) as emulator:
+        async with SynScanEmulator(sim, SynScanConfig(model=165) if altaz else None) as emulator:
             host, port = await emulator.on_tcp("127.0.0.1", 0)
             mount = SynScanMount(f"tcp://{host}:{port}", site=site, clock=sim.now)
             await mount.connect()
