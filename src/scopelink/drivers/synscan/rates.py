@@ -189,10 +189,9 @@ class SynScanRates(SynScanParking):
         assert self._loop_target is not None
         statistics = self.rate_loop_statistics
         assert statistics is not None
-        _, ra_error, dec_error = self._loop_drive
-        t = self._loop_time_s()[0]
-        target = self._loop_target.moved_to(t, rates)
-        wanted = self._axis_rates_for(target, self._with_pulses(rates), ra_error, dec_error)
+        _, first_error, second_error = self._loop_drive  # (RA, Dec) or (azimuth, altitude)
+        target = self._loop_target.moved_to(self._loop_time_s()[0], rates)
+        wanted = self._axis_rates_for(target, self._with_pulses(rates), first_error, second_error)
         changed = {
             axis: rate
             for axis, rate in wanted.items()
@@ -205,12 +204,13 @@ class SynScanRates(SynScanParking):
                 self._guard.check_move(axis, rate, await self.refresh())
         if self._loop_target is None or not self._loop_still_ours():
             return  # ended meanwhile (a goto, an abort): the rates are recorded, not started
+        t = self._loop_time_s()[0]  # now: a fresh reading above may have taken a while
         self._loop_target = self._loop_target.moved_to(t, rates)
         # The statistics' anchor: where and when the target is integrated from at these rates.
         assert self._loop_clock is not None
         statistics.started_at = self._loop_clock[0] + timedelta(seconds=t)
         statistics.anchor = (self._loop_target.ra_hours, self._loop_target.dec_deg)
-        self._loop_drive = (rates, ra_error, dec_error)
+        self._loop_drive = (rates, first_error, second_error)
         self._loop_owner = current_client()
         self.rate_updates += 1
         await self._drive_now(statistics)
