@@ -15,7 +15,7 @@ from scopelink.mount import GuideDirection, TrackingMode
 from scopelink.protocol.synscan import FixedRateSlew, SetTrackingMode
 from scopelink.sim import SimClock
 from tests.support.rates import loop_anchor
-from tests.support.synscan_driver import START, record_commands, rig
+from tests.support.synscan_driver import START, Rig, record_commands, rig
 
 SPEED_UP = 10.0
 """Simulated seconds per real second (the emulator's simulator costs CPU per rate command)."""
@@ -45,61 +45,44 @@ UPDATES = [(32.0, -6.0), (28.0, -10.0), (33.0, -7.0), (30.0, -9.0), (31.0, -8.0)
 3x the pace."""
 
 
-@pytest.mark.solo
-async def test_rate_updates_change_the_running_loop_without_stopping_it() -> None:
+async def _rate_updates_change_the_running_loop(
+    r: Rig, first: tuple[float, float, float, float, float]
+) -> None:
     """A new rate while the loop runs: no axis stop, no tracking hand-back, the target going on
-    from where it was (issue #16: at a satellite's 1 s updates the restarts lost ground)."""
-    async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
-        await r.mount.goto_equatorial(7.5, 35.0)
-        await r.mount.wait_for_slew(timeout_s=15.0)
-        async with r.mount.watching():
-            await r.mount.set_tracking_rates(30.0, -8.0)
-            _, t0, ra0, dec0 = loop_anchor(r.mount.rate_loop_statistics, r.sim.clock.epoch)
-            await asyncio.sleep(2.0)  # 20 s of the mount's: four loop time constants
-            commands = record_commands(r.emulator)
-            # The ideal: integrated piecewise from the loop's start, each piece from the
-            # update's time on the mount's clock.
-            pieces = [(t0, ra0, dec0, 30.0, -8.0)]
+    from where it was (issue #16: at a satellite's 1 s updates the restarts lost ground).
+    ``first``: the loop's start (mount seconds, RA h, Dec °) and its rates."""
+    commands = record_commands(r.emulator)
+    pieces = [first]  # the ideal, integrated piecewise from each update's time on
 
-            def ideal(t: float) -> tuple[float, float]:
-                start, ra, dec, ra_rate, dec_rate = next(p for p in reversed(pieces) if p[0] <= t)
-                return ra + ra_rate * (t - start) / 54000.0, dec + dec_rate * (t - start) / 3600.0
+    def ideal(t: float) -> tuple[float, float]:
+        start, ra, dec, ra_rate, dec_rate = next(p for p in reversed(pieces) if p[0] <= t)
+        return ra + ra_rate * (t - start) / 54000.0, dec + dec_rate * (t - start) / 3600.0
 
-            errors: list[float] = []
-
-            def sample() -> None:
-                t = r.sim.elapsed()
-                (ra, dec), (ideal_ra, ideal_dec) = r.sim.j2000_at(t), ideal(t)
-                errors.append(
-                    3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
-                )
-
-            for ra_rate, dec_rate in UPDATES:
-                t = r.sim.elapsed()
-                pieces.append((t, *ideal(t), ra_rate, dec_rate))
-                await r.mount.set_tracking_rates(ra_rate, dec_rate)
-                for _ in range(6):
-                    await asyncio.sleep(0.05)
-                    sample()
-            assert _running(r.mount)
-        stops = [c for c in commands if isinstance(c, FixedRateSlew) and c.rate == 0]
-        hand_backs = [c for c in commands if isinstance(c, SetTrackingMode)]
-        worst = max(errors)
-        print(
-            f"{len(UPDATES)} rate updates: truth max {worst:.2f}″ across them, "
-            f"{r.mount.rate_updates} taken by the running loop, {len(commands)} commands"
-        )
-        assert not stops, f"an axis was stopped between updates: {stops}"
-        assert not hand_backs, f"tracking was handed back between updates: {hand_backs}"
-        assert r.mount.rate_updates == len(UPDATES)
-        assert worst < 5.0, f"{worst:.2f}″ off the integrated target across an update ({errors})"
-        await r.mount.set_tracking_rates(0.0, 0.0)
-        assert not _running(r.mount)
-        assert not r.mount.guard.rate_motions
+    errors: list[float] = []
+    for ra_rate, dec_rate in UPDATES:
+        t = r.sim.elapsed()
+        pieces.append((t, *ideal(t), ra_rate, dec_rate))
+        await r.mount.set_tracking_rates(ra_rate, dec_rate)
+        for _ in range(6):
+            await asyncio.sleep(0.05)
+            t = r.sim.elapsed()
+            (ra, dec), (ideal_ra, ideal_dec) = r.sim.j2000_at(t), ideal(t)
+            errors.append(3600.0 * angular_separation_deg(ideal_ra * 15, ideal_dec, ra * 15, dec))
+    assert _running(r.mount)
+    stops = [c for c in commands if isinstance(c, FixedRateSlew) and c.rate == 0]
+    hand_backs = [c for c in commands if isinstance(c, SetTrackingMode)]
+    print(
+        f"{len(UPDATES)} rate updates: truth max {max(errors):.2f}″ across them, "
+        f"{r.mount.rate_updates} taken by the running loop, {len(commands)} commands"
+    )
+    assert not stops, f"an axis was stopped between updates: {stops}"
+    assert not hand_backs, f"tracking was handed back between updates: {hand_backs}"
+    assert r.mount.rate_updates == len(UPDATES)
+    assert max(errors) < 5.0, f"off the integrated target across an update ({errors})"
 
 
 @pytest.mark.solo
-async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -> None:
+async def test_custom_rates_follow_the_integrated_target_and_take_updates_in_place() -> None:
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         await r.mount.wait_for_slew(timeout_s=15.0)
@@ -128,6 +111,8 @@ async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -
             f"{stats.commands} rate commands"
         )
         assert rms < 5.0, f"RMS {rms:.2f}″ against the integrated target (errors {settled})"
+        async with r.mount.watching():
+            await _rate_updates_change_the_running_loop(r, (t0, ra0, dec0, ra_rate, dec_rate))
         # Back to zero: the hand control tracks by itself again.
         await r.mount.set_tracking_rates(0.0, 0.0)
         assert not _running(r.mount)
