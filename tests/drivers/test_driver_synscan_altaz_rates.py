@@ -7,8 +7,6 @@ from __future__ import annotations
 import asyncio
 import math
 
-import pytest
-
 from scopelink.astro import angular_separation_deg, observed_to_j2000
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import TrackingMode
@@ -39,7 +37,6 @@ def _hand_control_tracking(sim: SimulatedMount) -> TrackingMode:
     return sim.tracking
 
 
-@pytest.mark.solo
 async def test_the_altaz_loop_follows_and_a_goto_or_an_abort_hands_tracking_back() -> None:
     async with rig(
         "tcp",
