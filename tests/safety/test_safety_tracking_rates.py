@@ -15,7 +15,7 @@ from scopelink.mount.rates import TrackingRates
 from scopelink.servers.synscan import SynScanConfig
 from scopelink.sim import AZ_GTI, SimClock
 from tests.support.rates import lowest_altitude
-from tests.support.synscan_driver import START, rig
+from tests.support.synscan_driver import START, Rig, rig
 
 HORIZON_DEG = 30.0
 
@@ -24,21 +24,28 @@ def _running(mount: SynScanMount) -> bool:
     return mount.custom_rates_running
 
 
+async def _lowest_under_a_rate_heading_down(r: Rig, alt_deg: float, az_deg: float) -> float:
+    """From ``alt_deg``/``az_deg``, custom rates of -600″/s of Dec (down there): the lowest
+    altitude the simulator reached before the guard stopped the loop, and after."""
+    r.mount.limits = Limits(horizon_deg=HORIZON_DEG)
+    ra, dec = observed_to_j2000(alt_deg, az_deg, r.mount.now(), r.mount.site)
+    await r.mount.goto_equatorial(ra, dec)
+    await r.mount.wait_for_slew(timeout_s=15.0)
+    async with r.mount.watching():
+        await r.mount.set_tracking_rates(0.0, -600.0)
+        assert _running(r.mount)
+        lowest = await lowest_altitude(
+            lambda: _running(r.mount), lambda: r.sim.observed_at(r.sim.elapsed())[0]
+        )
+    assert lowest >= HORIZON_DEG - 0.05, f"went down to {lowest:.3f}°"
+    assert lowest < HORIZON_DEG + 1.0, f"stopped at {lowest:.3f}°: did it move at all?"
+    assert not r.mount.guard.rate_motions
+    return lowest
+
+
 async def test_a_custom_rate_towards_the_horizon_is_stopped_by_the_guard() -> None:
     async with rig("tcp", clock=SimClock.accelerated(10.0, START)) as r:
-        r.mount.limits = Limits(horizon_deg=HORIZON_DEG)
-        ra, dec = observed_to_j2000(34.0, 180.0, r.mount.now(), r.mount.site)
-        await r.mount.goto_equatorial(ra, dec)
-        await r.mount.wait_for_slew(timeout_s=15.0)
-        async with r.mount.watching():
-            await r.mount.set_tracking_rates(0.0, -600.0)  # south, on the meridian: down
-            assert _running(r.mount)
-            lowest = await lowest_altitude(
-                lambda: _running(r.mount), lambda: r.sim.observed_at(r.sim.elapsed())[0]
-            )
-        assert lowest >= HORIZON_DEG - 0.05, f"went down to {lowest:.3f}°"
-        assert lowest < HORIZON_DEG + 2.0, f"stopped at {lowest:.3f}°: did it move at all?"
-        assert not r.mount.guard.rate_motions
+        lowest = await _lowest_under_a_rate_heading_down(r, 34.0, 180.0)  # south, the meridian
         print(f"custom rate towards the horizon: lowest {lowest:.3f}° (horizon {HORIZON_DEG}°)")
 
 
@@ -82,18 +89,6 @@ async def test_the_altaz_loop_heading_down_is_stopped_by_the_guard() -> None:
         config=SynScanConfig(model=165),
         clock=SimClock.accelerated(10.0, START),
     ) as r:
-        r.mount.limits = Limits(horizon_deg=HORIZON_DEG)
-        ra, dec = observed_to_j2000(32.0, 90.0, r.mount.now(), r.mount.site)
-        await r.mount.goto_equatorial(ra, dec)
-        await r.mount.wait_for_slew(timeout_s=15.0)
-        async with r.mount.watching():
-            await r.mount.set_tracking_rates(0.0, -600.0)  # east: Dec falling takes it down
-            assert _running(r.mount)
-            lowest = await lowest_altitude(
-                lambda: _running(r.mount), lambda: r.sim.observed_at(r.sim.elapsed())[0]
-            )
-        assert lowest >= HORIZON_DEG - 0.05, f"went down to {lowest:.3f}°"
-        assert lowest < HORIZON_DEG + 1.0, f"stopped at {lowest:.3f}°: did it move at all?"
-        assert not r.mount.guard.rate_motions
+        lowest = await _lowest_under_a_rate_heading_down(r, 32.0, 90.0)  # east: Dec falling
         assert r.sim.tracking is TrackingMode.ALT_AZ  # handed back to the hand control
         print(f"alt-az loop towards the horizon: lowest {lowest:.3f}° (horizon {HORIZON_DEG}°)")
