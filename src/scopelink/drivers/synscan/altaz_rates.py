@@ -28,12 +28,8 @@ from datetime import timedelta
 from scopelink.astro import j2000_to_observed, wrap_signed_degrees
 from scopelink.drivers.synscan.identify import MAX_SLEW_RATE_DEG_S
 from scopelink.drivers.synscan.loop_pulses import SynScanLoopPulses
-from scopelink.drivers.synscan.rates import (
-    LOOP_GAIN_PER_S,
-    MAX_CORRECTION_ARCSEC_S,
-    LoopTarget,
-    quantised,
-)
+from scopelink.drivers.synscan.loop_target import LoopTarget
+from scopelink.drivers.synscan.rates import LOOP_GAIN_PER_S, MAX_CORRECTION_ARCSEC_S, quantised
 from scopelink.mount import AlignmentMode, MountAxis, MountState
 from scopelink.mount.rates import TrackingRates
 

@@ -18,12 +18,12 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
 from scopelink.drivers.synscan.base import AXES
 from scopelink.drivers.synscan.identify import synscan_tracking
+from scopelink.drivers.synscan.loop_target import LoopTarget
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
     LimitError,
@@ -44,7 +44,6 @@ from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 __all__ = [
     "LOOP_GAIN_PER_S",
     "MAX_CORRECTION_ARCSEC_S",
-    "LoopTarget",
     "RateLoopStatistics",
     "SynScanRates",
     "quantised",
@@ -91,28 +90,6 @@ def quantised(arcsec_per_s: float) -> float:
 
 def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
-
-
-@dataclass(frozen=True, slots=True)
-class LoopTarget:
-    """The loop's integrated target: J2000 RA (h) and Dec (°) at ``since_s`` (seconds of the
-    mount's clock after the loop began), moving at ``rates`` from there. A rate update moves the
-    anchor to where the target is then (:meth:`moved_to`), so the target never jumps."""
-
-    since_s: float
-    ra_hours: float
-    dec_deg: float
-    rates: TrackingRates
-
-    def at(self, t_s: float) -> tuple[float, float]:
-        dt = t_s - self.since_s
-        return self.ra_hours + self.rates.ra_hours_per_s * dt, self.dec_deg + (
-            self.rates.dec_deg_per_s * dt
-        )
-
-    def moved_to(self, t_s: float, rates: TrackingRates) -> LoopTarget:
-        """The same target from ``t_s`` on, at ``rates``."""
-        return LoopTarget(t_s, *self.at(t_s), rates)
 
 
 class SynScanRates(SynScanParking):
