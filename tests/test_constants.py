@@ -54,3 +54,9 @@ def test_the_tracking_page_states_the_rates_and_loop_settings_the_code_has() -> 
     assert f"`POLE_TRACKING_DEG`, {POLE_TRACKING_DEG:g}°" in tracking
     assert MAX_SIM_TRACKING_OFFSET_ARCSEC_S == MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S == 3600.0
     assert "3600″/s (1°/s) on each axis" in tracking
+    # The SynScan alt-az loop (drivers/synscan/altaz_rates.py).
+    from scopelink.drivers.synscan.altaz_rates import FEED_FORWARD_STEP_S
+    from scopelink.drivers.synscan.identify import MAX_SLEW_RATE_DEG_S
+
+    assert f"`FEED_FORWARD_STEP_S` = {FEED_FORWARD_STEP_S:g} s of the mount's clock" in tracking
+    assert f"(`MAX_SLEW_RATE_DEG_S`, 800x sidereal,\n{MAX_SLEW_RATE_DEG_S:.2f}°/s)" in tracking

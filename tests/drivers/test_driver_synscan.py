@@ -277,7 +277,12 @@ async def test_an_altaz_mount() -> None:
         assert r.mount.identity.model == "AZ-GTi"
         capabilities = r.mount.capabilities
         assert capabilities.alignment_mode is AlignmentMode.ALT_AZ
-        assert capabilities.tracking_modes == {TrackingMode.OFF, TrackingMode.ALT_AZ}
+        # Sidereal on an alt-az mount is its alt-az tracking (custom rates are offsets from it).
+        assert capabilities.tracking_modes == {
+            TrackingMode.OFF,
+            TrackingMode.ALT_AZ,
+            TrackingMode.SIDEREAL,
+        }
         assert not capabilities.can_report_pier_side
         with pytest.raises(NotSupportedError):
             await r.mount.pulse_guide(GuideDirection.NORTH, 100)

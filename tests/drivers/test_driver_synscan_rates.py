@@ -11,11 +11,11 @@ import pytest
 from scopelink.astro import angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.drivers.synscan.rates import RateLoopStatistics
-from scopelink.mount import GuideDirection, NotSupportedError, TrackingMode
-from scopelink.servers.synscan import SynScanConfig
-from scopelink.sim import AZ_GTI, SimClock
+from scopelink.mount import GuideDirection, TrackingMode
+from scopelink.protocol.synscan import FixedRateSlew, SetTrackingMode
+from scopelink.sim import SimClock
 from tests.support.rates import loop_anchor
-from tests.support.synscan_driver import START, rig
+from tests.support.synscan_driver import START, Rig, record_commands, rig
 
 SPEED_UP = 10.0
 """Simulated seconds per real second (the emulator's simulator costs CPU per rate command)."""
@@ -40,8 +40,49 @@ def _truth_error_arcsec(
     return 3600.0 * angular_separation_deg(ideal_ra * 15.0, ideal_dec, ra * 15.0, dec)
 
 
+UPDATES = [(32.0, -6.0), (28.0, -10.0), (33.0, -7.0), (30.0, -9.0), (31.0, -8.0)]
+"""A rate update every 0.3 s of real time (3 s of the mount's): a satellite's every second at
+3x the pace."""
+
+
+async def _rate_updates_change_the_running_loop(
+    r: Rig, first: tuple[float, float, float, float, float]
+) -> None:
+    """A new rate while the loop runs: no axis stop, no tracking hand-back, the target going on
+    from where it was (issue #16: at a satellite's 1 s updates the restarts lost ground).
+    ``first``: the loop's start (mount seconds, RA h, Dec °) and its rates."""
+    commands = record_commands(r.emulator)
+    pieces = [first]  # the ideal, integrated piecewise from each update's time on
+
+    def ideal(t: float) -> tuple[float, float]:
+        start, ra, dec, ra_rate, dec_rate = next(p for p in reversed(pieces) if p[0] <= t)
+        return ra + ra_rate * (t - start) / 54000.0, dec + dec_rate * (t - start) / 3600.0
+
+    errors: list[float] = []
+    for ra_rate, dec_rate in UPDATES:
+        t = r.sim.elapsed()
+        pieces.append((t, *ideal(t), ra_rate, dec_rate))
+        await r.mount.set_tracking_rates(ra_rate, dec_rate)
+        for _ in range(6):
+            await asyncio.sleep(0.05)
+            t = r.sim.elapsed()
+            (ra, dec), (ideal_ra, ideal_dec) = r.sim.j2000_at(t), ideal(t)
+            errors.append(3600.0 * angular_separation_deg(ideal_ra * 15, ideal_dec, ra * 15, dec))
+    assert _running(r.mount)
+    stops = [c for c in commands if isinstance(c, FixedRateSlew) and c.rate == 0]
+    hand_backs = [c for c in commands if isinstance(c, SetTrackingMode)]
+    print(
+        f"{len(UPDATES)} rate updates: truth max {max(errors):.2f}″ across them, "
+        f"{r.mount.rate_updates} taken by the running loop, {len(commands)} commands"
+    )
+    assert not stops, f"an axis was stopped between updates: {stops}"
+    assert not hand_backs, f"tracking was handed back between updates: {hand_backs}"
+    assert r.mount.rate_updates == len(UPDATES)
+    assert max(errors) < 5.0, f"off the integrated target across an update ({errors})"
+
+
 @pytest.mark.solo
-async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -> None:
+async def test_custom_rates_follow_the_integrated_target_and_take_updates_in_place() -> None:
     async with rig("tcp", clock=SimClock.accelerated(SPEED_UP, START)) as r:
         await r.mount.goto_equatorial(7.5, 35.0)
         await r.mount.wait_for_slew(timeout_s=15.0)
@@ -70,6 +111,8 @@ async def test_custom_rates_follow_the_integrated_target_within_a_few_arcsec() -
             f"{stats.commands} rate commands"
         )
         assert rms < 5.0, f"RMS {rms:.2f}″ against the integrated target (errors {settled})"
+        async with r.mount.watching():
+            await _rate_updates_change_the_running_loop(r, (t0, ra0, dec0, ra_rate, dec_rate))
         # Back to zero: the hand control tracks by itself again.
         await r.mount.set_tracking_rates(0.0, 0.0)
         assert not _running(r.mount)
@@ -119,17 +162,12 @@ async def test_a_client_that_leaves_takes_its_rates_with_it() -> None:
         async with r.mount.watching(), r.mount.motion_client("phone"):
             await r.mount.set_tracking_rates(10.0, 10.0)
             assert _running(r.mount)
+            await r.mount.set_tracking_rates(12.0, 8.0)  # the running loop takes it: still its
+            assert r.mount.rate_updates == 1
         assert not _running(r.mount)
         assert r.mount.tracking_rates.zero
         assert r.sim.tracking is TrackingMode.SIDEREAL
         assert not r.mount.guard.rate_motions
-
-
-async def test_an_alt_az_hand_control_refuses_custom_rates() -> None:
-    async with rig("tcp", model=AZ_GTI, config=SynScanConfig(model=165)) as r:
-        assert r.mount.capabilities.max_tracking_offset_arcsec_s == 0.0
-        with pytest.raises(NotSupportedError, match="custom rates"):
-            await r.mount.set_tracking_rates(1.0, 0.0)
 
 
 async def test_a_goto_ends_the_loop_and_is_never_overridden() -> None:

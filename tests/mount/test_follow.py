@@ -17,7 +17,7 @@ from scopelink.astro.targets import (
     satellite_target,
     solar_system_target,
 )
-from scopelink.mount import Limits, NotSupportedError, SunAvoidanceError
+from scopelink.mount import Limits, SunAvoidanceError
 from scopelink.mount.follow import FollowReport, TargetFollower
 from scopelink.mount.follow_plan import FollowError
 from scopelink.servers.synscan import SynScanConfig
@@ -92,12 +92,9 @@ async def test_refusals_come_before_anything_moves(tmp_path: Path) -> None:
     assert mount.state.ra_j2000_hours == before.ra_j2000_hours
     assert mount.tracking_rates.zero
     await mount.disconnect()
-    # A SynScan alt-az hand control has no custom rates.
+    # A SynScan alt-az hand control has custom rates now (its PC loop drives the alt/az axes).
     async with rig("tcp", model=AZ_GTI, config=SynScanConfig(model=165)) as r:
-        with pytest.raises(NotSupportedError, match=r"^this mount cannot track at custom rates$"):
-            await TargetFollower(r.mount, solar_system_target("Moon", r.mount.site)).run(
-                duration_s=1.0
-            )
+        assert TargetFollower(r.mount, solar_system_target("Moon", r.mount.site)).check() is None
 
 
 async def test_stop_ends_following_and_zeroes_the_rates() -> None:

@@ -11,6 +11,7 @@ from datetime import UTC, datetime
 from scopelink.astro import Site, angular_separation_deg
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import MountState
+from scopelink.protocol.synscan import AnyCommand, AnyReply
 from scopelink.servers.faults import FaultInjector
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import EQ6, MountModel, SimClock, SimulatedMount
@@ -85,3 +86,17 @@ def assert_position_matches(
     assert truth.az_deg is not None
     horizontal = angular_separation_deg(state.az_deg, state.alt_deg, truth.az_deg, truth.alt_deg)
     assert horizontal <= tolerance_deg, (state, truth)
+
+
+def record_commands(emulator: SynScanEmulator) -> list[AnyCommand]:
+    """Every command the emulated hand control answers from now on, in order (observed, not
+    changed: its own handler answers each)."""
+    seen: list[AnyCommand] = []
+    answer = emulator.hand_control.answer
+
+    async def recorded(command: AnyCommand) -> AnyReply:
+        seen.append(command)
+        return await answer(command)
+
+    emulator.hand_control.answer = recorded  # type: ignore[method-assign]
+    return seen

@@ -5,6 +5,11 @@ One class per concern, each building on the one before:
 - `base`: `SynScanBase`, construction, identity, every exchange (owed stops first);
 - `connection`: `SynScanConnection`, identify the hand control, reconnect a lost link;
 - `polling`: `SynScanPolling`, read the state (``L``, ``e``, ``t``, ``p``, ``J``);
+- `parking`: `SynScanParking`, park records, resume after a power cycle, slow gotos;
+- `rates`: `SynScanRates`, custom tracking rates by a PC loop of rate slews (updates in place);
+- `loop_target`: `LoopTarget`, the loop's integrated target (re-anchored by an update);
+- `loop_pulses`: `SynScanLoopPulses`, guide pulses that join the loop, guide rates;
+- `altaz_rates`: `SynScanAltAzRates`, the loop on an alt-az mount's axes;
 - `mount`: `SynScanMount`, the commands (connect, gotos, syncs, abort, rates, guiding, park,
   site, time).
 

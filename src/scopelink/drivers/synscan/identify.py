@@ -85,7 +85,8 @@ def capabilities_for(info: HandControlInfo) -> Capabilities:
     """What the Mount API offers for this hand control and model."""
     equatorial = info.equatorial
     sky_tracking = TrackingMode.SIDEREAL if equatorial else TrackingMode.ALT_AZ
-    modes = {TrackingMode.OFF, sky_tracking}
+    # An alt-az mount offers sidereal too: its alt-az tracking (custom rates are offsets from it).
+    modes = {TrackingMode.OFF, sky_tracking, TrackingMode.SIDEREAL}
     if equatorial:
         modes.add(TrackingMode.PEC)
         # Lunar, solar and King: sidereal plus an RA offset, by the PC loop (rates.py).
@@ -106,6 +107,7 @@ def capabilities_for(info: HandControlInfo) -> Capabilities:
         can_set_site=True,
         can_set_time=True,
         can_report_pier_side=equatorial,
-        # Custom rates: a PC loop of rate slews on the RA/Dec axes (rates.py), equatorial only.
-        max_tracking_offset_arcsec_s=MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S if equatorial else 0.0,
+        # Custom rates: a PC loop of rate slews on the RA/Dec axes (rates.py) or, on an alt-az
+        # mount, on the azimuth and altitude axes (altaz_rates.py).
+        max_tracking_offset_arcsec_s=MAX_SYNSCAN_TRACKING_OFFSET_ARCSEC_S,
     )

@@ -23,10 +23,10 @@ from typing import Any, Self
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, Site, angular_separation_deg
 from scopelink.drivers.common import LinkFactory
+from scopelink.drivers.synscan.altaz_rates import SynScanAltAzRates
 from scopelink.drivers.synscan.base import AXES, rate_zero
 from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.parking import SlowGotoRefusedError
-from scopelink.drivers.synscan.rates import SynScanRates
 from scopelink.drivers.synscan.settling import SettleDetector
 from scopelink.mount import (
     AlignmentMode,
@@ -82,7 +82,7 @@ def _separation_deg(ra1_hours: float, dec1: float, ra2_hours: float, dec2: float
     return float(angular_separation_deg(ra1_hours * 15.0, dec1, ra2_hours * 15.0, dec2))
 
 
-class SynScanMount(SynScanRates):
+class SynScanMount(SynScanAltAzRates):
     """A SynScan hand control on ``link``: a link spec (``/dev/ttyUSB0``, ``tcp://host:11880``,
     a pty path) or a factory that opens a :class:`~scopelink.links.Link`.
 
@@ -390,6 +390,8 @@ class SynScanMount(SynScanRates):
         return set(pulses)
 
     async def _set_tracking(self, mode: TrackingMode) -> None:
+        if mode is TrackingMode.SIDEREAL and self._sky_tracking() is TrackingMode.ALT_AZ:
+            mode = TrackingMode.ALT_AZ  # an alt-az mount follows the stars by its alt-az mode
         await self._end_custom_rates()  # custom rates: a loop on the PC (rates.py)
         await self._ask(SetTrackingMode(synscan_tracking(mode)), Ack)
         self._tracking = mode

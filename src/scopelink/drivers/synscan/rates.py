@@ -18,27 +18,26 @@ import contextlib
 import logging
 import math
 from contextlib import aclosing
-from dataclasses import replace
-from datetime import datetime
+from datetime import datetime, timedelta
 
 from scopelink.astro import SIDEREAL_RATE_DEG_S, PierSide, wrap_signed_degrees
-from scopelink.drivers.synscan.base import AXES, MAX_GUIDE_RATE_DEG_S
+from scopelink.drivers.synscan.base import AXES
 from scopelink.drivers.synscan.identify import synscan_tracking
+from scopelink.drivers.synscan.loop_target import LoopTarget
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
-    GuideDirection,
-    InvalidValueError,
+    LimitError,
     MountAxis,
     MountError,
     MountState,
     Priority,
     TrackingMode,
 )
+from scopelink.mount.deadman import MotionClient, current_client
 from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
     TrackingRates,
-    pulse_joining_loop,
 )
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
@@ -47,6 +46,7 @@ __all__ = [
     "MAX_CORRECTION_ARCSEC_S",
     "RateLoopStatistics",
     "SynScanRates",
+    "quantised",
 ]
 
 logger = logging.getLogger(__name__)
@@ -73,16 +73,18 @@ LOOP_MODES = frozenset(
         TrackingMode.LUNAR,
         TrackingMode.SOLAR,
         TrackingMode.KING,
+        TrackingMode.ALT_AZ,
     }
 )
-"""The modes the loop runs in: sidereal and PEC with custom rates; lunar, solar and King always
-(the hand control has none of them: sidereal plus their RA offset)."""
+"""The modes the loop runs in: sidereal, PEC and alt-az with custom rates; lunar, solar and King
+always (the hand control has none of them: sidereal plus their RA offset)."""
 
-HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC})
-"""The equatorial modes the hand control tracks in by itself."""
+HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC, TrackingMode.ALT_AZ})
+"""The modes the hand control tracks in by itself (alt-az: an alt-az mount's)."""
 
 
-def _quantised(arcsec_per_s: float) -> float:
+def quantised(arcsec_per_s: float) -> float:
+    """A rate (arcsec/s) rounded to the variable-rate slew's ¼″/s step."""
     return round(arcsec_per_s / QUANTUM_ARCSEC_S) * QUANTUM_ARCSEC_S
 
 
@@ -105,6 +107,11 @@ class SynScanRates(SynScanParking):
     _loop_shifts: GuideShifts | None = None
     _loop_drive: tuple[TrackingRates, float, float] | None = None
     """The loop's rates in force and the last errors (RA, Dec degrees): to drive between polls."""
+    _loop_target: LoopTarget | None = None
+    _loop_owner: MotionClient | None = None
+    """Who set the rates last: the owner of the loop's axes for the dead-man."""
+    rate_updates = 0
+    """Rate changes the running loop took without a restart (all loops of this driver)."""
     _loop_clock: tuple[datetime, float] | None = None
     """The loop's start on the mount clock and on the PC's (``loop.time()``)."""
     rate_loop_statistics: RateLoopStatistics | None = None
@@ -132,34 +139,61 @@ class SynScanRates(SynScanParking):
         if self._loop_mode is not None and not (self._loop_starting or self._loop_joining):
             self._loop_taken = True
 
-    _guide_rate_dec_deg_s: float | None = None
-
-    @property
-    def guide_rates_deg_s(self) -> tuple[float, float]:
-        """(RA, Dec) pulse-guide rates (°/s): ``guide_rate_deg_s`` unless Dec's was set apart."""
-        dec = self._guide_rate_dec_deg_s
-        return self.guide_rate_deg_s, self.guide_rate_deg_s if dec is None else dec
-
-    async def set_guide_rates(self, ra_deg_s: float, dec_deg_s: float) -> None:
-        """Pulse-guide rates (°/s) in RA and Dec, each within (0, 10x sidereal]: the hand
-        control's rate slews take ¼″/s steps (the PC times the pulses)."""
-        for name, value in (("RA", ra_deg_s), ("Dec", dec_deg_s)):
-            if not (isinstance(value, int | float) and 0.0 < value <= MAX_GUIDE_RATE_DEG_S):
-                raise InvalidValueError(
-                    f"{name} guide rate {value!r}°/s must lie in (0, {MAX_GUIDE_RATE_DEG_S:.5f}] "
-                    "(10x sidereal)"
-                )
-        self.guide_rate_deg_s = float(ra_deg_s)
-        self._guide_rate_dec_deg_s = float(dec_deg_s)
-
     @property
     def custom_rates_running(self) -> bool:
         """Whether the PC loop drives the axes now."""
         return self._loop_mode is not None
 
     async def _set_tracking_rates(self, rates: TrackingRates) -> None:
+        mode = self._loop_mode
+        if (
+            mode is not None
+            and self._rate_loop is not None
+            and self._loop_still_ours()
+            and not (rates.zero and mode in HAND_CONTROL_MODES)
+        ):
+            await self._change_loop_rates(rates.plus_mode(mode))
+            return
         await self._end_custom_rates()
         await self._start_custom_rates(rates)
+
+    async def _change_loop_rates(self, rates: TrackingRates) -> None:
+        """New rates for the running loop, without stopping it (a satellite's updates every
+        second): its target goes on from where it is now at the new rates, and the axes get
+        the new rates at once. The axis rates are checked by the horizon guard first, as a
+        loop's first rates are: one heading out at a limit is refused, nothing changed."""
+        assert self._loop_drive is not None
+        assert self._loop_target is not None
+        statistics = self.rate_loop_statistics
+        assert statistics is not None
+        _, first_error, second_error = self._loop_drive  # (RA, Dec) or (azimuth, altitude)
+        target = self._loop_target.moved_to(self._loop_time_s()[0], rates)
+        wanted = self._axis_rates_for(target, self._with_pulses(rates), first_error, second_error)
+        changed = {
+            axis: rate
+            for axis, rate in wanted.items()
+            if (self._loop_rates or {}).get(axis) != rate
+        }
+        for axis, rate in changed.items():
+            try:
+                self._guard.check_move(axis, rate, self.state)
+            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
+                self._guard.check_move(axis, rate, await self.refresh())
+        if self._loop_target is None or not self._loop_still_ours():
+            return  # ended meanwhile (a goto, an abort): the rates are recorded, not started
+        t = self._loop_time_s()[0]  # now: a fresh reading above may have taken a while
+        self._loop_target = self._loop_target.moved_to(t, rates)
+        # The statistics' anchor: where and when the target is integrated from at these rates.
+        assert self._loop_clock is not None
+        statistics.started_at = self._loop_clock[0] + timedelta(seconds=t)
+        statistics.anchor = (self._loop_target.ra_hours, self._loop_target.dec_deg)
+        self._loop_drive = (rates, first_error, second_error)
+        self._loop_owner = current_client()
+        self.rate_updates += 1
+        await self._drive_now(statistics)
+        if self._loop_still_ours():  # the axes are the new owner's, changed or not
+            for axis, rate in (self._loop_rates or {}).items():
+                self._guard.motion_commanded(axis, rate)
 
     async def _start_custom_rates(
         self, rates: TrackingRates | None = None, mode: TrackingMode | None = None
@@ -179,7 +213,8 @@ class SynScanRates(SynScanParking):
         self._loop_mode = mode
         self._loop_rates = {}
         self._loop_taken = False
-        anchor = (state, state.ra_j2000_hours, state.dec_j2000_deg)
+        self._loop_owner = current_client()
+        self._loop_target = LoopTarget(0.0, state.ra_j2000_hours, state.dec_j2000_deg, rates)
         statistics = RateLoopStatistics(
             started_at=state.read_at, anchor=(state.ra_j2000_hours, state.dec_j2000_deg)
         )
@@ -189,20 +224,22 @@ class SynScanRates(SynScanParking):
         self._loop_clock = (state.read_at, asyncio.get_running_loop().time())
         self._loop_starting = True
         try:
-            await self._drive(self._axis_rates_for(rates, 0.0, 0.0), statistics, first=True)
+            first = self._axis_rates_for(self._loop_target, rates, 0.0, 0.0)
+            await self._drive(first, statistics, first=True)
         except BaseException:
             await self._end_custom_rates(force=True)
             raise
         finally:
             self._loop_starting = False
         self._rate_loop = asyncio.create_task(
-            self._run(rates, anchor, statistics), name="synscan custom tracking rates"
+            self._run(state, statistics), name="synscan custom tracking rates"
         )
 
     def _axis_rates_for(
-        self, rates: TrackingRates, ra_error_deg: float, dec_error_deg: float
+        self, target: LoopTarget, rates: TrackingRates, ra_error_deg: float, dec_error_deg: float
     ) -> dict[MountAxis, float]:
-        """Axis rates (°/s, signed as the driver's rate slews) for the rates and the errors."""
+        """Axis rates (°/s, signed as the driver's rate slews) for the rates (with the guide
+        pulses running) and the errors; ``target`` is the loop's (an alt-az loop's path)."""
         hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
         ra_arcsec = rates.ra_arcsec_per_s + _clamp(
             LOOP_GAIN_PER_S * ra_error_deg * 3600.0, MAX_CORRECTION_ARCSEC_S
@@ -214,8 +251,8 @@ class SynScanRates(SynScanParking):
         primary = hemisphere * (SIDEREAL_RATE_DEG_S * 3600.0 - ra_arcsec)
         dec_sign = -hemisphere if self._pier_side is PierSide.WEST else hemisphere
         return {
-            MountAxis.PRIMARY: _quantised(primary) / 3600.0,
-            MountAxis.SECONDARY: _quantised(dec_sign * dec_arcsec) / 3600.0,
+            MountAxis.PRIMARY: quantised(primary) / 3600.0,
+            MountAxis.SECONDARY: quantised(dec_sign * dec_arcsec) / 3600.0,
         }
 
     async def _drive(
@@ -253,7 +290,9 @@ class SynScanRates(SynScanParking):
                     with self._stops_owed_on_failure(axes={axis}):
                         await self._ask_passthrough(command)
                     self._axis_rates[axis] = rate
-                    self._guard.motion_commanded(axis, rate)
+                    owner = self._loop_owner
+                    with self.acting_for(owner.token if owner is not None else None):
+                        self._guard.motion_commanded(axis, rate)
             self._loop_rates[axis] = rate
             statistics.commands += 1
 
@@ -276,13 +315,7 @@ class SynScanRates(SynScanParking):
             return False
         return all(self._axis_rates.get(axis) == rate for axis, rate in self._loop_rates.items())
 
-    async def _run(
-        self,
-        rates: TrackingRates,
-        anchor: tuple[MountState, float, float],
-        statistics: RateLoopStatistics,
-    ) -> None:
-        first, ra0, dec0 = anchor
+    async def _run(self, first: MountState, statistics: RateLoopStatistics) -> None:
         try:
             async with aclosing(self.states()) as states:
                 async for state in states:
@@ -293,14 +326,11 @@ class SynScanRates(SynScanParking):
                     assert state.dec_j2000_deg is not None
                     dt = (state.read_at - first.read_at).total_seconds()
                     dt -= self._reading_lag_s(first, state, dt)
-                    shifts = self._loop_shifts or GuideShifts()
-                    ra_shift, dec_shift = shifts.at(dt)
-                    target_ra = ra0 + rates.ra_hours_per_s * dt + ra_shift
-                    target_dec = dec0 + rates.dec_deg_per_s * dt + dec_shift
-                    ra_error = wrap_signed_degrees((target_ra - state.ra_j2000_hours) * 15.0)
-                    dec_error = target_dec - state.dec_j2000_deg
-                    statistics.add_error(_sky_error_arcsec(ra_error, dec_error, state))
-                    self._loop_drive = (rates, ra_error, dec_error)
+                    target = self._loop_target
+                    assert target is not None
+                    first_error, second_error, sky = self._loop_errors(target, state, dt)
+                    statistics.add_error(sky)
+                    self._loop_drive = (target.rates, first_error, second_error)
                     await self._drive_now(statistics)
         except MountError as error:
             logger.warning("%s: custom tracking rates: %s", self.wire.name, error)
@@ -312,6 +342,20 @@ class SynScanRates(SynScanParking):
                 # After the command that took over, which has the wire before the hand-back.
                 with contextlib.suppress(MountError):  # a failed stop is owed, sent later
                     await asyncio.shield(self._hand_back())
+
+    def _loop_errors(
+        self, target: LoopTarget, state: MountState, dt: float
+    ) -> tuple[float, float, float]:
+        """The reading's errors against the target ``dt`` s after the loop began (the guide
+        pulses' shifts added): RA and Dec (°) as :meth:`_axis_rates_for` takes them, and the
+        error on the sky (arcsec)."""
+        assert state.ra_j2000_hours is not None
+        assert state.dec_j2000_deg is not None
+        ra_shift, dec_shift = (self._loop_shifts or GuideShifts()).at(dt)
+        target_ra, target_dec = target.at(dt)
+        ra_error = wrap_signed_degrees((target_ra + ra_shift - state.ra_j2000_hours) * 15.0)
+        dec_error = target_dec + dec_shift - state.dec_j2000_deg
+        return ra_error, dec_error, _sky_error_arcsec(ra_error, dec_error, state)
 
     def _loop_time_s(self) -> tuple[float, float]:
         """Seconds since the loop started on the mount's clock, and the mount clock's rate
@@ -325,61 +369,20 @@ class SynScanRates(SynScanParking):
     async def _drive_now(self, statistics: RateLoopStatistics) -> None:
         """Drive at the rates in force, the running pulses and the last errors."""
         assert self._loop_drive is not None
-        rates, ra_error, dec_error = self._loop_drive
+        assert self._loop_target is not None
+        rates, first_error, second_error = self._loop_drive
+        target, with_pulses = self._loop_target, self._with_pulses(rates)
+        await self._drive(
+            self._axis_rates_for(target, with_pulses, first_error, second_error), statistics
+        )
+
+    def _with_pulses(self, rates: TrackingRates) -> TrackingRates:
+        """``rates`` plus the guide pulses running now."""
         t, _ = self._loop_time_s()
         ra_pulse, dec_pulse = (self._loop_shifts or GuideShifts()).rates_at(t)
-        with_pulses = TrackingRates(
+        return TrackingRates(
             rates.ra_arcsec_per_s + ra_pulse * 54000.0, rates.dec_arcsec_per_s + dec_pulse * 3600.0
         )
-        await self._drive(self._axis_rates_for(with_pulses, ra_error, dec_error), statistics)
-
-    async def pulse_guide(self, direction: GuideDirection, duration_ms: int) -> None:
-        """As :meth:`Mount.pulse_guide`; while the loop runs the pulse is added to it (its
-        guide rate on top of the loop's, the target moved along: docs/tracking.md)."""
-        await pulse_joining_loop(self, super().pulse_guide, direction, duration_ms)
-
-    async def _pulse_into_loop(
-        self, axis: MountAxis, axis_rate_deg_s: float, duration_ms: int
-    ) -> None:
-        """The guide rate on ``axis`` added to the loop's for ``duration_ms`` (PC time), and the
-        loop's target moved along with it, so the loop keeps the correction."""
-        statistics, shifts = self.rate_loop_statistics, self._loop_shifts
-        assert statistics is not None
-        assert shifts is not None
-        hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
-        arcsec = axis_rate_deg_s * 3600.0
-        if axis is MountAxis.PRIMARY:  # the polar axis turning faster: RA decreasing
-            ra_rate, dec_rate = -hemisphere * arcsec / 54000.0, 0.0
-        else:
-            dec_sign = -hemisphere if self._pier_side is PierSide.WEST else hemisphere
-            ra_rate, dec_rate = 0.0, dec_sign * arcsec / 3600.0
-        previous = self._pulses.pop(axis, None)
-        if previous is not None:
-            previous.cancel()
-        t, ratio = self._loop_time_s()
-        shifts.add(axis.value, t, duration_ms / 1000.0 * ratio, ra_rate, dec_rate)
-        statistics.pulses += 1
-        await self._drive_now(statistics)
-        self._pulses[axis] = asyncio.create_task(
-            self._end_loop_pulse(axis, duration_ms / 1000.0), name=f"end guide pulse {axis.name}"
-        )
-        self._publish(replace(self.state, pulse_guiding=True))
-
-    async def _end_loop_pulse(self, axis: MountAxis, duration_s: float) -> None:
-        try:
-            await asyncio.sleep(duration_s)
-            statistics = self.rate_loop_statistics
-            if statistics is not None and self._loop_still_ours():
-                assert self._loop_shifts is not None
-                self._loop_shifts.cut(axis.value, self._loop_time_s()[0])
-                await self._drive_now(statistics)
-        except MountError as error:
-            logger.warning("%s: ending a guide pulse in the loop: %s", self.wire.name, error)
-        finally:
-            if self._pulses.get(axis) is asyncio.current_task():
-                del self._pulses[axis]
-            if not self._pulses:
-                self._publish(replace(self.state, pulse_guiding=False))
 
     async def _end_custom_rates(self, *, force: bool = False) -> None:
         """Stop the loop (rates zeroed, a tracking change, a disconnect): both axes stopped and
