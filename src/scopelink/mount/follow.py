@@ -29,19 +29,23 @@ from scopelink.astro import j2000_to_observed, wrap_signed_degrees
 from scopelink.astro.targets import MovingTarget, SatelliteTarget, TargetError, TargetKind
 from scopelink.mount.base import Mount
 from scopelink.mount.errors import (
+    InvalidValueError,
     LimitError,
     MountError,
     NotSupportedError,
     SunAvoidanceError,
 )
 from scopelink.mount.follow_plan import FollowError, PassPlan, plan_pass
+from scopelink.mount.rates import TrackingRates
 from scopelink.mount.slew_wait import slew_unless_stopped
 from scopelink.mount.sun import SETTING as SUN_SETTING
-from scopelink.mount.types import MountState, TrackingMode
+from scopelink.mount.types import MountState, SlewTarget, TrackingMode
 
 __all__ = [
     "GAIN",
     "GOTO_LEAD_S",
+    "MAX_DURATION_S",
+    "MAX_INTERVAL_S",
     "REPORT_EVERY_S",
     "FollowError",
     "FollowReport",
@@ -69,6 +73,16 @@ starts: time for the slew across the sky and its settling."""
 
 REPORT_EVERY_S = 0.5
 """The tracking error is reported at most this often (mount clock)."""
+
+MAX_INTERVAL_S = 600.0
+"""The longest interval between rate updates accepted (10 minutes: the follower checks the
+limits and the Sun zone only at its updates)."""
+
+MAX_DURATION_S = 30 * 86400.0
+"""The longest ``duration_s`` accepted (30 days); longer, or not a number, is a typing error."""
+
+TAKEN_OVER = "another goto took the mount over (another client, or a meridian flip)"
+CHANGED_RATES = "the tracking rates were changed elsewhere (another client)"
 
 
 def default_interval_s(kind: TargetKind) -> float:
@@ -116,12 +130,26 @@ class TargetFollower:
         interval_s: float | None = None,
         on_report: Callable[[FollowReport], None] | None = None,
     ) -> None:
+        if interval_s is not None and not (
+            isinstance(interval_s, int | float)
+            and math.isfinite(interval_s)
+            and 0.0 < interval_s <= MAX_INTERVAL_S
+        ):
+            raise InvalidValueError(
+                f"the interval between rate updates must lie in (0, {MAX_INTERVAL_S:g}] s, "
+                f"not {interval_s}"
+            )
         self.mount = mount
         self.target = target
         self.interval_s = interval_s or default_interval_s(target.kind)
         self.on_report = on_report
         self.result = FollowResult()
         self.last: FollowReport | None = None
+        self._own_goto: SlewTarget | None = None
+        """The mount's last goto when the follower began, then the follower's own goto: any
+        other goto takes the mount over and ends following."""
+        self._rates_set: TrackingRates | None = None
+        """The rates the follower set last: other rates in force were set by someone else."""
 
     # --- refusals, before anything moves ------------------------------------------------------
 
@@ -163,8 +191,17 @@ class TargetFollower:
         passed since following began, the pass ends or the target leaves the limits; the rates
         go back to zero at the end (the mount tracks at the sidereal rate)."""
         stop = stop or asyncio.Event()
+        if duration_s is not None and not (
+            isinstance(duration_s, int | float)
+            and math.isfinite(duration_s)
+            and 0.0 < duration_s <= MAX_DURATION_S
+        ):
+            raise InvalidValueError(
+                f"the duration must lie in (0, {MAX_DURATION_S:g}] s, not {duration_s}"
+            )
         plan = self.check()
         mount = self.mount
+        self._own_goto = mount.target
         try:
             async with mount.watching():
                 if plan is None:
@@ -187,8 +224,10 @@ class TargetFollower:
                     end = until if end is None else min(end, until)
                 await self._follow(stop, end)
         finally:
+            # Back to zero, unless someone else has set rates since (theirs are kept).
             with contextlib.suppress(MountError):
-                if mount.state.connected and not mount.tracking_rates.zero:
+                ours = mount.tracking_rates == self._rates_set
+                if mount.state.connected and ours and not mount.tracking_rates.zero:
                     await asyncio.shield(mount.set_tracking_rates(0.0, 0.0))
         return self.result
 
@@ -196,6 +235,7 @@ class TargetFollower:
         """Goto the target's place at ``at``; ``stop`` meanwhile aborts the slew."""
         ra, dec = self.target.position(at)
         await self.mount.goto_equatorial(ra, dec)
+        self._own_goto = self.mount.target
         self._report(FollowReport(self.mount.now(), "slewing", None, math.nan, math.nan, ra, dec))
         await slew_unless_stopped(self.mount, stop)
 
@@ -204,18 +244,27 @@ class TargetFollower:
             async for state in states:
                 if stop.is_set() or state.read_at >= deadline:
                     return
+                if self.mount.target is not self._own_goto:
+                    self.result.reason = TAKEN_OVER
+                    stop.set()
+                    return
                 self._throttled(state, "waiting", 0.0, 0.0)
 
     async def _follow(self, stop: asyncio.Event, end: datetime | None) -> None:
         mount = self.mount
         if mount.state.tracking is not TrackingMode.SIDEREAL:
             await mount.set_tracking(TrackingMode.SIDEREAL)  # the rates are offsets from it
+        since = mount.now()  # readings from here on show the follower's tracking mode
         next_update: datetime | None = None
         rates = (0.0, 0.0)
         async with aclosing(mount.states()) as states:
             async for state in states:
                 if stop.is_set():
                     self.result.reason = "stopped"
+                    return
+                taken = self._taken_over(state, fresh=state.read_at >= since)
+                if taken:
+                    self.result.reason = taken
                     return
                 if not state.connected or state.ra_j2000_hours is None:
                     continue
@@ -234,17 +283,44 @@ class TargetFollower:
                 except TargetError as failed:  # e.g. SGP4 cannot carry the TLE this far
                     self.result.reason = str(failed)
                     return
+                if not all(math.isfinite(value) for value in error):
+                    self.result.reason = self._no_number(t)
+                    return
                 self.result.errors.append((t, error[2]))
                 self._throttled(state, "following", *rates)
                 if next_update is None or t >= next_update:
+                    ahead = t + timedelta(seconds=self.interval_s)
                     try:
                         self._check_place(t, "")
+                        if end is None or ahead <= end:  # where these rates carry the mount
+                            self._check_place(ahead, f" {self.interval_s:g} s from now")
+                    except InvalidValueError:  # the place is not a number
+                        self.result.reason = self._no_number(ahead)
+                        return
                     except LimitError as refused:
                         self.result.reason = str(refused).split(":")[0]
                         return
                     rates = self._rates(t, error)
                     await mount.set_tracking_rates(*rates)
-                    next_update = t + timedelta(seconds=self.interval_s)
+                    self._rates_set = mount.tracking_rates
+                    next_update = ahead
+
+    def _no_number(self, t: datetime) -> str:
+        return (
+            f"no number for {self.target.name}'s place or the mount's reading at "
+            f"{t:%H:%M:%S} UTC: following stopped"
+        )
+
+    def _taken_over(self, state: MountState, *, fresh: bool) -> str | None:
+        """Why following must end because someone else took over (None: nobody did): a goto
+        not the follower's, rates it did not set, or another tracking mode."""
+        if self.mount.target is not self._own_goto:
+            return TAKEN_OVER
+        if self._rates_set is not None and self.mount.tracking_rates != self._rates_set:
+            return CHANGED_RATES
+        if fresh and state.tracking not in (TrackingMode.SIDEREAL, TrackingMode.OFF):
+            return f"tracking was set to {state.tracking.value} elsewhere (another client)"
+        return None
 
     def _error(self, state: MountState) -> tuple[float, float, float]:
         """(RA error in arcsec of RA, Dec error in arcsec, error on the sky in arcsec)."""

@@ -1,0 +1,168 @@
+"""Trying to break the follower (issue #16, docs/tracking.md "Tried to break it") on the
+simulator with an accelerated clock: a meridian flip mid-follow, another client's rates and
+goto, an ephemeris that gives no number, and hostile intervals and durations."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+import pytest
+
+from scopelink.astro import Site, angular_separation_deg, gmst_hours, observed_to_j2000
+from scopelink.astro._arrays import FloatArray
+from scopelink.astro.targets import MovingTarget, TargetKind, solar_system_target
+from scopelink.mount import InvalidValueError, Limits, PierSide
+from scopelink.mount.follow import CHANGED_RATES, TAKEN_OVER, TargetFollower
+from scopelink.sim import EQ6, SimClock, SimulatedMount
+
+MADRID = Site(40.4, -3.7, elevation_m=650.0)
+
+
+def _hour_angle_deg(ra_hours: float, t: datetime, site: Site) -> float:
+    return ((gmst_hours(t) + site.longitude_deg / 15.0 - ra_hours) * 15.0 + 180.0) % 360.0 - 180.0
+
+
+async def test_a_meridian_flip_mid_follow_sends_the_mount_nowhere_else() -> None:
+    """The flip's goto crosses the sky; rates worked out from its readings (up to 0.8°/s)
+    carried the mount 7.6° away from the Moon after the landing before this fix. Now the flip
+    (a goto not the follower's) ends following, and the flipped mount stays on the Moon."""
+    moon = solar_system_target("Moon", MADRID)
+    start = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    while _hour_angle_deg(moon.position(start)[0], start, MADRID) < -1.0:
+        start += timedelta(minutes=1)
+    limits = Limits(meridian_west_deg=0.5, min_track_minutes=0.0, auto_flip=True)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock(start=start, rate=150.0), limits=limits)
+    await sim.connect()
+    ra, dec = observed_to_j2000(40.0, 100.0, sim.now(), MADRID)
+    await sim.goto_equatorial(ra, dec)  # in the east: the tube on the west side of the pier
+    assert (await sim.wait_for_slew(timeout_s=20.0)).pier_side is PierSide.WEST
+    worst_after_flip = 0.0
+    flipped = False
+
+    async def watch() -> None:
+        nonlocal worst_after_flip, flipped
+        while True:
+            state = sim.state_at(sim.elapsed())
+            if state.pier_side is PierSide.EAST and not state.slewing:
+                flipped = True
+                assert state.ra_j2000_hours is not None
+                assert state.dec_j2000_deg is not None
+                ra, dec = moon.position(state.read_at)
+                off = angular_separation_deg(
+                    ra * 15.0, dec, state.ra_j2000_hours * 15.0, state.dec_j2000_deg
+                )
+                worst_after_flip = max(worst_after_flip, float(off))
+            await asyncio.sleep(0.02)
+
+    watcher = asyncio.create_task(watch())
+    try:
+        follower = TargetFollower(sim, moon)
+        result = await follower.run(duration_s=1200.0)
+        landed = sim.clock.datetime_at(sim.elapsed()) + timedelta(seconds=180)
+        await sim.wait_for(lambda s: s.read_at >= landed, timeout_s=20.0)
+    finally:
+        watcher.cancel()
+        await sim.disconnect()
+    assert flipped, "the mount did not flip: the test's set-up is wrong"
+    assert result.reason == TAKEN_OVER or result.reason.startswith("tracking was stopped")
+    assert worst_after_flip < 0.1, f"{worst_after_flip:.2f}° off the Moon after the flip"
+    assert sim.tracking_rates.zero
+
+
+async def test_another_clients_rates_and_goto_end_following_and_are_kept() -> None:
+    """Rates set by someone else while following used to be overwritten within an interval
+    (and zeroed at the end): now the later command wins, following ends and they are kept;
+    a goto elsewhere ends following too (it used to pull the mount back at up to 1°/s)."""
+    t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    moon = solar_system_target("Moon", MADRID)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock(start=t0, rate=50.0))
+    await sim.connect()
+    try:
+        follower = TargetFollower(sim, moon, interval_s=5.0)
+        task = asyncio.create_task(follower.run(duration_s=3600.0))
+        await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
+        await sim.set_tracking_rates(0.0, 12.0)  # someone else: Alpaca's DeclinationRate
+        result = await asyncio.wait_for(task, 20.0)
+        assert result.reason == CHANGED_RATES
+        assert (sim.tracking_rates.ra_arcsec_per_s, sim.tracking_rates.dec_arcsec_per_s) == (
+            0.0,
+            12.0,
+        )
+        await sim.set_tracking_rates(0.0, 0.0)
+        follower = TargetFollower(sim, moon, interval_s=5.0)
+        task = asyncio.create_task(follower.run(duration_s=3600.0))
+        await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
+        ra, dec = observed_to_j2000(50.0, 100.0, sim.now(), MADRID)
+        await sim.goto_equatorial(ra, dec)  # someone else's goto
+        result = await asyncio.wait_for(task, 20.0)
+        assert result.reason == TAKEN_OVER
+        assert sim.tracking_rates.zero
+        landed = await sim.wait_for_slew(timeout_s=20.0)
+        assert landed.ra_j2000_hours is not None
+        assert abs(landed.ra_j2000_hours - ra) * 15.0 < 0.1  # where the other client sent it
+    finally:
+        await sim.disconnect()
+
+
+class _FailingEphemeris(MovingTarget):
+    """The Moon until ``fails_at``, then no number (an orbit PyEphem cannot carry, a bug)."""
+
+    def __init__(self, site: Site, fails_at: datetime) -> None:
+        super().__init__("Broken", TargetKind.COMET, site)
+        self._moon = solar_system_target("Moon", site)
+        self._fails_jd = (fails_at - datetime(1970, 1, 1, tzinfo=UTC)).total_seconds() / 86400.0
+
+    def positions(self, jd: tuple[FloatArray, FloatArray]) -> tuple[FloatArray, FloatArray]:
+        ra, dec = self._moon.positions(jd)
+        unix_days = (np.asarray(jd[0]) - 2440587.5) + np.asarray(jd[1])
+        bad = unix_days >= self._fails_jd
+        return np.where(bad, np.nan, ra), np.where(bad, np.nan, dec)
+
+
+async def test_an_ephemeris_without_numbers_mid_follow_stops_instead_of_racing() -> None:
+    """A place that is not a number made the clamp ``max(-limit, min(limit, nan))`` answer
+    +3600″/s: the mount was driven at 1°/s. Now following stops, rates back to zero."""
+    t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock(start=t0, rate=100.0))
+    await sim.connect()
+    try:
+        target = _FailingEphemeris(MADRID, t0 + timedelta(seconds=150))
+        fastest = 0.0
+
+        async def watch() -> None:
+            nonlocal fastest
+            while True:
+                rates = sim.tracking_rates
+                fastest = max(fastest, abs(rates.ra_arcsec_per_s), abs(rates.dec_arcsec_per_s))
+                await asyncio.sleep(0.005)
+
+        watcher = asyncio.create_task(watch())
+        result = await TargetFollower(sim, target, interval_s=5.0).run(duration_s=3600.0)
+        watcher.cancel()
+    finally:
+        await sim.disconnect()
+    assert result.reason.startswith("no number for Broken's place"), result.reason
+    assert fastest < 100.0, f"driven at {fastest:g}″/s"
+    assert sim.tracking_rates.zero
+
+
+async def test_hostile_intervals_and_durations_are_refused_before_anything_moves() -> None:
+    t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(t0))
+    await sim.connect()
+    try:
+        before = sim.state
+        moon = solar_system_target("Moon", MADRID)
+        for interval in (math.nan, math.inf, -1.0, 1e300):
+            with pytest.raises(InvalidValueError, match="interval between rate updates"):
+                TargetFollower(sim, moon, interval_s=interval)
+        for duration in (math.nan, math.inf, -5.0, 1e300):
+            with pytest.raises(InvalidValueError, match="duration must lie in"):
+                await TargetFollower(sim, moon).run(duration_s=duration)
+        assert sim.state.ra_j2000_hours == before.ra_j2000_hours
+        assert sim.target is None
+    finally:
+        await sim.disconnect()
