@@ -7,16 +7,27 @@ from __future__ import annotations
 import asyncio
 import math
 from datetime import UTC, datetime, timedelta
+from pathlib import Path
 
+import erfa
 import numpy as np
 import pytest
 
 from scopelink.astro import Site, angular_separation_deg, gmst_hours, observed_to_j2000
 from scopelink.astro._arrays import FloatArray
-from scopelink.astro.targets import MovingTarget, TargetKind, solar_system_target
+from scopelink.astro.targets import (
+    MovingTarget,
+    SatelliteTarget,
+    TargetKind,
+    satellite_target,
+    solar_system_target,
+    times_after,
+)
 from scopelink.mount import InvalidValueError, Limits, PierSide
 from scopelink.mount.follow import CHANGED_RATES, TAKEN_OVER, TargetFollower
+from scopelink.mount.sun import sun_j2000
 from scopelink.sim import EQ6, SimClock, SimulatedMount
+from tests.support.targets import iss_tle_at
 
 MADRID = Site(40.4, -3.7, elevation_m=650.0)
 
@@ -166,3 +177,61 @@ async def test_hostile_intervals_and_durations_are_refused_before_anything_moves
         assert sim.target is None
     finally:
         await sim.disconnect()
+
+
+def _site_seeing_the_iss_cross_the_sun(
+    iss: SatelliteTarget, start: datetime
+) -> tuple[Site, datetime]:
+    """A site from which the ISS passes in front of the Sun, and when: where the line from the
+    ISS away from the Sun meets the Earth (a sphere: good to a degree or so)."""
+    t = start
+    for _ in range(24 * 60):
+        jd1, jd2 = times_after(t, np.zeros(1))
+        _, teme_km, _ = iss.tle.satrec.sgp4(float(jd1[0]), float(jd2[0]))
+        satellite = np.array(teme_km)
+        sun_ra, sun_dec = sun_j2000(t, Site(0.0, 0.0))
+        ra, dec = math.radians(sun_ra * 15.0), math.radians(sun_dec)
+        towards_sun = np.array(
+            [math.cos(dec) * math.cos(ra), math.cos(dec) * math.sin(ra), math.sin(dec)]
+        )
+        along = float(satellite @ towards_sun)
+        disc = along * along - float(satellite @ satellite) + 6371.0**2
+        if disc > 0.0 and along - math.sqrt(disc) > 0.0:
+            x, y, z = satellite - (along - math.sqrt(disc)) * towards_sun
+            theta = float(erfa.gmst82(jd1, jd2)[0])
+            east_x = math.cos(theta) * x + math.sin(theta) * y
+            east_y = -math.sin(theta) * x + math.cos(theta) * y
+            latitude = math.degrees(math.asin(z / math.sqrt(x * x + y * y + z * z)))
+            if abs(latitude) < 55.0:
+                return Site(latitude, math.degrees(math.atan2(east_y, east_x))), t
+        t += timedelta(minutes=1)
+    raise AssertionError("the ISS never crossed the Sun for a site below 55° of latitude")
+
+
+async def test_a_daytime_satellite_pass_across_the_sun_is_followed_outside_its_zone(
+    tmp_path: Path,
+) -> None:
+    """The pass plan judged the limits but not the Sun zone: a pass in front of the Sun was
+    planned whole (the follower then stopped at the zone's edge, the guard below it)."""
+    t0 = datetime(2026, 3, 3, 9, tzinfo=UTC)
+    tle = iss_tle_at(t0, tmp_path / "iss.tle")
+    site, crossing = _site_seeing_the_iss_cross_the_sun(
+        satellite_target("ISS", tle, Site(0.0, 0.0)), t0
+    )
+    iss = satellite_target("ISS", tle, site)
+    sun_ra, sun_dec = sun_j2000(crossing, site)
+    ra, dec = iss.position(crossing)
+    assert angular_separation_deg(ra * 15.0, dec, sun_ra * 15.0, sun_dec) < 5.0
+    sim = SimulatedMount(EQ6, site=site, clock=SimClock.stepped(crossing - timedelta(minutes=12)))
+    await sim.connect()
+    try:
+        plan = TargetFollower(sim, iss).check()
+    finally:
+        await sim.disconnect()
+    assert plan is not None
+    assert plan.note is not None
+    assert "of the Sun" in plan.note, plan.note
+    seconds = int((plan.end - plan.start).total_seconds())
+    ras, decs = iss.positions(times_after(plan.start, np.arange(0.0, seconds + 1.0)))
+    apart = angular_separation_deg(ras * 15.0, decs, sun_ra * 15.0, sun_dec)
+    assert float(np.min(apart)) >= 15.0, f"the plan comes {float(np.min(apart)):.1f}° from the Sun"

@@ -165,7 +165,7 @@ class TargetFollower:
                 "(and cover the telescope and the finder with certified solar filters first)"
             )
         if isinstance(target, SatelliteTarget):
-            plan = plan_pass(target, mount.limits, limit, mount.now())
+            plan = plan_pass(target, mount.limits, limit, mount.now(), mount.sun_zone())
             self.result.plan = plan
             return plan
         self._check_place(mount.now(), "")
