@@ -42,6 +42,7 @@ from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import MountState, SlewTarget, TrackingMode
 
 __all__ = [
+    "ABORTED",
     "GAIN",
     "GOTO_LEAD_S",
     "MAX_DURATION_S",
@@ -83,6 +84,7 @@ MAX_DURATION_S = 30 * 86400.0
 
 TAKEN_OVER = "another goto took the mount over (another client, or a meridian flip)"
 CHANGED_RATES = "the tracking rates were changed elsewhere (another client)"
+ABORTED = "an abort stopped following (a stop from a front end, or the horizon guard)"
 
 
 def default_interval_s(kind: TargetKind) -> float:
@@ -148,6 +150,8 @@ class TargetFollower:
         self._own_goto: SlewTarget | None = None
         """The mount's last goto when the follower began, then the follower's own goto: any
         other goto takes the mount over and ends following."""
+        self._aborts = mount.aborts
+        """``Mount.aborts`` when following began: any abort since ends following."""
         self._rates_set: TrackingRates | None = None
         """The rates the follower set last: other rates in force were set by someone else."""
 
@@ -201,7 +205,7 @@ class TargetFollower:
             )
         plan = self.check()
         mount = self.mount
-        self._own_goto = mount.target
+        self._own_goto, self._aborts = mount.target, mount.aborts
         try:
             async with mount.watching():
                 if plan is None:
@@ -211,12 +215,12 @@ class TargetFollower:
                     if start >= plan.end - timedelta(seconds=10):
                         raise FollowError(f"{self.target.name}: too little of the pass is left")
                     await self._wait_until(start - timedelta(seconds=GOTO_LEAD_S), stop)
-                if not stop.is_set():
+                if not stop.is_set() and not self.result.reason:
                     await self._goto(start, stop)
-                if plan is not None and not stop.is_set():
+                if plan is not None and not stop.is_set() and not self.result.reason:
                     await self._wait_until(start, stop)
-                if stop.is_set():
-                    self.result.reason = "stopped"
+                if stop.is_set() or self.result.reason:
+                    self.result.reason = self.result.reason or "stopped"
                     return self.result
                 end = plan.end if plan is not None else None
                 if duration_s is not None:
@@ -244,9 +248,9 @@ class TargetFollower:
             async for state in states:
                 if stop.is_set() or state.read_at >= deadline:
                     return
-                if self.mount.target is not self._own_goto:
-                    self.result.reason = TAKEN_OVER
-                    stop.set()
+                taken = self._taken_over(state, fresh=False)
+                if taken:
+                    self.result.reason = taken
                     return
                 self._throttled(state, "waiting", 0.0, 0.0)
 
@@ -316,6 +320,9 @@ class TargetFollower:
         not the follower's, rates it did not set, or another tracking mode."""
         if self.mount.target is not self._own_goto:
             return TAKEN_OVER
+        if self.mount.aborts != self._aborts:
+            problems = "; ".join(state.problems)
+            return ABORTED + (f": {problems}" if problems else "")
         if self._rates_set is not None and self.mount.tracking_rates != self._rates_set:
             return CHANGED_RATES
         if fresh and state.tracking not in (TrackingMode.SIDEREAL, TrackingMode.OFF):
