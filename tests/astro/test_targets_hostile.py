@@ -103,6 +103,7 @@ def test_the_tracking_page_states_the_file_and_orbit_limits() -> None:
     from scopelink.astro.targets.base import MAX_FILE_BYTES
     from scopelink.astro.targets.elements import MAX_ORBIT_AU, MIN_PERIHELION_AU
     from scopelink.mount.follow import MAX_DURATION_S, MAX_INTERVAL_S
+    from scopelink.mount.follow_plan import MAX_TLE_AGE_DAYS
 
     docs = Path(__file__).resolve().parents[2] / "docs" / "tracking.md"
     text = " ".join(docs.read_text(encoding="utf-8").split())
@@ -111,3 +112,4 @@ def test_the_tracking_page_states_the_file_and_orbit_limits() -> None:
     assert f"`MAX_FILE_BYTES` = {MAX_FILE_BYTES // 2**20} MiB" in text
     assert f"`MAX_INTERVAL_S` = {MAX_INTERVAL_S:g} s" in text
     assert f"`MAX_DURATION_S` = {MAX_DURATION_S / 86400:g} days" in text
+    assert f"`MAX_TLE_AGE_DAYS` = {MAX_TLE_AGE_DAYS:g} days" in text

@@ -25,9 +25,10 @@ from scopelink.astro.targets import (
 )
 from scopelink.mount import InvalidValueError, Limits, PierSide
 from scopelink.mount.follow import CHANGED_RATES, TAKEN_OVER, TargetFollower
+from scopelink.mount.follow_plan import FollowError
 from scopelink.mount.sun import sun_j2000
 from scopelink.sim import EQ6, SimClock, SimulatedMount
-from tests.support.targets import iss_tle_at
+from tests.support.targets import SATELLITES, iss_tle_at
 
 MADRID = Site(40.4, -3.7, elevation_m=650.0)
 
@@ -235,3 +236,26 @@ async def test_a_daytime_satellite_pass_across_the_sun_is_followed_outside_its_z
     ras, decs = iss.positions(times_after(plan.start, np.arange(0.0, seconds + 1.0)))
     apart = angular_separation_deg(ras * 15.0, decs, sun_ra * 15.0, sun_dec)
     assert float(np.min(apart)) >= 15.0, f"the plan comes {float(np.min(apart)):.1f}° from the Sun"
+
+
+async def test_a_tle_far_from_its_epoch_is_refused_before_anything_moves(tmp_path: Path) -> None:
+    """SGP4 carries a 2008 TLE to 2026 without an error: the follower planned a pass of a
+    satellite that is not there and slewed to it. Now a TLE more than 30 days from now (either
+    way) is refused, saying why."""
+    t0 = datetime(2026, 3, 3, 21, tzinfo=UTC)
+    site = Site(51.48, 0.0)
+    sim = SimulatedMount(EQ6, site=site, clock=SimClock.stepped(t0))
+    await sim.connect()
+    try:
+        stale = satellite_target("ISS", SATELLITES, site)  # 2008-09-20
+        with pytest.raises(FollowError, match=r"is for 2008-09-20, 6373 days before now") as no:
+            TargetFollower(sim, stale).check()  # what run() does first
+        assert "get a recent TLE" in str(no.value)
+        ahead = satellite_target("ISS", iss_tle_at(t0 + timedelta(days=40), tmp_path / "a"), site)
+        with pytest.raises(FollowError, match=r"40 days after now"):
+            TargetFollower(sim, ahead).check()
+        fresh = satellite_target("ISS", iss_tle_at(t0 - timedelta(days=20), tmp_path / "f"), site)
+        assert TargetFollower(sim, fresh).check() is not None
+        assert sim.target is None  # nothing moved
+    finally:
+        await sim.disconnect()

@@ -28,7 +28,14 @@ from scopelink.mount.limits import Limits
 from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.sun import SunZone
 
-__all__ = ["MIN_FOLLOW_S", "RATE_MARGIN", "FollowError", "PassPlan", "plan_pass"]
+__all__ = [
+    "MAX_TLE_AGE_DAYS",
+    "MIN_FOLLOW_S",
+    "RATE_MARGIN",
+    "FollowError",
+    "PassPlan",
+    "plan_pass",
+]
 
 RATE_MARGIN = 0.9
 """The share of the mount's largest rate a pass may need (the rest is for corrections)."""
@@ -38,6 +45,12 @@ MIN_FOLLOW_S = 30.0
 
 PASS_WINDOW_HOURS = 24.0
 """How far ahead the next pass is looked for."""
+
+MAX_TLE_AGE_DAYS = 30.0
+"""A TLE further than this from the pass (before or after its epoch) is refused: SGP4 still
+answers, but a low orbit's place drifts by kilometres a day (the ISS: 1-3 km, so a 30-day-old
+TLE may be off by a minute along its track): the mount would follow a satellite that is not
+there."""
 
 
 class FollowError(MountError):
@@ -73,6 +86,15 @@ def plan_pass(
     """The stretch of the next pass to follow, or :class:`FollowError` saying why none;
     ``sun``: the Sun avoidance zone (None: off), whose seconds are never followed."""
     horizon = max(limits.horizon_deg, 0.0)
+    satrec = target.tle.satrec
+    epoch = utc_datetime(float(satrec.jdsatepoch), float(satrec.jdsatepochF))
+    age_days = (now - epoch).total_seconds() / 86400.0
+    if abs(age_days) > MAX_TLE_AGE_DAYS:
+        raise FollowError(
+            f"the TLE of {target.name} is for {epoch:%Y-%m-%d}, {abs(age_days):.0f} days "
+            f"{'before' if age_days > 0 else 'after'} now: more than {MAX_TLE_AGE_DAYS:g} days "
+            "from its epoch SGP4 places a low satellite far from where it is (get a recent TLE)"
+        )
     found = next_pass(target, now, window_hours=PASS_WINDOW_HOURS, horizon_deg=horizon)
     if found is None:
         raise FollowError(
