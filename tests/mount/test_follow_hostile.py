@@ -259,3 +259,32 @@ async def test_a_tle_far_from_its_epoch_is_refused_before_anything_moves(tmp_pat
         assert sim.target is None  # nothing moved
     finally:
         await sim.disconnect()
+
+
+class _Streak(MovingTarget):
+    """A target crossing the sky at 1.6°/s of Dec from a place high in the south (an object
+    a few thousand km away without a TLE: a re-entry, a test)."""
+
+    def __init__(self, site: Site, at: datetime) -> None:
+        super().__init__("Streak", TargetKind.ASTEROID, site)
+        self._ra, self._dec = observed_to_j2000(50.0, 180.0, at, site)
+        self._at = at
+
+    def positions(self, jd: tuple[FloatArray, FloatArray]) -> tuple[FloatArray, FloatArray]:
+        unix_s = ((np.asarray(jd[0]) - 2440587.5) + np.asarray(jd[1])) * 86400.0
+        seconds = unix_s - self._at.timestamp()
+        return np.full_like(seconds, self._ra), self._dec + 1.6 * seconds
+
+
+async def test_a_target_faster_than_the_mount_is_refused_not_trailed() -> None:
+    """Only a satellite's pass was judged against the mount's rates: a faster target was
+    followed at the clamp, falling further behind every second. Now refused before the goto."""
+    t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock.stepped(t0))
+    await sim.connect()
+    try:
+        with pytest.raises(FollowError, match=r"Streak needs 5760″/s in Dec now; this mount's"):
+            TargetFollower(sim, _Streak(MADRID, t0)).check()
+        assert sim.target is None
+    finally:
+        await sim.disconnect()

@@ -35,7 +35,7 @@ from scopelink.mount.errors import (
     NotSupportedError,
     SunAvoidanceError,
 )
-from scopelink.mount.follow_plan import FollowError, PassPlan, plan_pass
+from scopelink.mount.follow_plan import RATE_MARGIN, FollowError, PassPlan, plan_pass
 from scopelink.mount.rates import TrackingRates
 from scopelink.mount.slew_wait import slew_unless_stopped
 from scopelink.mount.sun import SETTING as SUN_SETTING
@@ -173,7 +173,21 @@ class TargetFollower:
             self.result.plan = plan
             return plan
         self._check_place(mount.now(), "")
+        self._check_rates(mount.now(), limit)
         return None
+
+    def _check_rates(self, t: datetime, limit: float) -> None:
+        """FollowError when the target moves faster than the mount's largest rate (with room
+        for corrections, as for a satellite's pass): it would fall behind at the clamp."""
+        rates = self.target.rate(t)
+        allowed = RATE_MARGIN * limit
+        for axis, value in (("RA", rates.ra_arcsec_per_s), ("Dec", rates.dec_arcsec_per_s)):
+            if abs(value) > allowed:
+                raise FollowError(
+                    f"{self.target.name} needs {abs(value):.0f}″/s in {axis} now; this mount's "
+                    f"largest rate is {limit:g}″/s ({RATE_MARGIN:.0%} of it is used, the rest "
+                    "is for corrections)"
+                )
 
     def _check_place(self, t: datetime, what: str) -> None:
         """LimitError / SunAvoidanceError when the target is outside the limits at ``t``."""
