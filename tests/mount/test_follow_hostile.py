@@ -28,6 +28,8 @@ from scopelink.mount.follow import CHANGED_RATES, TAKEN_OVER, TargetFollower
 from scopelink.mount.follow_plan import FollowError
 from scopelink.mount.sun import sun_j2000
 from scopelink.sim import EQ6, SimClock, SimulatedMount
+from tests.support.alpaca import blocking
+from tests.support.rates import alpaca_telescope
 from tests.support.targets import SATELLITES, iss_tle_at
 
 MADRID = Site(40.4, -3.7, elevation_m=650.0)
@@ -84,37 +86,39 @@ async def test_a_meridian_flip_mid_follow_sends_the_mount_nowhere_else() -> None
     assert sim.tracking_rates.zero
 
 
-async def test_another_clients_rates_and_goto_end_following_and_are_kept() -> None:
-    """Rates set by someone else while following used to be overwritten within an interval
-    (and zeroed at the end): now the later command wins, following ends and they are kept;
-    a goto elsewhere ends following too (it used to pull the mount back at up to 1°/s)."""
+async def test_another_clients_rates_and_goto_end_following_and_are_kept(tmp_path: Path) -> None:
+    """Rates set by another client (alpyca over Alpaca) while following used to be overwritten
+    within an interval and zeroed at the end: now the later command wins, following ends and
+    they are kept; another client's slew ends following too (it used to pull the mount back
+    at up to 1°/s)."""
     t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
     moon = solar_system_target("Moon", MADRID)
     sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock(start=t0, rate=50.0))
     await sim.connect()
     try:
-        follower = TargetFollower(sim, moon, interval_s=5.0)
-        task = asyncio.create_task(follower.run(duration_s=3600.0))
-        await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
-        await sim.set_tracking_rates(0.0, 12.0)  # someone else: Alpaca's DeclinationRate
-        result = await asyncio.wait_for(task, 20.0)
-        assert result.reason == CHANGED_RATES
-        assert (sim.tracking_rates.ra_arcsec_per_s, sim.tracking_rates.dec_arcsec_per_s) == (
-            0.0,
-            12.0,
-        )
-        await sim.set_tracking_rates(0.0, 0.0)
-        follower = TargetFollower(sim, moon, interval_s=5.0)
-        task = asyncio.create_task(follower.run(duration_s=3600.0))
-        await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
-        ra, dec = observed_to_j2000(50.0, 100.0, sim.now(), MADRID)
-        await sim.goto_equatorial(ra, dec)  # someone else's goto
-        result = await asyncio.wait_for(task, 20.0)
-        assert result.reason == TAKEN_OVER
-        assert sim.tracking_rates.zero
-        landed = await sim.wait_for_slew(timeout_s=20.0)
-        assert landed.ra_j2000_hours is not None
-        assert abs(landed.ra_j2000_hours - ra) * 15.0 < 0.1  # where the other client sent it
+        async with alpaca_telescope(sim, tmp_path) as telescope:
+            follower = TargetFollower(sim, moon, interval_s=5.0)
+            task = asyncio.create_task(follower.run(duration_s=3600.0))
+            await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
+            await blocking(lambda: setattr(telescope, "DeclinationRate", 12.0))
+            result = await asyncio.wait_for(task, 20.0)
+            assert result.reason == CHANGED_RATES
+            assert sim.tracking_rates.dec_arcsec_per_s == 12.0  # the other client's, kept
+            await blocking(lambda: setattr(telescope, "DeclinationRate", 0.0))
+            await blocking(lambda: setattr(telescope, "RightAscensionRate", 0.0))
+            assert sim.tracking_rates.zero
+            follower = TargetFollower(sim, moon, interval_s=5.0)
+            task = asyncio.create_task(follower.run(duration_s=3600.0))
+            await sim.wait_for(lambda s: not sim.tracking_rates.zero, timeout_s=20.0)
+            ra, dec = observed_to_j2000(50.0, 100.0, sim.now(), MADRID)
+            await blocking(lambda: telescope.SlewToCoordinatesAsync(ra, dec))
+            result = await asyncio.wait_for(task, 20.0)
+            assert result.reason == TAKEN_OVER
+            assert sim.tracking_rates.zero
+            landed = await sim.wait_for_slew(timeout_s=20.0)
+            assert landed.ra_j2000_hours is not None
+            # Where the other client sent it (Alpaca's coordinates are of date: 0.3° from J2000).
+            assert abs(landed.ra_j2000_hours - ra) * 15.0 < 1.0
     finally:
         await sim.disconnect()
 
