@@ -87,6 +87,14 @@ CHANGED_RATES = "the tracking rates were changed elsewhere (another client)"
 ABORTED = "an abort stopped following (a stop from a front end, or the horizon guard)"
 
 
+def _check_seconds(what: str, value: float | None, most: float) -> None:
+    """InvalidValueError unless ``value`` is None or a number of seconds in (0, ``most``]."""
+    if value is not None and not (
+        isinstance(value, int | float) and math.isfinite(value) and 0.0 < value <= most
+    ):
+        raise InvalidValueError(f"{what} must lie in (0, {most:g}] s, not {value}")
+
+
 def default_interval_s(kind: TargetKind) -> float:
     return INTERVAL_S.get(kind, DEFAULT_INTERVAL_S)
 
@@ -132,15 +140,7 @@ class TargetFollower:
         interval_s: float | None = None,
         on_report: Callable[[FollowReport], None] | None = None,
     ) -> None:
-        if interval_s is not None and not (
-            isinstance(interval_s, int | float)
-            and math.isfinite(interval_s)
-            and 0.0 < interval_s <= MAX_INTERVAL_S
-        ):
-            raise InvalidValueError(
-                f"the interval between rate updates must lie in (0, {MAX_INTERVAL_S:g}] s, "
-                f"not {interval_s}"
-            )
+        _check_seconds("the interval between rate updates", interval_s, MAX_INTERVAL_S)
         self.mount = mount
         self.target = target
         self.interval_s = interval_s or default_interval_s(target.kind)
@@ -209,14 +209,7 @@ class TargetFollower:
         passed since following began, the pass ends or the target leaves the limits; the rates
         go back to zero at the end (the mount tracks at the sidereal rate)."""
         stop = stop or asyncio.Event()
-        if duration_s is not None and not (
-            isinstance(duration_s, int | float)
-            and math.isfinite(duration_s)
-            and 0.0 < duration_s <= MAX_DURATION_S
-        ):
-            raise InvalidValueError(
-                f"the duration must lie in (0, {MAX_DURATION_S:g}] s, not {duration_s}"
-            )
+        _check_seconds("the duration", duration_s, MAX_DURATION_S)
         plan = self.check()
         mount = self.mount
         self._own_goto, self._aborts = mount.target, mount.aborts
