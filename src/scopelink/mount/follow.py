@@ -150,7 +150,7 @@ class TargetFollower:
         self._own_goto: SlewTarget | None = None
         """The mount's last goto when the follower began, then the follower's own goto: any
         other goto takes the mount over and ends following."""
-        self._aborts = mount.aborts
+        self._aborts = 0
         """``Mount.aborts`` when following began: any abort since ends following."""
         self._rates_set: TrackingRates | None = None
         """The rates the follower set last: other rates in force were set by someone else."""
