@@ -30,7 +30,12 @@ from scopelink.cli.mount_session import run_on_mount
 from scopelink.cli.options import add_device_arguments
 from scopelink.cli.stopping import until_stopped
 from scopelink.mount import Mount, TrackingMode
-from scopelink.mount.follow import FollowReport, TargetFollower
+from scopelink.mount.follow import (
+    MAX_DURATION_S,
+    MAX_INTERVAL_S,
+    FollowReport,
+    TargetFollower,
+)
 
 __all__ = ["TrackDisplay", "follow", "make_target", "register", "run_track"]
 
@@ -119,9 +124,14 @@ def run_track(args: argparse.Namespace) -> int:
     first = args.what[0].lower()
     if first in MODE_WORDS:
         return _run_mode(args, first)
-    for value, name in ((args.duration, "--duration"), (args.interval, "--interval")):
-        if value is not None and not value > 0:
-            raise CommandError(f"{name} must be positive, not {value:g}")
+    for value, name, most in (
+        (args.duration, "--duration", MAX_DURATION_S),
+        (args.interval, "--interval", MAX_INTERVAL_S),
+    ):
+        if value is not None and not (math.isfinite(value) and 0.0 < value <= most):
+            raise CommandError(
+                f"{name} must be a number of seconds in (0, {most:g}], not {value:g}"
+            )
     if first in ("comet", "asteroid") and args.elements is None:
         raise CommandError(
             f"track {first} needs --elements FILE",

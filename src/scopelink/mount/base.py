@@ -124,6 +124,8 @@ class Mount(PointedMount):
         """Park was commanded and not undone (AtPark once the mount has arrived and stopped)."""
         self.park_keeper = ParkKeeper()
         """Records the park and restores it at unpark (:mod:`scopelink.mount.parking`)."""
+        self.aborts = 0
+        """How often :meth:`abort` was called: a follower seeing one ends (mount/follow.py)."""
 
     # --- who, what, where -------------------------------------------------------------------------
 
@@ -368,6 +370,7 @@ class Mount(PointedMount):
         while the link is lost too (the driver tries it, or owes the stop)."""
         if not self.engaged:
             self._require_connected()
+        self.aborts += 1
         cancels_park = self.parking
         self._motion_commanded()  # seen to stop at full rate
         await self._abort()

@@ -29,19 +29,24 @@ from scopelink.astro import j2000_to_observed, wrap_signed_degrees
 from scopelink.astro.targets import MovingTarget, SatelliteTarget, TargetError, TargetKind
 from scopelink.mount.base import Mount
 from scopelink.mount.errors import (
+    InvalidValueError,
     LimitError,
     MountError,
     NotSupportedError,
     SunAvoidanceError,
 )
-from scopelink.mount.follow_plan import FollowError, PassPlan, plan_pass
+from scopelink.mount.follow_plan import RATE_MARGIN, FollowError, PassPlan, plan_pass
+from scopelink.mount.rates import TrackingRates
 from scopelink.mount.slew_wait import slew_unless_stopped
 from scopelink.mount.sun import SETTING as SUN_SETTING
-from scopelink.mount.types import MountState, TrackingMode
+from scopelink.mount.types import MountState, SlewTarget, TrackingMode
 
 __all__ = [
+    "ABORTED",
     "GAIN",
     "GOTO_LEAD_S",
+    "MAX_DURATION_S",
+    "MAX_INTERVAL_S",
     "REPORT_EVERY_S",
     "FollowError",
     "FollowReport",
@@ -69,6 +74,25 @@ starts: time for the slew across the sky and its settling."""
 
 REPORT_EVERY_S = 0.5
 """The tracking error is reported at most this often (mount clock)."""
+
+MAX_INTERVAL_S = 600.0
+"""The longest interval between rate updates accepted (10 minutes: the follower checks the
+limits and the Sun zone only at its updates)."""
+
+MAX_DURATION_S = 30 * 86400.0
+"""The longest ``duration_s`` accepted (30 days); longer, or not a number, is a typing error."""
+
+TAKEN_OVER = "another goto took the mount over (another client, or a meridian flip)"
+CHANGED_RATES = "the tracking rates were changed elsewhere (another client)"
+ABORTED = "an abort stopped following (a stop from a front end, or the horizon guard)"
+
+
+def _check_seconds(what: str, value: float | None, most: float) -> None:
+    """InvalidValueError unless ``value`` is None or a number of seconds in (0, ``most``]."""
+    if value is not None and not (
+        isinstance(value, int | float) and math.isfinite(value) and 0.0 < value <= most
+    ):
+        raise InvalidValueError(f"{what} must lie in (0, {most:g}] s, not {value}")
 
 
 def default_interval_s(kind: TargetKind) -> float:
@@ -116,12 +140,20 @@ class TargetFollower:
         interval_s: float | None = None,
         on_report: Callable[[FollowReport], None] | None = None,
     ) -> None:
+        _check_seconds("the interval between rate updates", interval_s, MAX_INTERVAL_S)
         self.mount = mount
         self.target = target
         self.interval_s = interval_s or default_interval_s(target.kind)
         self.on_report = on_report
         self.result = FollowResult()
         self.last: FollowReport | None = None
+        self._own_goto: SlewTarget | None = None
+        """The mount's last goto when the follower began, then the follower's own goto: any
+        other goto takes the mount over and ends following."""
+        self._aborts = 0
+        """``Mount.aborts`` when following began: any abort since ends following."""
+        self._rates_set: TrackingRates | None = None
+        """The rates the follower set last: other rates in force were set by someone else."""
 
     # --- refusals, before anything moves ------------------------------------------------------
 
@@ -137,11 +169,25 @@ class TargetFollower:
                 "(and cover the telescope and the finder with certified solar filters first)"
             )
         if isinstance(target, SatelliteTarget):
-            plan = plan_pass(target, mount.limits, limit, mount.now())
+            plan = plan_pass(target, mount.limits, limit, mount.now(), mount.sun_zone())
             self.result.plan = plan
             return plan
         self._check_place(mount.now(), "")
+        self._check_rates(mount.now(), limit)
         return None
+
+    def _check_rates(self, t: datetime, limit: float) -> None:
+        """FollowError when the target moves faster than the mount's largest rate (with room
+        for corrections, as for a satellite's pass): it would fall behind at the clamp."""
+        rates = self.target.rate(t)
+        allowed = RATE_MARGIN * limit
+        for axis, value in (("RA", rates.ra_arcsec_per_s), ("Dec", rates.dec_arcsec_per_s)):
+            if abs(value) > allowed:
+                raise FollowError(
+                    f"{self.target.name} needs {abs(value):.0f}″/s in {axis} now; this mount's "
+                    f"largest rate is {limit:g}″/s ({RATE_MARGIN:.0%} of it is used, the rest "
+                    "is for corrections)"
+                )
 
     def _check_place(self, t: datetime, what: str) -> None:
         """LimitError / SunAvoidanceError when the target is outside the limits at ``t``."""
@@ -163,8 +209,10 @@ class TargetFollower:
         passed since following began, the pass ends or the target leaves the limits; the rates
         go back to zero at the end (the mount tracks at the sidereal rate)."""
         stop = stop or asyncio.Event()
+        _check_seconds("the duration", duration_s, MAX_DURATION_S)
         plan = self.check()
         mount = self.mount
+        self._own_goto, self._aborts = mount.target, mount.aborts
         try:
             async with mount.watching():
                 if plan is None:
@@ -174,12 +222,12 @@ class TargetFollower:
                     if start >= plan.end - timedelta(seconds=10):
                         raise FollowError(f"{self.target.name}: too little of the pass is left")
                     await self._wait_until(start - timedelta(seconds=GOTO_LEAD_S), stop)
-                if not stop.is_set():
+                if not stop.is_set() and not self.result.reason:
                     await self._goto(start, stop)
-                if plan is not None and not stop.is_set():
+                if plan is not None and not stop.is_set() and not self.result.reason:
                     await self._wait_until(start, stop)
-                if stop.is_set():
-                    self.result.reason = "stopped"
+                if stop.is_set() or self.result.reason:
+                    self.result.reason = self.result.reason or "stopped"
                     return self.result
                 end = plan.end if plan is not None else None
                 if duration_s is not None:
@@ -187,8 +235,10 @@ class TargetFollower:
                     end = until if end is None else min(end, until)
                 await self._follow(stop, end)
         finally:
+            # Back to zero, unless someone else has set rates since (theirs are kept).
             with contextlib.suppress(MountError):
-                if mount.state.connected and not mount.tracking_rates.zero:
+                ours = mount.tracking_rates == self._rates_set
+                if mount.state.connected and ours and not mount.tracking_rates.zero:
                     await asyncio.shield(mount.set_tracking_rates(0.0, 0.0))
         return self.result
 
@@ -196,6 +246,7 @@ class TargetFollower:
         """Goto the target's place at ``at``; ``stop`` meanwhile aborts the slew."""
         ra, dec = self.target.position(at)
         await self.mount.goto_equatorial(ra, dec)
+        self._own_goto = self.mount.target
         self._report(FollowReport(self.mount.now(), "slewing", None, math.nan, math.nan, ra, dec))
         await slew_unless_stopped(self.mount, stop)
 
@@ -204,18 +255,27 @@ class TargetFollower:
             async for state in states:
                 if stop.is_set() or state.read_at >= deadline:
                     return
+                taken = self._taken_over(state, fresh=False)
+                if taken:
+                    self.result.reason = taken
+                    return
                 self._throttled(state, "waiting", 0.0, 0.0)
 
     async def _follow(self, stop: asyncio.Event, end: datetime | None) -> None:
         mount = self.mount
         if mount.state.tracking is not TrackingMode.SIDEREAL:
             await mount.set_tracking(TrackingMode.SIDEREAL)  # the rates are offsets from it
+        since = mount.now()  # readings from here on show the follower's tracking mode
         next_update: datetime | None = None
         rates = (0.0, 0.0)
         async with aclosing(mount.states()) as states:
             async for state in states:
                 if stop.is_set():
                     self.result.reason = "stopped"
+                    return
+                taken = self._taken_over(state, fresh=state.read_at >= since)
+                if taken:
+                    self.result.reason = taken
                     return
                 if not state.connected or state.ra_j2000_hours is None:
                     continue
@@ -234,17 +294,47 @@ class TargetFollower:
                 except TargetError as failed:  # e.g. SGP4 cannot carry the TLE this far
                     self.result.reason = str(failed)
                     return
+                if not all(math.isfinite(value) for value in error):
+                    self.result.reason = self._no_number(t)
+                    return
                 self.result.errors.append((t, error[2]))
                 self._throttled(state, "following", *rates)
                 if next_update is None or t >= next_update:
+                    ahead = t + timedelta(seconds=self.interval_s)
                     try:
                         self._check_place(t, "")
+                        if end is None or ahead <= end:  # where these rates carry the mount
+                            self._check_place(ahead, f" {self.interval_s:g} s from now")
+                    except InvalidValueError:  # the place is not a number
+                        self.result.reason = self._no_number(ahead)
+                        return
                     except LimitError as refused:
                         self.result.reason = str(refused).split(":")[0]
                         return
                     rates = self._rates(t, error)
                     await mount.set_tracking_rates(*rates)
-                    next_update = t + timedelta(seconds=self.interval_s)
+                    self._rates_set = mount.tracking_rates
+                    next_update = ahead
+
+    def _no_number(self, t: datetime) -> str:
+        return (
+            f"no number for {self.target.name}'s place or the mount's reading at "
+            f"{t:%H:%M:%S} UTC: following stopped"
+        )
+
+    def _taken_over(self, state: MountState, *, fresh: bool) -> str | None:
+        """Why following must end because someone else took over (None: nobody did): a goto
+        not the follower's, rates it did not set, or another tracking mode."""
+        if self.mount.target is not self._own_goto:
+            return TAKEN_OVER
+        if self.mount.aborts != self._aborts:
+            problems = "; ".join(state.problems)
+            return ABORTED + (f": {problems}" if problems else "")
+        if self._rates_set is not None and self.mount.tracking_rates != self._rates_set:
+            return CHANGED_RATES
+        if fresh and state.tracking not in (TrackingMode.SIDEREAL, TrackingMode.OFF):
+            return f"tracking was set to {state.tracking.value} elsewhere (another client)"
+        return None
 
     def _error(self, state: MountState) -> tuple[float, float, float]:
         """(RA error in arcsec of RA, Dec error in arcsec, error on the sky in arcsec)."""

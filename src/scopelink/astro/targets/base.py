@@ -10,9 +10,11 @@ how fast those coordinates change, in the units of ``Mount.set_tracking_rates``:
 from __future__ import annotations
 
 import enum
+import stat
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
+from pathlib import Path
 
 import numpy as np
 
@@ -21,11 +23,13 @@ from scopelink.astro.site import Site
 from scopelink.astro.timescales import utc_pair
 
 __all__ = [
+    "MAX_FILE_BYTES",
     "RATE_STEP_S",
     "MovingTarget",
     "TargetError",
     "TargetKind",
     "TargetRates",
+    "read_target_file",
     "times_after",
     "utc_datetime",
 ]
@@ -35,8 +39,33 @@ RATE_STEP_S = 1.0
 ~1e-4 of itself over it; a low satellite's by < 1 %)."""
 
 
+MAX_FILE_BYTES = 512 * 1024 * 1024
+"""The largest elements or TLE file read (512 MiB): MPCORB.DAT, every numbered asteroid, is
+about 300 MB; CelesTrak's whole catalogue of satellites is a few MB."""
+
+
 class TargetError(ValueError):
     """A target that cannot be made: an unknown name, a bad elements or TLE file (one line)."""
+
+
+def read_target_file(path: Path, what: str) -> str:
+    """The text of an elements or TLE file (``what`` names it in errors), or a one-line
+    :class:`TargetError`: only a regular file of at most ``MAX_FILE_BYTES`` is read (a device
+    such as /dev/zero or a pipe would never end), undecodable bytes replaced."""
+    try:
+        info = path.stat()
+        if stat.S_ISDIR(info.st_mode):
+            raise TargetError(f"cannot read {what} {path}: it is a directory")
+        if not stat.S_ISREG(info.st_mode):
+            raise TargetError(f"cannot read {what} {path}: not a regular file")
+        if info.st_size > MAX_FILE_BYTES:
+            raise TargetError(
+                f"cannot read {what} {path}: {info.st_size / 2**20:.0f} MiB is more than the "
+                f"{MAX_FILE_BYTES / 2**20:.0f} MiB any {what} needs"
+            )
+        return path.read_text(encoding="utf-8", errors="replace")
+    except OSError as error:
+        raise TargetError(f"cannot read {what} {path}: {error.strerror or error}") from None
 
 
 class TargetKind(enum.StrEnum):

@@ -28,7 +28,12 @@ from scopelink.astro._arrays import FloatArray
 from scopelink.astro.catalog.names import name_key
 from scopelink.astro.catalog.solar_system import _site_gcrs_km
 from scopelink.astro.site import Site
-from scopelink.astro.targets.base import MovingTarget, TargetError, TargetKind
+from scopelink.astro.targets.base import (
+    MovingTarget,
+    TargetError,
+    TargetKind,
+    read_target_file,
+)
 from scopelink.astro.timescales import tt_pair
 
 __all__ = ["OrbitTarget", "orbit_target", "read_orbits"]
@@ -38,6 +43,15 @@ _GAUSS_DEG_PER_DAY = 0.9856076686
 """The Gaussian gravitational constant in degrees: a 1 au orbit's mean daily motion."""
 _DUBLIN_JD = 2415020.0
 """PyEphem counts days from 1899 December 31 12:00 (JD 2415020)."""
+
+MIN_PERIHELION_AU = 0.001
+"""The closest perihelion an orbit may have (a fifth of the Sun's radius: no body orbits
+closer). PyEphem's Kepler solver never returns for a perihelion of 0 or an orbit of infinite
+size, so such elements are refused when read, before any place is computed."""
+
+MAX_ORBIT_AU = 1.0e6
+"""The largest semi-major axis or perihelion distance an orbit may have (beyond the Oort
+cloud); larger or infinite values are typing errors."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,15 +69,20 @@ class OrbitTarget(MovingTarget):
     def __init__(self, orbit: Orbit, site: Site | None) -> None:
         super().__init__(orbit.name, TargetKind.COMET if orbit.comet else TargetKind.ASTEROID, site)
         self.orbit = orbit
-        self._body = ephem.readdb(orbit.xephem)
+        self._body = _checked_body(orbit.xephem)
 
     def positions(self, jd: tuple[FloatArray, FloatArray]) -> tuple[FloatArray, FloatArray]:
         jd1, jd2 = (np.ravel(part) for part in jd)
         vectors = np.empty((3, jd1.size))
         for i, (a, b) in enumerate(zip(jd1, jd2, strict=True)):
-            self._body.compute(ephem.Date((a - _DUBLIN_JD) + b))
-            ra, dec = float(self._body.a_ra), float(self._body.a_dec)
-            distance_km = float(self._body.earth_distance) * _AU_KM
+            try:
+                self._body.compute(ephem.Date((a - _DUBLIN_JD) + b))
+                ra, dec = float(self._body.a_ra), float(self._body.a_dec)
+                distance_km = float(self._body.earth_distance) * _AU_KM
+            except (RuntimeError, ValueError, OverflowError) as error:  # PyEphem's refusals
+                raise TargetError(f"{self.name}: no place from these elements ({error})") from None
+            if not (math.isfinite(ra) and math.isfinite(dec) and math.isfinite(distance_km)):
+                raise TargetError(f"{self.name}: these elements give no place (not a number)")
             vectors[:, i] = distance_km * np.array(
                 [math.cos(dec) * math.cos(ra), math.cos(dec) * math.sin(ra), math.sin(dec)]
             )
@@ -80,17 +99,14 @@ class OrbitTarget(MovingTarget):
 
 def read_orbits(path: Path) -> list[Orbit]:
     """Every orbit in an elements file, or a one-line :class:`TargetError` naming the line."""
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as error:
-        raise TargetError(f"cannot read elements file {path}: {error.strerror}") from None
+    text = read_target_file(path, "elements file")
     orbits = []
     for number, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         try:
             orbits.append(_orbit_of_line(line))
-        except (ValueError, IndexError) as error:
+        except (ValueError, IndexError, ZeroDivisionError, OverflowError) as error:
             raise TargetError(
                 f"{path} line {number}: not an MPC one-line or XEphem orbit ({error})"
             ) from None
@@ -129,9 +145,40 @@ def _keys(full_name: str) -> set[str]:
     return keys
 
 
+def _checked_body(xephem: str) -> ephem.Body:
+    """The PyEphem body of an XEphem line, or ``ValueError`` when it is no orbit PyEphem can
+    carry: another XEphem type (a fixed star, an Earth satellite), an eccentricity that does not
+    fit the orbit's type, or a perihelion or size outside [``MIN_PERIHELION_AU``,
+    ``MAX_ORBIT_AU``] (PyEphem hangs on some of those)."""
+    body = ephem.readdb(xephem)
+    if isinstance(body, ephem.EllipticalBody):
+        a, e = float(body._a), float(body._e)
+        if not 0.0 <= e < 1.0:
+            raise ValueError(f"an elliptical orbit needs an eccentricity in [0, 1), not {e:g}")
+        _check_distance("semi-major axis", a)
+        _check_distance("perihelion distance", a * (1.0 - e))
+    elif isinstance(body, ephem.HyperbolicBody):
+        e = float(body._e)
+        if not (math.isfinite(e) and e > 1.0):
+            raise ValueError(f"a hyperbolic orbit needs an eccentricity above 1, not {e:g}")
+        _check_distance("perihelion distance", float(body._q))
+    elif isinstance(body, ephem.ParabolicBody):
+        _check_distance("perihelion distance", float(body._q))
+    else:
+        raise ValueError(f"an XEphem {type(body).__name__} is no orbit (types e, h or p are)")
+    return body
+
+
+def _check_distance(what: str, au: float) -> None:
+    if not (math.isfinite(au) and MIN_PERIHELION_AU <= au <= MAX_ORBIT_AU):
+        raise ValueError(
+            f"{what} {au:g} au must lie within {MIN_PERIHELION_AU:g}-{MAX_ORBIT_AU:g} au"
+        )
+
+
 def _orbit_of_line(line: str) -> Orbit:
     if "," in line[:60]:
-        body = ephem.readdb(line.strip())
+        body = _checked_body(line.strip())
         return Orbit(body.name, line.strip(), _xephem_is_comet(line))
     if len(line.rstrip()) >= 104 and re.match(r"^[ \d]{4}[CPDXAI]", line):
         return _mpc_comet(line)
@@ -151,7 +198,10 @@ def _field(line: str, first: int, last: int) -> float:
     text = line[first - 1 : last].strip()
     if not text:
         raise ValueError(f"columns {first}-{last} are empty")
-    return float(text)
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"columns {first}-{last} hold {text!r}, not a number")
+    return value
 
 
 def _mpc_comet(line: str) -> Orbit:
@@ -163,6 +213,9 @@ def _mpc_comet(line: str) -> Orbit:
     magnitude = line[91:100].split()
     h, k = magnitude if len(magnitude) == 2 else ("10", "4")
     when = f"{month}/{day}/{year}"
+    _check_distance("perihelion distance", q)
+    if not (math.isfinite(e) and e >= 0.0):
+        raise ValueError(f"eccentricity {e:g} must be a number of at least 0")
     if e < 1.0:
         a = q / (1.0 - e)
         n = _GAUSS_DEG_PER_DAY / a**1.5
@@ -171,7 +224,7 @@ def _mpc_comet(line: str) -> Orbit:
         xephem = f"{name},p,{when},{inc},{peri},{q},{node},2000,{h},{k}"
     else:
         xephem = f"{name},h,{when},{inc},{node},{peri},{e},{q},2000,{h},{k}"
-    ephem.readdb(xephem)  # the values must make an orbit PyEphem takes
+    _checked_body(xephem)  # the values must make an orbit PyEphem takes
     return Orbit(name, xephem, comet=True)
 
 
@@ -202,5 +255,5 @@ def _mpc_asteroid(line: str) -> Orbit:
     name = line[166:194].strip() if len(line) > 166 else ""
     name = name or line[:7].strip()
     xephem = f"{name},e,{inc},{node},{peri},{a},{n},{e},{m},{month}/{day}/{year},2000,H{h},{g}"
-    ephem.readdb(xephem)
+    _checked_body(xephem)
     return Orbit(name, xephem, comet=False)

@@ -24,7 +24,12 @@ from scopelink.astro._arrays import FloatArray
 from scopelink.astro.catalog.names import name_key
 from scopelink.astro.horizontal import observed_to_j2000
 from scopelink.astro.site import Site
-from scopelink.astro.targets.base import MovingTarget, TargetError, TargetKind
+from scopelink.astro.targets.base import (
+    MovingTarget,
+    TargetError,
+    TargetKind,
+    read_target_file,
+)
 
 __all__ = ["SatelliteTarget", "Tle", "read_tles", "satellite_target"]
 
@@ -97,10 +102,7 @@ def _checksum_ok(line: str) -> bool:
 def read_tles(path: Path) -> list[Tle]:
     """Every element set in a TLE file (two-line or three-line with names), or a one-line
     :class:`TargetError` naming the line."""
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError as error:
-        raise TargetError(f"cannot read TLE file {path}: {error.strerror}") from None
+    lines = read_target_file(path, "TLE file").splitlines()
     tles: list[Tle] = []
     name: str | None = None
     index = 0
