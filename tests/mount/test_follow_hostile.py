@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import re
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -292,3 +293,34 @@ async def test_a_target_faster_than_the_mount_is_refused_not_trailed() -> None:
         assert sim.target is None
     finally:
         await sim.disconnect()
+
+
+class _LateStreak(_Streak):
+    """Still until ``after`` seconds past ``at``, then the streak's 1.6°/s of Dec: a target that
+    becomes faster than the mount while it is followed."""
+
+    def __init__(self, site: Site, at: datetime, after: float) -> None:
+        super().__init__(site, at)
+        self._after = after
+
+    def positions(self, jd: tuple[FloatArray, FloatArray]) -> tuple[FloatArray, FloatArray]:
+        unix_s = ((np.asarray(jd[0]) - 2440587.5) + np.asarray(jd[1])) * 86400.0
+        moving = np.maximum(unix_s - self._at.timestamp() - self._after, 0.0)
+        return np.full_like(moving, self._ra), self._dec + 1.6 * moving
+
+
+async def test_a_target_that_becomes_faster_than_the_mount_ends_following_not_trailed() -> None:
+    """The speed check ran only before the goto: a target that sped up later was trailed at
+    the clamp, further behind at every update. Now the next update ends following, saying why."""
+    t0 = datetime(2026, 3, 1, 23, 0, tzinfo=UTC)
+    sim = SimulatedMount(EQ6, site=MADRID, clock=SimClock(start=t0, rate=100.0))
+    await sim.connect()
+    try:
+        follower = TargetFollower(sim, _LateStreak(MADRID, t0, after=120.0), interval_s=5.0)
+        result = await follower.run(duration_s=1800.0)
+        ended = sim.now()
+    finally:
+        await sim.disconnect()
+    assert re.search(r"Streak needs 5760″/s in Dec now; this mount's", result.reason), result.reason
+    assert ended - t0 < timedelta(seconds=200), f"trailed until {ended:%H:%M:%S}"
+    assert sim.tracking_rates.zero

@@ -65,8 +65,8 @@ INTERVAL_S = {TargetKind.SATELLITE: 1.0}
 """Seconds of the mount's clock between rate updates by kind; others: ``DEFAULT_INTERVAL_S``."""
 
 DEFAULT_INTERVAL_S = 30.0
-"""The Moon's path curves by < 0.01″ from a line over 30 s. Each update restarts a SynScan
-driver's PC loop (a transient of a few arcsec), so fewer updates follow more closely there."""
+"""The Moon's path curves by < 0.01″ from a line over 30 s. Each update restarts the Sky
+Tracker's press loop (re-anchored at a reading), so fewer updates follow more closely there."""
 
 GOTO_LEAD_S = 60.0
 """A satellite is met where it will be this many seconds (of the mount's clock) after the goto
@@ -302,6 +302,8 @@ class TargetFollower:
                 if next_update is None or t >= next_update:
                     ahead = t + timedelta(seconds=self.interval_s)
                     try:
+                        if self.result.plan is None:  # a pass's plan judged its rates already
+                            self._check_rates(t, mount.capabilities.max_tracking_offset_arcsec_s)
                         self._check_place(t, "")
                         if end is None or ahead <= end:  # where these rates carry the mount
                             self._check_place(ahead, f" {self.interval_s:g} s from now")
@@ -310,6 +312,9 @@ class TargetFollower:
                         return
                     except LimitError as refused:
                         self.result.reason = str(refused).split(":")[0]
+                        return
+                    except FollowError as too_fast:  # it sped up: trailing it helps nobody
+                        self.result.reason = str(too_fast)
                         return
                     rates = self._rates(t, error)
                     await mount.set_tracking_rates(*rates)
