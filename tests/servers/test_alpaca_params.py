@@ -93,6 +93,15 @@ def test_non_finite_or_out_of_range_numbers_are_invalid_values(text: str) -> Non
     with pytest.raises(AlpacaError) as caught:
         params.number("RightAscension", 0.0, 24.0)
     assert caught.value.number is ErrorNumber.INVALID_VALUE
+    if text.lower().lstrip("+-") in ("nan", "inf", "infinity"):
+        assert "must be a finite number" in str(caught.value), caught.value
+
+
+def test_a_non_finite_number_without_bounds_says_so() -> None:
+    """A NaN rate read "must lie within [-inf, inf]": true, and no help."""
+    params = Params.from_pairs([("DeclinationRate", "NaN")], exact=True)
+    with pytest.raises(AlpacaError, match=r"^DeclinationRate NaN must be a finite number$"):
+        params.number("DeclinationRate")
 
 
 @pytest.mark.parametrize("text", ["fast", "", "1_0", "0x10", "١٢", "1,5"])

@@ -89,7 +89,11 @@ class Params:
             value = math.nan  # well formed, but no coordinate or rate: InvalidValue below
         else:
             raise BadRequest(f"{name} must be a decimal number, got {text!r}")
-        if not (math.isfinite(value) and low <= value <= high):
+        if not math.isfinite(value):
+            raise AlpacaError(
+                ErrorNumber.INVALID_VALUE, f"{name} {stripped[:24]} must be a finite number"
+            )
+        if not low <= value <= high:
             limits = f"[{low:g}, {high:g}]"
             raise AlpacaError(
                 ErrorNumber.INVALID_VALUE, f"{name} {stripped[:24]} must lie within {limits}"
