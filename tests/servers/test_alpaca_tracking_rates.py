@@ -102,7 +102,15 @@ async def test_refusals_are_one_line_and_change_nothing(tmp_path: Path) -> None:
         await _connect_and_point(telescope, mount, 50.0, 200.0)
         with pytest.raises(InvalidValueException, match="within"):
             await blocking(lambda: setattr(telescope, "DeclinationRate", 1e5))
+        # An RA offset set at sidereal does not ride on top of lunar: leaving sidereal zeroes
+        # it (it is an offset from sidereal); the Dec rate is kept.
+        await blocking(lambda: setattr(telescope, "RightAscensionRate", 0.01))
+        await blocking(lambda: setattr(telescope, "DeclinationRate", 2.0))
         await blocking(lambda: setattr(telescope, "TrackingRate", DriveRates.driveLunar))
+        assert await blocking(lambda: telescope.RightAscensionRate) == 0.0
+        assert mount.tracking_rates.ra_arcsec_per_s == 0.0
+        assert mount.tracking_rates.dec_arcsec_per_s == 2.0
+        await blocking(lambda: setattr(telescope, "DeclinationRate", 0.0))
         with pytest.raises(InvalidOperationException, match="sidereal"):
             await blocking(lambda: setattr(telescope, "RightAscensionRate", 0.01))
         assert mount.tracking_rates.zero

@@ -172,6 +172,10 @@ class TrackingMembers(MemberGroup):
                 ErrorNumber.INVALID_VALUE, f"tracking rate {rate.name.lower()} is not supported"
             )
         self._drive_rate = rate
+        rates = mount.tracking_rates
+        if rate is not DriveRate.SIDEREAL and rates.ra_arcsec_per_s != 0.0:
+            # RightAscensionRate is an offset from sidereal: it does not ride on another rate.
+            await self.session.call(mount.set_tracking_rates(0.0, rates.dec_arcsec_per_s))
         mode = mode_for(mount, rate)
         if mode is not None and mount.state.tracking is not TrackingMode.OFF:
             await self.session.call(mount.set_tracking(mode))
