@@ -99,6 +99,14 @@ def test_park_then_status_agree_through_the_running_serve(config: Path, runtime_
         status, _, err = scopelink_here(config, "guide", "north", "100")
         assert status == 1
         assert f"cannot be done through a running scopelink serve (PID {serve.pid})" in err
+        # Following runs where the mount is driven: said so, not "cannot track at custom rates".
+        status, _, err = scopelink_here(config, "track", "moon")
+        assert status == 1
+        assert (
+            f"following: cannot be done through a running scopelink serve (PID {serve.pid})" in err
+        )
+        assert "POST /api/track" in err
+        assert "custom rates" not in err
         # `pointing` (which talks to the dashboard itself) finds the same serve without --url.
         status, out, err = scopelink_here(config, "pointing", "--json")
         assert status == 0, err

@@ -232,22 +232,23 @@ class ServeMount:
 
     @property
     def park_position(self) -> NoReturn:
-        raise self._cannot("reading the park position")
+        raise self.cannot("reading the park position")
 
     @park_position.setter
     def park_position(self, position: object) -> None:
-        raise self._cannot(
+        raise self.cannot(
             "parking elsewhere (--at, --axes)", "the serve parks where its [park] setting says"
         )
 
     def __getattr__(self, name: str) -> NoReturn:
         if name.startswith("__"):  # Python's own protocols: not a mount feature
             raise AttributeError(name)
-        raise self._cannot(name.strip("_").replace("_", " "))
+        raise self.cannot(name.strip("_").replace("_", " "))
 
     # --- the wire ---------------------------------------------------------------------------------
 
-    def _cannot(self, what: str, hint: str = "") -> NotSupportedError:
+    def cannot(self, what: str, hint: str = "") -> NotSupportedError:
+        """The one-line refusal of what the serve's API does not offer."""
         return NotSupportedError(
             f"{what}: cannot be done through a running scopelink serve (PID {self.entry.pid})"
             + (f"; {hint}" if hint else "; stop the serve and give --device DEVICE")

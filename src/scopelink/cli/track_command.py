@@ -223,6 +223,16 @@ def make_target(args: argparse.Namespace, mount: Mount) -> MovingTarget:
 
 
 async def follow(mount: Mount, args: argparse.Namespace) -> int:
+    from scopelink.cli.serve_mount import ServeMount  # noqa: PLC0415
+
+    served: object = mount  # run_on_mount gives a ServeMount in a Mount's place
+    if isinstance(served, ServeMount):  # the follower must run where the mount is driven
+        raise served.cannot(
+            "following",
+            "the serve follows the Moon, a planet or the Sun itself (POST /api/track on its "
+            "dashboard, docs/dashboard.md); for any target, stop the serve and give "
+            "--device DEVICE",
+        )
     target = make_target(args, mount)
     with TrackDisplay(target.name) as display:
 
