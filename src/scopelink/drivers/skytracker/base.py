@@ -101,10 +101,13 @@ _WITH_COMMANDER = capabilities_for(commander=True)
 _WITHOUT_COMMANDER = capabilities_for(commander=False)
 
 
-def pointing_of(reply: object, read_at: datetime, site: Site) -> Pointing:
-    """The reading of one Sky Commander position reply."""
-    assert isinstance(reply, PositionReply)
-    return Pointing(reply.ra_hours, reply.dec_degrees, read_at, site)
+def pointing_of(
+    reply: object, read_at: datetime, site: Site, received_s: float | None = None
+) -> Pointing:
+    """The reading of one Sky Commander position reply (``received_s``: when it arrived,
+    :func:`time.monotonic`; default now)."""
+    assert type(reply) is PositionReply  # exact: isinstance of an ABC runs Python code
+    return Pointing(reply.ra_hours, reply.dec_degrees, read_at, site, received_s)
 
 
 class SkyTrackerBase(Mount):
@@ -265,7 +268,7 @@ class SkyTrackerBase(Mount):
         return self._position
 
     def _note_status(self, reply: object) -> None:
-        assert isinstance(reply, StatusReply)
+        assert type(reply) is StatusReply  # exact: isinstance of an ABC runs Python code
         self._status = reply.status
         self._mode = reply.status.mode
         self._status_at = (self.now(), time.monotonic())

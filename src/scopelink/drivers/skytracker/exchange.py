@@ -18,7 +18,6 @@ again after the stop): :class:`StopWentFirstError`.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 from collections.abc import Sequence
@@ -72,6 +71,9 @@ RESYNC_QUIET_S = 0.1
 """After a fault, input is drained until the line has been quiet this long."""
 RESYNC_MAX_S = 2.0
 POSITION_REPLY_SIZE = PositionReply.size
+_REQUEST_BUS = RequestBus()
+_RELEASE_BUS = ReleaseBus()
+"""The bus commands of every Sky Commander exchange, built once (frozen, so shareable)."""
 
 
 class ReplyTimeoutError(DeviceError):
@@ -200,11 +202,16 @@ class SkyTrackerLine:
         refused = unanswered = 0
         retried_commands = False
         attempt = 0
+        scheduler = self.scheduler
         while attempt <= len(delays):
             if attempt:
                 await asyncio.sleep(delays[attempt - 1])
             attempt += 1
-            async with self.scheduler.turn(priority):
+            # The turn as scheduler.turn() takes it, without its context manager's coroutines
+            # when the wire is free (every poll's position passes here, issue #14).
+            if not scheduler.try_take():
+                await scheduler.take(priority)
+            try:
                 self._turn_stops = self._stops
                 answer = await self._request_bus()
                 if answer is None:
@@ -217,7 +224,10 @@ class SkyTrackerLine:
                 try:
                     if self._commander_behind:
                         await self._catch_up_commander()
-                    return [await self._exchange(c, self.timeout_s) for c in commands]
+                    replies: list[Reply | None] = []
+                    for command in commands:
+                        replies.append(await self._exchange(command, self.timeout_s))
+                    return replies
                 except (ReplyTimeoutError, BadReplyError) as error:
                     # Loading an object, realigning on it and reading the position can all be
                     # repeated: one more try (the resync has ended any partial line).
@@ -228,6 +238,8 @@ class SkyTrackerLine:
                     logger.info("Sky Commander exchange failed, trying once more: %s", error)
                 finally:
                     await self._release_bus()
+            finally:
+                scheduler.release()
         waited = sum(delays)
         what = ", ".join(c.describe() for c in commands)
         if refused:
@@ -299,19 +311,22 @@ class SkyTrackerLine:
     async def _request_bus(self) -> bool | None:
         """True granted, False refused, None no (good) answer (the line was resynchronised)."""
         try:
-            reply = await self._exchange(RequestBus(), self.bus.grant_timeout_s)
+            reply = await self._exchange(_REQUEST_BUS, self.bus.grant_timeout_s)
         except (ReplyTimeoutError, BadReplyError) as error:
             logger.info("bus request failed: %s", error)
             return None
-        assert isinstance(reply, BusAnswer)
+        assert type(reply) is BusAnswer  # exact: isinstance of an ABC runs Python code
         return reply.granted
 
     async def _release_bus(self) -> None:
         if self.link.closed:
             return
-        # If the link went away, the box takes the bus back when its PC link ends.
-        with contextlib.suppress(LinkError, NotConnectedError):
-            await self._exchange(ReleaseBus(), self.timeout_s)
+        # If the link went away, the box takes the bus back when its PC link ends. (A try, not
+        # contextlib.suppress: that is an object and two calls on every poll.)
+        try:
+            await self._exchange(_RELEASE_BUS, self.timeout_s)
+        except (LinkError, NotConnectedError):
+            return
 
     # --- one exchange ------------------------------------------------------------------------
 
@@ -342,7 +357,19 @@ class SkyTrackerLine:
             if command.reply is None:
                 return None
             with deadline.start(reply_within_s):
-                event = await self._next_reply()
+                # The reply, read inline (not a coroutine of its own: every exchange runs
+                # this, issue #14). Exact types, not isinstance: the events derive from an ABC,
+                # whose isinstance check runs Python code (they have no subclasses).
+                client = self._client
+                while True:
+                    event = client.next_event()
+                    if event is NEED_DATA:
+                        client.receive_data(await self.link.read())
+                    elif type(event) is StrayByte:
+                        self._note_stray(event)
+                    else:
+                        assert event is not PAUSED  # a client never pauses
+                        break
         except TimeoutError:
             self._client.abandon_reply()
             if deadline.interrupted:
@@ -366,25 +393,12 @@ class SkyTrackerLine:
             self._interrupted = True
             raise
         self.last_answer_s = time.monotonic()  # an answer, if perhaps a garbled one
-        if isinstance(event, BadReply):
+        if type(event) is BadReply:
             await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
         if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
-        return event
-
-    async def _next_reply(self) -> Reply | BadReply:
-        while True:
-            event = self._client.next_event()
-            if event is NEED_DATA:
-                self._client.receive_data(await self.link.read())
-            # An exact type, not isinstance: the events derive from an ABC, whose isinstance
-            # check runs Python code on every reply (StrayByte has no subclasses).
-            elif type(event) is StrayByte:
-                self._note_stray(event)
-            else:
-                assert event is not PAUSED  # a client never pauses
-                return cast(Reply | BadReply, event)
+        return cast(Reply, event)
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:
