@@ -351,8 +351,14 @@ class SkyTrackerLine:
         deadline = self._deadline
         deadline.interrupted = False
         try:
-            async with self._writing:
+            # The lock taken and released by hand: ``async with`` adds two coroutines to every
+            # exchange (issue #14).
+            writing = self._writing
+            await writing.acquire()
+            try:
                 await self.link.write(data)
+            finally:
+                writing.release()
             self.statistics.commands_sent += 1
             if command.reply is None:
                 return None
