@@ -151,8 +151,10 @@ class SkyTrackerLine:
         self.last_answer_s = time.monotonic()
         """:func:`time.monotonic` when the box last answered a command (or the line opened):
         how long it has been silent, which tells a lost box from a noisy line."""
-        self._writing = asyncio.Lock()
-        """Held while bytes are written: a stop never lands inside another command's bytes."""
+        self._writing = WireScheduler()
+        """Held while bytes are written: a stop never lands inside another command's bytes
+        (first come, first served: every writer takes it at ``Priority.COMMAND``). A scheduler
+        rather than an ``asyncio.Lock``: its free case takes no coroutine (issue #14)."""
         self._deadline = ReplyDeadline()
         """Bounds the reply being waited for, which a stop may abandon."""
         self._stops = 0
@@ -213,11 +215,14 @@ class SkyTrackerLine:
                 await scheduler.take(priority)
             try:
                 self._turn_stops = self._stops
-                answer = await self._request_bus()
-                if answer is None:
-                    unanswered += 1
+                try:  # the bus request (inline: every poll's position passes here)
+                    answer = await self._exchange(_REQUEST_BUS, self.bus.grant_timeout_s)
+                except (ReplyTimeoutError, BadReplyError) as error:
+                    logger.info("bus request failed: %s", error)
+                    unanswered += 1  # no (good) answer: the line was resynchronised
                     continue
-                if not answer:
+                assert type(answer) is BusAnswer  # exact: isinstance of an ABC runs Python code
+                if not answer.granted:
                     refused += 1
                     self.statistics.bus_refusals += 1
                     continue
@@ -267,7 +272,7 @@ class SkyTrackerLine:
         self._deadline.interrupt()
         data = ReleaseBus().encode() + b"".join(command.encode() for command in commands)
         try:
-            async with self._writing:
+            async with self._writing.turn(Priority.COMMAND):
                 await self.link.write(data)
         except LinkError as error:
             self._interrupted = True
@@ -285,7 +290,7 @@ class SkyTrackerLine:
         discarded with it; only then may the next reply be taken as the answer to a command.
         Replies it sends while the bus is released never reach the PC (the box keeps them)."""
         self._flush_strays()
-        async with self._writing:
+        async with self._writing.turn(Priority.COMMAND):
             await self.link.write(b"\r")
         self.statistics.commands_sent += 1
         received = b""
@@ -307,16 +312,6 @@ class SkyTrackerLine:
         if len(received) > POSITION_REPLY_SIZE:
             logger.info("the Sky Commander caught up: discarded %s", received.hex(" "))
         self._commander_behind = False
-
-    async def _request_bus(self) -> bool | None:
-        """True granted, False refused, None no (good) answer (the line was resynchronised)."""
-        try:
-            reply = await self._exchange(_REQUEST_BUS, self.bus.grant_timeout_s)
-        except (ReplyTimeoutError, BadReplyError) as error:
-            logger.info("bus request failed: %s", error)
-            return None
-        assert type(reply) is BusAnswer  # exact: isinstance of an ABC runs Python code
-        return reply.granted
 
     async def _release_bus(self) -> None:
         if self.link.closed:
@@ -351,10 +346,11 @@ class SkyTrackerLine:
         deadline = self._deadline
         deadline.interrupted = False
         try:
-            # The lock taken and released by hand: ``async with`` adds two coroutines to every
+            # The write turn taken and released by hand: ``async with`` adds coroutines to every
             # exchange (issue #14).
             writing = self._writing
-            await writing.acquire()
+            if not writing.try_take():
+                await writing.take(Priority.COMMAND)
             try:
                 await self.link.write(data)
             finally:
@@ -438,19 +434,19 @@ class SkyTrackerLine:
                 # Still inside the grant: CR ends any partial 'L' line the Sky Commander holds
                 # (bytes lost on the unbuffered port); without one it asks for a position, whose
                 # reply is drained here, before 'q', so it cannot reach the box's own next poll.
-                async with self._writing:
+                async with self._writing.turn(Priority.COMMAND):
                     await self.link.write(b"\r")
                 discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
                 # Still behind if it is slow (its replies may come in a later grant).
                 self._commander_behind = True
-            async with self._writing:
+            async with self._writing.turn(Priority.COMMAND):
                 await self.link.write(ReleaseBus().encode())
             self.statistics.commands_sent += 1 + held
             if self._sync_marker is not None:
                 # The box answers in order: a reply it is late with comes before the answer to
                 # this 'V'. A quiet drain alone would let a reply later than the drain through,
                 # to be read as the answer to the next command.
-                async with self._writing:
+                async with self._writing.turn(Priority.COMMAND):
                     await self.link.write(ReadVersion().encode())
                 self.statistics.commands_sent += 1
                 received, synced = await self._read_through(self._sync_marker)
