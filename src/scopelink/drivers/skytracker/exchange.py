@@ -341,7 +341,8 @@ class SkyTrackerLine:
             raise StopWentFirstError(
                 f"{command.describe()!r} not sent: a stop was written meanwhile"
             )
-        self._flush_strays()
+        if self._client.has_data:  # bytes before the command was sent: strays
+            self._flush_strays()
         data = self._client.send(command)
         deadline = self._deadline
         deadline.interrupted = False
