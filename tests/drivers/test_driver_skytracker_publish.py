@@ -5,6 +5,7 @@ its J2000 position at its instant (one float position takes ``astro.one_position
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +56,12 @@ async def test_capabilities_follow_the_commander_and_readings_are_converted_exac
         for alt_deg, az_deg in [(35.0, 120.0), (62.0, 300.0), (15.0, 45.0), (80.0, 181.0)]:
             r.point(alt_deg, az_deg)
             r.sim.step(0.7)  # each reading at its own instant
+            before_s = time.monotonic()
             state = await r.driver.refresh()
+            # Each reading's age counts from its own reply: the status's, then the position's
+            # (the last reply of the refresh; its 'q' has none).
+            assert state.position_received_s == r.driver.line.last_answer_s
+            assert before_s <= state.received_s <= state.position_received_s <= time.monotonic()
             assert state.ra_j2000_hours is not None
             assert state.dec_j2000_deg is not None
             ra, dec = np.array([state.ra_j2000_hours]), np.array([state.dec_j2000_deg])

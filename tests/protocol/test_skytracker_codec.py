@@ -160,6 +160,25 @@ def test_bus_is_refused_with_nul_while_a_goto_runs() -> None:
         client.send(ReadPosition())
 
 
+def waiting(client: TrackerClient) -> bool:
+    """A function, so type checkers do not narrow the property between reads."""
+    return client.has_data
+
+
+def test_client_says_whether_bytes_wait() -> None:
+    client = TrackerClient()
+    assert not waiting(client)
+    client.receive_data(b"\x10")  # a byte while no reply is expected: a stray, still waiting
+    assert waiting(client)
+    assert isinstance(client.next_event(), StrayByte)
+    assert not waiting(client)
+    client.send(ReadStatus())
+    client.receive_data(b"\x90")
+    assert waiting(client)
+    assert isinstance(client.next_event(), StatusReply)
+    assert not waiting(client)
+
+
 def test_status_reply_describes_flags() -> None:
     client = TrackerClient()
     client.send(ReadStatus())

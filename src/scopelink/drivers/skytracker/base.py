@@ -72,6 +72,9 @@ BOX_TRACKING = (TrackerMode.TRACK, TrackerMode.GUIDE)
 identity first, where a set would call ``Enum.__hash__``, Python code)."""
 
 NOTHING_PRESSED = Direction(0)
+_GOTO = TrackerMode.GOTO
+"""Looked up once: each look-up of an enum member costs ~80 ns (Python 3.11); every publish
+asks."""
 
 
 def capabilities_for(*, commander: bool) -> Capabilities:
@@ -101,10 +104,13 @@ _WITH_COMMANDER = capabilities_for(commander=True)
 _WITHOUT_COMMANDER = capabilities_for(commander=False)
 
 
-def pointing_of(reply: object, read_at: datetime, site: Site) -> Pointing:
-    """The reading of one Sky Commander position reply."""
-    assert isinstance(reply, PositionReply)
-    return Pointing(reply.ra_hours, reply.dec_degrees, read_at, site)
+def pointing_of(
+    reply: object, read_at: datetime, site: Site, received_s: float | None = None
+) -> Pointing:
+    """The reading of one Sky Commander position reply (``received_s``: when it arrived,
+    :func:`time.monotonic`; default now)."""
+    assert type(reply) is PositionReply  # exact: isinstance of an ABC runs Python code
+    return Pointing(reply.ra_hours, reply.dec_degrees, read_at, site, received_s)
 
 
 class SkyTrackerBase(Mount):
@@ -264,11 +270,14 @@ class SkyTrackerBase(Mount):
         self._position = pointing_of(reply, self.now(), self.site)
         return self._position
 
-    def _note_status(self, reply: object) -> None:
-        assert isinstance(reply, StatusReply)
-        self._status = reply.status
-        self._mode = reply.status.mode
-        self._status_at = (self.now(), time.monotonic())
+    def _note_status(self, reply: object, received_s: float | None = None) -> None:
+        """Record a status reply that arrived at ``received_s`` (:func:`time.monotonic`;
+        default now)."""
+        assert type(reply) is StatusReply  # exact: isinstance of an ABC runs Python code
+        status = reply.status
+        self._status = status
+        self._mode = status.mode
+        self._status_at = (self.now(), time.monotonic() if received_s is None else received_s)
 
     def _publish_now(self) -> MountState:
         position = self._position
@@ -298,7 +307,7 @@ class SkyTrackerBase(Mount):
             dec_of_date_deg=dec_of_date,
             alt_deg=alt,
             az_deg=az,
-            slewing=self._mode is TrackerMode.GOTO or bool(pressed & ~pulsing),
+            slewing=self._mode is _GOTO or bool(pressed & ~pulsing),
             tracking=self._tracking_choice if self._mode in BOX_TRACKING else TrackingMode.OFF,
             parked=False,
             aligned=True,

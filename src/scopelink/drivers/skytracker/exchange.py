@@ -18,7 +18,6 @@ again after the stop): :class:`StopWentFirstError`.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 from collections.abc import Sequence
@@ -72,6 +71,9 @@ RESYNC_QUIET_S = 0.1
 """After a fault, input is drained until the line has been quiet this long."""
 RESYNC_MAX_S = 2.0
 POSITION_REPLY_SIZE = PositionReply.size
+_REQUEST_BUS = RequestBus()
+_RELEASE_BUS = ReleaseBus()
+"""The bus commands of every Sky Commander exchange, built once (frozen, so shareable)."""
 
 
 class ReplyTimeoutError(DeviceError):
@@ -149,8 +151,10 @@ class SkyTrackerLine:
         self.last_answer_s = time.monotonic()
         """:func:`time.monotonic` when the box last answered a command (or the line opened):
         how long it has been silent, which tells a lost box from a noisy line."""
-        self._writing = asyncio.Lock()
-        """Held while bytes are written: a stop never lands inside another command's bytes."""
+        self._writing = WireScheduler()
+        """Held while bytes are written: a stop never lands inside another command's bytes
+        (first come, first served: every writer takes it at ``Priority.COMMAND``). A scheduler
+        rather than an ``asyncio.Lock``: its free case takes no coroutine (issue #14)."""
         self._deadline = ReplyDeadline()
         """Bounds the reply being waited for, which a stop may abandon."""
         self._stops = 0
@@ -200,24 +204,35 @@ class SkyTrackerLine:
         refused = unanswered = 0
         retried_commands = False
         attempt = 0
+        scheduler = self.scheduler
         while attempt <= len(delays):
             if attempt:
                 await asyncio.sleep(delays[attempt - 1])
             attempt += 1
-            async with self.scheduler.turn(priority):
+            # The turn as scheduler.turn() takes it, without its context manager's coroutines
+            # when the wire is free (every poll's position passes here, issue #14).
+            if not scheduler.try_take():
+                await scheduler.take(priority)
+            try:
                 self._turn_stops = self._stops
-                answer = await self._request_bus()
-                if answer is None:
-                    unanswered += 1
+                try:  # the bus request (inline: every poll's position passes here)
+                    answer = await self._exchange(_REQUEST_BUS, self.bus.grant_timeout_s)
+                except (ReplyTimeoutError, BadReplyError) as error:
+                    logger.info("bus request failed: %s", error)
+                    unanswered += 1  # no (good) answer: the line was resynchronised
                     continue
-                if not answer:
+                assert type(answer) is BusAnswer  # exact: isinstance of an ABC runs Python code
+                if not answer.granted:
                     refused += 1
                     self.statistics.bus_refusals += 1
                     continue
                 try:
                     if self._commander_behind:
                         await self._catch_up_commander()
-                    return [await self._exchange(c, self.timeout_s) for c in commands]
+                    replies: list[Reply | None] = []
+                    for command in commands:
+                        replies.append(await self._exchange(command, self.timeout_s))
+                    return replies
                 except (ReplyTimeoutError, BadReplyError) as error:
                     # Loading an object, realigning on it and reading the position can all be
                     # repeated: one more try (the resync has ended any partial line).
@@ -228,6 +243,8 @@ class SkyTrackerLine:
                     logger.info("Sky Commander exchange failed, trying once more: %s", error)
                 finally:
                     await self._release_bus()
+            finally:
+                scheduler.release()
         waited = sum(delays)
         what = ", ".join(c.describe() for c in commands)
         if refused:
@@ -255,7 +272,7 @@ class SkyTrackerLine:
         self._deadline.interrupt()
         data = ReleaseBus().encode() + b"".join(command.encode() for command in commands)
         try:
-            async with self._writing:
+            async with self._writing.turn(Priority.COMMAND):
                 await self.link.write(data)
         except LinkError as error:
             self._interrupted = True
@@ -273,7 +290,7 @@ class SkyTrackerLine:
         discarded with it; only then may the next reply be taken as the answer to a command.
         Replies it sends while the bus is released never reach the PC (the box keeps them)."""
         self._flush_strays()
-        async with self._writing:
+        async with self._writing.turn(Priority.COMMAND):
             await self.link.write(b"\r")
         self.statistics.commands_sent += 1
         received = b""
@@ -296,22 +313,15 @@ class SkyTrackerLine:
             logger.info("the Sky Commander caught up: discarded %s", received.hex(" "))
         self._commander_behind = False
 
-    async def _request_bus(self) -> bool | None:
-        """True granted, False refused, None no (good) answer (the line was resynchronised)."""
-        try:
-            reply = await self._exchange(RequestBus(), self.bus.grant_timeout_s)
-        except (ReplyTimeoutError, BadReplyError) as error:
-            logger.info("bus request failed: %s", error)
-            return None
-        assert isinstance(reply, BusAnswer)
-        return reply.granted
-
     async def _release_bus(self) -> None:
         if self.link.closed:
             return
-        # If the link went away, the box takes the bus back when its PC link ends.
-        with contextlib.suppress(LinkError, NotConnectedError):
-            await self._exchange(ReleaseBus(), self.timeout_s)
+        # If the link went away, the box takes the bus back when its PC link ends. (A try, not
+        # contextlib.suppress: that is an object and two calls on every poll.)
+        try:
+            await self._exchange(_RELEASE_BUS, self.timeout_s)
+        except (LinkError, NotConnectedError):
+            return
 
     # --- one exchange ------------------------------------------------------------------------
 
@@ -331,18 +341,38 @@ class SkyTrackerLine:
             raise StopWentFirstError(
                 f"{command.describe()!r} not sent: a stop was written meanwhile"
             )
-        self._flush_strays()
+        if self._client.has_data:  # bytes before the command was sent: strays
+            self._flush_strays()
         data = self._client.send(command)
         deadline = self._deadline
         deadline.interrupted = False
         try:
-            async with self._writing:
+            # The write turn taken and released by hand: ``async with`` adds coroutines to every
+            # exchange (issue #14).
+            writing = self._writing
+            if not writing.try_take():
+                await writing.take(Priority.COMMAND)
+            try:
                 await self.link.write(data)
+            finally:
+                writing.release()
             self.statistics.commands_sent += 1
             if command.reply is None:
                 return None
             with deadline.start(reply_within_s):
-                event = await self._next_reply()
+                # The reply, read inline (not a coroutine of its own: every exchange runs
+                # this, issue #14). Exact types, not isinstance: the events derive from an ABC,
+                # whose isinstance check runs Python code (they have no subclasses).
+                client = self._client
+                while True:
+                    event = client.next_event()
+                    if event is NEED_DATA:
+                        client.receive_data(await self.link.read())
+                    elif type(event) is StrayByte:
+                        self._note_stray(event)
+                    else:
+                        assert event is not PAUSED  # a client never pauses
+                        break
         except TimeoutError:
             self._client.abandon_reply()
             if deadline.interrupted:
@@ -366,25 +396,12 @@ class SkyTrackerLine:
             self._interrupted = True
             raise
         self.last_answer_s = time.monotonic()  # an answer, if perhaps a garbled one
-        if isinstance(event, BadReply):
+        if type(event) is BadReply:
             await self._resync_after_fault()
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
         if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
-        return event
-
-    async def _next_reply(self) -> Reply | BadReply:
-        while True:
-            event = self._client.next_event()
-            if event is NEED_DATA:
-                self._client.receive_data(await self.link.read())
-            # An exact type, not isinstance: the events derive from an ABC, whose isinstance
-            # check runs Python code on every reply (StrayByte has no subclasses).
-            elif type(event) is StrayByte:
-                self._note_stray(event)
-            else:
-                assert event is not PAUSED  # a client never pauses
-                return cast(Reply | BadReply, event)
+        return cast(Reply, event)
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:
@@ -418,19 +435,19 @@ class SkyTrackerLine:
                 # Still inside the grant: CR ends any partial 'L' line the Sky Commander holds
                 # (bytes lost on the unbuffered port); without one it asks for a position, whose
                 # reply is drained here, before 'q', so it cannot reach the box's own next poll.
-                async with self._writing:
+                async with self._writing.turn(Priority.COMMAND):
                     await self.link.write(b"\r")
                 discarded += await self.link.drain_input(RESYNC_QUIET_S, RESYNC_MAX_S)
                 # Still behind if it is slow (its replies may come in a later grant).
                 self._commander_behind = True
-            async with self._writing:
+            async with self._writing.turn(Priority.COMMAND):
                 await self.link.write(ReleaseBus().encode())
             self.statistics.commands_sent += 1 + held
             if self._sync_marker is not None:
                 # The box answers in order: a reply it is late with comes before the answer to
                 # this 'V'. A quiet drain alone would let a reply later than the drain through,
                 # to be read as the answer to the next command.
-                async with self._writing:
+                async with self._writing.turn(Priority.COMMAND):
                     await self.link.write(ReadVersion().encode())
                 self.statistics.commands_sent += 1
                 received, synced = await self._read_through(self._sync_marker)

@@ -24,6 +24,11 @@ class ByteStream:
         return self._offset
 
     @property
+    def has_data(self) -> bool:
+        """Whether bytes are waiting to be turned into events (cheaper than :attr:`buffered`)."""
+        return bool(self._buffer)
+
+    @property
     def buffered(self) -> bytes:
         """Bytes received but not yet consumed by an event."""
         return bytes(self._buffer)
