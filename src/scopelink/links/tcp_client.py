@@ -17,10 +17,12 @@ from __future__ import annotations
 
 import asyncio
 import socket
+from collections.abc import Awaitable, Callable
 from typing import cast
 
 from scopelink.links.base import Link, LinkClosedError
-from scopelink.links.inbound import InboundBuffer
+from scopelink.links.inbound import E, InboundBuffer
+from scopelink.protocol.base import NeedData
 
 
 def peer_host_without_nagle(transport: asyncio.BaseTransport | asyncio.StreamWriter) -> str | None:
@@ -97,6 +99,9 @@ class TcpClientLink(Link):
 
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
+
+    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        return self._inbound.read_event(parse, self)
 
     async def _write_all(self, data: bytes) -> None:
         transport = self._transport
