@@ -52,7 +52,10 @@ class InboundBuffer:
             if parser is not None:
                 parse, link, waiter = parser
                 if not waiter.done():  # not cancelled: the parser takes the bytes
-                    event = _parsed(parse, link, data)
+                    link.bytes_read += len(data)  # as _parsed(), inline: every reply passes
+                    if trace_logger.isEnabledFor(logging.DEBUG):
+                        trace_transfer("<--", link.name, data)
+                    event = parse(data)
                     if event is not NEED_DATA:
                         self._parser = None
                         waiter.resolve(event)  # the reader runs now (last: it may read again)

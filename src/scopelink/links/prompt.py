@@ -29,28 +29,32 @@ _Callback = tuple[Callable[[Any], object], contextvars.Context | None]
 
 
 class PromptFuture(asyncio.Future[T]):
-    """An ``asyncio.Future`` whose :meth:`resolve` wakes its awaiting task in the same call."""
+    """An ``asyncio.Future`` whose :meth:`resolve` wakes its awaiting task in the same call.
 
-    __slots__ = ("_prompt_callbacks",)
+    Made as ``PromptFuture(loop=loop)``; no ``__init__`` of its own (one is a Python call per
+    future: every reply makes one)."""
 
-    def __init__(self, *, loop: asyncio.AbstractEventLoop) -> None:
-        super().__init__(loop=loop)
-        self._prompt_callbacks: list[_Callback] = []
+    _prompt_callbacks: list[_Callback] | None = None
+    """The done callbacks held back for :meth:`resolve` (None until the first is added; a
+    class default rather than a slot, which would need an ``__init__`` to set it)."""
 
     def add_done_callback(
         self, fn: Callable[[Any], object], *, context: contextvars.Context | None = None
     ) -> None:
         if self.done():
             super().add_done_callback(fn, context=context)  # scheduled at once, as usual
+            return
+        callbacks = self._prompt_callbacks
+        if callbacks is None:
+            self._prompt_callbacks = [(fn, context)]
         else:
-            self._prompt_callbacks.append((fn, context))
+            callbacks.append((fn, context))
 
     def remove_done_callback(self, fn: Callable[[Any], object]) -> int:
-        callbacks = self._prompt_callbacks
+        callbacks = self._held()
         kept = [callback for callback in callbacks if callback[0] != fn]
-        removed = len(callbacks) - len(kept)
         self._prompt_callbacks = kept
-        return removed + super().remove_done_callback(fn)
+        return len(callbacks) - len(kept) + super().remove_done_callback(fn)
 
     def resolve(self, result: T) -> None:
         """``set_result(result)``, then run the done callbacks (the task's wake-up) now, unless
@@ -69,11 +73,16 @@ class PromptFuture(asyncio.Future[T]):
         self._run_callbacks(False)
         return True
 
+    def _held(self) -> list[_Callback]:
+        return self._prompt_callbacks or []
+
     def _run_callbacks(self, now: bool) -> None:
-        callbacks, self._prompt_callbacks = self._prompt_callbacks, []
+        callbacks = self._held()
+        self._prompt_callbacks = []
+        loop = self.get_loop()
         for fn, context in callbacks:
             if not now:
-                self.get_loop().call_soon(fn, self, context=context)
+                loop.call_soon(fn, self, context=context)
                 continue
             try:
                 if context is None:
@@ -83,6 +92,6 @@ class PromptFuture(asyncio.Future[T]):
             except (SystemExit, KeyboardInterrupt):
                 raise
             except BaseException as error:  # as the loop reports a failed callback
-                self.get_loop().call_exception_handler(
+                loop.call_exception_handler(
                     {"message": f"Exception in callback {fn!r}", "exception": error, "future": self}
                 )

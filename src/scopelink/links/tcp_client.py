@@ -16,12 +16,14 @@ full (the transport's high-water mark), ``peer_host`` for allow-lists.
 from __future__ import annotations
 
 import asyncio
+import logging
 import socket
 from collections.abc import Awaitable, Callable
 from typing import cast
 
 from scopelink.links.base import Link, LinkClosedError
 from scopelink.links.inbound import E, InboundBuffer
+from scopelink.links.trace import trace_logger, trace_transfer
 from scopelink.protocol.base import NeedData
 
 
@@ -111,11 +113,16 @@ class TcpClientLink(Link):
         if self._protocol._paused:  # above the high-water mark: wait until it drains
             await self._protocol.drained()
 
-    def _writes_now(self) -> bool:
-        return not self._protocol._paused and not self._transport.is_closing()
-
-    def _write_now(self, data: bytes) -> None:
-        self._transport.write(data)
+    def write_now(self, data: bytes) -> bool:
+        # Link.write_now's steps in one call (every command passes here, issue #14).
+        transport = self._transport
+        if self._closed or self._protocol._paused or transport.is_closing():
+            return False
+        self.bytes_written += len(data)
+        if trace_logger.isEnabledFor(logging.DEBUG):
+            trace_transfer("-->", self.name, data)
+        transport.write(data)
+        return True
 
     async def _close_transport(self) -> None:
         self._inbound.feed_end(f"{self.name} is closed")

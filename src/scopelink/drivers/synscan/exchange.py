@@ -379,15 +379,16 @@ class SynScanWire:
         statistics.exchanges += 1
         statistics.bytes_sent += len(data)
         deadline = self._deadline
+        loop = deadline.loop
         completed = False
         try:
-            now = self.last_write_at = deadline.loop.time()
+            now = self.last_write_at = loop.time()
             if not link.write_now(data):  # a TCP command leaves at once, without a coroutine
                 await link.write(data)
-                now = deadline.loop.time()
+                now = loop.time()
             if meanwhile is not None:
                 meanwhile()
-                now = deadline.loop.time()
+                now = loop.time()
             with self._interruptible(self.timeout_s, now):
                 # The reply, read by shape (inline rather than a coroutine of its own: this
                 # runs on every command, issue #14): bytes already buffered first, then those
