@@ -158,22 +158,10 @@ class Link(ABC):
     def write_now(self, data: bytes) -> bool:
         """Hand non-empty ``data`` over at once if this link can without waiting (True); False
         when it cannot, having sent nothing: then :meth:`write` it. The driver's hot path (one
-        command per exchange) saves two coroutines a command this way (issue #14)."""
-        if self._closed or not self._writes_now():
-            return False
-        self.bytes_written += len(data)
-        if trace_logger.isEnabledFor(logging.DEBUG):
-            trace_transfer("-->", self._name, data)
-        self._write_now(data)
-        return True
-
-    def _writes_now(self) -> bool:
-        """Whether :meth:`_write_now` can take bytes now (a link without it: never)."""
+        command per exchange) saves two coroutines a command this way (issue #14). A link that
+        can (:class:`~scopelink.links.TcpClientLink`) overrides this, counting and tracing the
+        bytes as :meth:`write` does; this one never can."""
         return False
-
-    def _write_now(self, data: bytes) -> None:  # pragma: no cover - only after _writes_now()
-        """Hand ``data`` over without waiting (called only when :meth:`_writes_now` said so)."""
-        raise NotImplementedError
 
     async def close(self) -> None:
         """Release the link (idempotent); pending and later reads and writes then raise."""

@@ -114,7 +114,7 @@ class TcpClientLink(Link):
             await self._protocol.drained()
 
     def write_now(self, data: bytes) -> bool:
-        # Link.write_now's steps in one call (every command passes here, issue #14).
+        """See :meth:`Link.write_now`: below the transport's high-water mark, at once."""
         transport = self._transport
         if self._closed or self._protocol._paused or transport.is_closing():
             return False
