@@ -22,7 +22,9 @@ def test_quick_driver_benchmark_prints_its_tables() -> None:
     assert any(line.startswith("nexstar 0.0.5 getPosition") for line in lines), result.stdout
     assert any(line.startswith("pyserial write/read") for line in lines), result.stdout
     assert any(line.startswith("asyncio floor (bare Protocol)") for line in lines), result.stdout
+    assert any(line.startswith("scopelink refresh() per command") for line in lines)
     assert any(line.startswith("our driver above the asyncio floor: ") for line in lines)
+    assert lines[-2].startswith("the goal judges 'scopelink SynScanMount.wire'"), result.stdout
     goal = lines[-1]
     assert goal.startswith("goal CPU per e <= nexstar's: "), result.stdout
     assert goal.split(": ")[1].split(";")[0] in {"PASS", "MISS"}, goal

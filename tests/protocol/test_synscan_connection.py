@@ -216,3 +216,36 @@ def test_server_discard_partial() -> None:
     assert server.discard_partial() == b"r1234"
     assert server.parser.offset == 5
     assert server.unanswered == ()
+
+
+def test_a_polls_reply_in_the_same_bytes_as_last_time_is_the_same_reply_object() -> None:
+    client = SynScanClientConnection()
+    replies = []
+    for data in (b"12AB0500,34CD0500#", b"12AB0500,34CD0500#", b"12AC0500,34CD0500#"):
+        client.send(GetRaDec())
+        client.receive_data(data[:9])
+        assert client.next_event() is NEED_DATA  # a partial reply is never the remembered one
+        replies.append(client.receive_and_next_event(data[9:]))
+        assert client.state is ClientState.IDLE
+    assert replies[0] is replies[1]
+    assert replies[2] == Position(Frame.EQUATORIAL, 0x12AC0500, 0x34CD0500)
+    assert replies[0] == Position(Frame.EQUATORIAL, 0x12AB0500, 0x34CD0500)
+    # The standard-precision poll is another command: its bytes never meet the precise reply's.
+    client.send(GetRaDec(precise=False))
+    assert client.receive_and_next_event(b"12AB,34CD#") == Position(
+        Frame.EQUATORIAL, 0x12AB, 0x34CD, precise=False
+    )
+    # A wrong reply after a remembered one is still malformed, not taken for it.
+    client.send(GetRaDec())
+    event = client.receive_and_next_event(b"12AB0500;34CD0500#")
+    assert isinstance(event, MalformedReply)
+    # Commands whose replies are not polls are parsed every time.
+    client.reset()
+    versions = []
+    for _ in range(2):
+        client.send(GetVersion())
+        versions.append(client.receive_and_next_event(b"\x04\x0e\x05#"))
+    assert versions[0] == versions[1]
+    assert versions[0] is not versions[1]
+    assert GetRaDec.repeats_reply
+    assert not GetVersion.repeats_reply

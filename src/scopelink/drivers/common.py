@@ -152,7 +152,9 @@ class ReplyDeadline:
         """Begin a read that times out after ``seconds`` (None: never) from ``now`` (loop time;
         default: the clock now, looked up); use as ``with``."""
         assert self._task is None, "one read at a time"
-        loop = self.loop
+        loop = self._loop
+        if loop is None or loop.is_closed():  # inline: this runs on every exchange (issue #14)
+            loop = self.loop
         task = asyncio.current_task(loop)
         assert task is not None
         if now is None:

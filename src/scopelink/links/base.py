@@ -10,15 +10,19 @@ from __future__ import annotations
 import asyncio
 import logging
 from abc import ABC, abstractmethod
+from collections.abc import Awaitable, Callable
 from types import TracebackType
-from typing import Self
+from typing import Self, TypeVar
 
 from scopelink.links.trace import trace_logger, trace_transfer
+from scopelink.protocol.base import NEED_DATA, NeedData
 
 DEFAULT_READ_SIZE = 4096
 
 DEFAULT_BAUDRATE = 9600
 """The line speed of both mount families (SynScan, Sky Tracker and Sky Commander)."""
+
+E = TypeVar("E")
 
 
 class LinkError(Exception):
@@ -91,6 +95,39 @@ class Link(ABC):
             trace_transfer("<--", self._name, data)
         return data
 
+    async def read_event(self, parse: Callable[[bytes], E | NeedData]) -> E:
+        """Wait until ``parse``, given the bytes received from now on (each byte once, in order,
+        in chunks as they come), returns something other than ``NEED_DATA``; return that.
+
+        A reply reader: a link fed by a callback (TCP, memory, a reader thread) runs ``parse``
+        right there, so the reader wakes once per reply, with the reply, rather than once per
+        chunk (issue #14: CPU per command). ``parse`` must not raise. Cancellation-safe: the
+        bytes ``parse`` took are the caller's (in its parser); later ones wait for the next
+        read. Raises :class:`LinkClosedError` as :meth:`read` does.
+        """
+        if self._closed:
+            raise LinkClosedError(f"{self._name} is closed")
+        try:
+            return await self._read_event(parse)
+        except LinkClosedError:
+            await self._release_after_end()
+            raise
+
+    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        """:meth:`read_event` by :meth:`_read_some`; a link whose bytes come through a callback
+        overrides it (see :meth:`InboundBuffer.read_event`)."""
+        return self._read_event_by_chunks(parse)
+
+    async def _read_event_by_chunks(self, parse: Callable[[bytes], E | NeedData]) -> E:
+        while True:
+            data = await self._read_some(DEFAULT_READ_SIZE)
+            self.bytes_read += len(data)
+            if trace_logger.isEnabledFor(logging.DEBUG):
+                trace_transfer("<--", self._name, data)
+            event = parse(data)
+            if event is not NEED_DATA:
+                return event  # anything but NEED_DATA is an E
+
     async def read_exactly(self, count: int) -> bytes:
         """Wait for exactly ``count`` bytes, e.g. a fixed-length reply.
 
@@ -121,22 +158,10 @@ class Link(ABC):
     def write_now(self, data: bytes) -> bool:
         """Hand non-empty ``data`` over at once if this link can without waiting (True); False
         when it cannot, having sent nothing: then :meth:`write` it. The driver's hot path (one
-        command per exchange) saves two coroutines a command this way (issue #14)."""
-        if self._closed or not self._writes_now():
-            return False
-        self.bytes_written += len(data)
-        if trace_logger.isEnabledFor(logging.DEBUG):
-            trace_transfer("-->", self._name, data)
-        self._write_now(data)
-        return True
-
-    def _writes_now(self) -> bool:
-        """Whether :meth:`_write_now` can take bytes now (a link without it: never)."""
+        command per exchange) saves two coroutines a command this way (issue #14). A link that
+        can (:class:`~scopelink.links.TcpClientLink`) overrides this, counting and tracing the
+        bytes as :meth:`write` does; this one never can."""
         return False
-
-    def _write_now(self, data: bytes) -> None:  # pragma: no cover - only after _writes_now()
-        """Hand ``data`` over without waiting (called only when :meth:`_writes_now` said so)."""
-        raise NotImplementedError
 
     async def close(self) -> None:
         """Release the link (idempotent); pending and later reads and writes then raise."""

@@ -4,10 +4,18 @@ coroutine."""
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
 import time
+from collections.abc import Callable
+from typing import Any, TypeVar
 
-from scopelink.links.base import LinkClosedError
+from scopelink.links.base import Link, LinkClosedError
+from scopelink.links.prompt import PromptFuture
+from scopelink.links.trace import trace_logger, trace_transfer
+from scopelink.protocol.base import NEED_DATA, NeedData
+
+E = TypeVar("E")
 
 
 class InboundBuffer:
@@ -18,15 +26,20 @@ class InboundBuffer:
     A waiting reader sleeps on a future of its own, which ``feed`` resolves (no
     ``asyncio.Event``: its extra look-ups cost CPU on every reply, issue #14); one reader at a
     time is the rule, but a second one is woken too.
+
+    :meth:`read_event` hands what arrives to a parser instead, in the producer's call, and
+    wakes its reader once, with what the parser made of the bytes.
     """
 
-    __slots__ = ("_data", "_end_reason", "_loop", "_waiters", "arrived_at")
+    __slots__ = ("_data", "_end_reason", "_loop", "_parser", "_waiters", "arrived_at")
 
     def __init__(self) -> None:
         self._data = bytearray()
         self._waiters: list[asyncio.Future[None]] = []
         self._loop: asyncio.AbstractEventLoop | None = None
         self._end_reason: str | None = None
+        self._parser: tuple[Callable[[bytes], Any], Link, PromptFuture[Any]] | None = None
+        """A :meth:`read_event` in progress: its parser, its link (counts, trace), its future."""
         self.arrived_at = -math.inf
         """``time.monotonic()`` when the latest bytes arrived (the producer says, or when fed)."""
 
@@ -34,15 +47,55 @@ class InboundBuffer:
         """Append received bytes; ignored after the end of the stream. ``arrived_at`` is when
         they arrived if the producer knows better than now (a paced peer: when due on the line)."""
         if self._end_reason is None and data:
-            self._data += data
             self.arrived_at = time.monotonic() if arrived_at is None else arrived_at
+            parser = self._parser
+            if parser is not None:
+                parse, link, waiter = parser
+                if not waiter.done():  # not cancelled: the parser takes the bytes
+                    link.bytes_read += len(data)  # as _parsed(), inline: every reply passes
+                    if trace_logger.isEnabledFor(logging.DEBUG):
+                        trace_transfer("<--", link.name, data)
+                    event = parse(data)
+                    if event is not NEED_DATA:
+                        self._parser = None
+                        waiter.resolve(event)  # the reader runs now (last: it may read again)
+                    return
+                self._parser = None
+            self._data += data
             self._wake()
 
     def feed_end(self, reason: str) -> None:
         """Mark the end of the stream; the first reason given is the one readers see."""
         if self._end_reason is None:
             self._end_reason = reason
+            parser, self._parser = self._parser, None
             self._wake()
+            if parser is not None and not parser[2].done():
+                parser[2].fail(LinkClosedError(reason))
+
+    def read_event(self, parse: Callable[[bytes], E | NeedData], link: Link) -> PromptFuture[E]:
+        """What ``parse`` makes of the bytes buffered and then of those fed, once it is other
+        than ``NEED_DATA`` (see :meth:`scopelink.links.Link.read_event`; ``link`` counts and
+        traces the bytes). The future fails with LinkClosedError once the stream has ended
+        without an event; cancelling it leaves later bytes buffered for the next read. Its
+        reader wakes in the producer's call (:class:`~scopelink.links.prompt.PromptFuture`)."""
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            loop = self._loop = asyncio.get_running_loop()
+        waiter: PromptFuture[E] = PromptFuture(loop=loop)
+        buffered = self._data
+        if buffered:
+            data = bytes(buffered)
+            buffered.clear()
+            event = _parsed(parse, link, data)
+            if event is not NEED_DATA:
+                waiter.set_result(event)  # not NEED_DATA: an E
+                return waiter
+        if self._end_reason is not None:
+            waiter.set_exception(LinkClosedError(self._end_reason))
+            return waiter
+        self._parser = (parse, link, waiter)
+        return waiter
 
     async def read(self, max_bytes: int) -> bytes:
         """Wait for 1..max_bytes bytes; LinkClosedError once drained and ended."""
@@ -72,3 +125,11 @@ class InboundBuffer:
         for waiter in self._waiters:
             if not waiter.done():
                 waiter.set_result(None)
+
+
+def _parsed(parse: Callable[[bytes], E | NeedData], link: Link, data: bytes) -> E | NeedData:
+    """``parse(data)``, the bytes counted and traced as :meth:`Link.read` does."""
+    link.bytes_read += len(data)
+    if trace_logger.isEnabledFor(logging.DEBUG):
+        trace_transfer("<--", link.name, data)
+    return parse(data)

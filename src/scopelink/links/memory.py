@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Awaitable, Callable
+
 from scopelink.links.base import Link, LinkClosedError
-from scopelink.links.inbound import InboundBuffer
+from scopelink.links.inbound import E, InboundBuffer
+from scopelink.protocol.base import NeedData
 
 
 class MemoryLink(Link):
@@ -16,6 +19,9 @@ class MemoryLink(Link):
 
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
+
+    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        return self._inbound.read_event(parse, self)
 
     @property
     def arrived_at(self) -> float:

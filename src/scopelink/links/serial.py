@@ -12,7 +12,7 @@ import asyncio
 import errno
 import io
 import threading
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
 import serial
@@ -25,7 +25,8 @@ from scopelink.links.base import (
     LinkSpecError,
 )
 from scopelink.links.fdstream import FdStream
-from scopelink.links.inbound import InboundBuffer
+from scopelink.links.inbound import E, InboundBuffer
+from scopelink.protocol.base import NeedData
 
 # How often a reader thread looks up from a blocking read to see whether it should stop.
 _THREAD_POLL_SECONDS = 0.05
@@ -100,6 +101,9 @@ class _ThreadedSerialLink(SerialLink):
 
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
+
+    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        return self._inbound.read_event(parse, self)
 
     async def _write_all(self, data: bytes) -> None:
         async with self._write_lock:

@@ -16,11 +16,15 @@ full (the transport's high-water mark), ``peer_host`` for allow-lists.
 from __future__ import annotations
 
 import asyncio
+import logging
 import socket
+from collections.abc import Awaitable, Callable
 from typing import cast
 
 from scopelink.links.base import Link, LinkClosedError
-from scopelink.links.inbound import InboundBuffer
+from scopelink.links.inbound import E, InboundBuffer
+from scopelink.links.trace import trace_logger, trace_transfer
+from scopelink.protocol.base import NeedData
 
 
 def peer_host_without_nagle(transport: asyncio.BaseTransport | asyncio.StreamWriter) -> str | None:
@@ -98,6 +102,9 @@ class TcpClientLink(Link):
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
 
+    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        return self._inbound.read_event(parse, self)
+
     async def _write_all(self, data: bytes) -> None:
         transport = self._transport
         if transport.is_closing():
@@ -106,11 +113,16 @@ class TcpClientLink(Link):
         if self._protocol._paused:  # above the high-water mark: wait until it drains
             await self._protocol.drained()
 
-    def _writes_now(self) -> bool:
-        return not self._protocol._paused and not self._transport.is_closing()
-
-    def _write_now(self, data: bytes) -> None:
-        self._transport.write(data)
+    def write_now(self, data: bytes) -> bool:
+        """See :meth:`Link.write_now`: below the transport's high-water mark, at once."""
+        transport = self._transport
+        if self._closed or self._protocol._paused or transport.is_closing():
+            return False
+        self.bytes_written += len(data)
+        if trace_logger.isEnabledFor(logging.DEBUG):
+            trace_transfer("-->", self.name, data)
+        transport.write(data)
+        return True
 
     async def _close_transport(self) -> None:
         self._inbound.feed_end(f"{self.name} is closed")

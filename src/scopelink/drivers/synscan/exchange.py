@@ -29,7 +29,6 @@ import logging
 import time
 from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
-from typing import cast
 
 from scopelink.drivers.common import LinkFactory, LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkClosedError, LinkError
@@ -38,9 +37,11 @@ from scopelink.protocol.synscan import (
     NEED_DATA,
     AnyCommand,
     AnyReply,
+    ClientError,
     Echo,
     EchoReply,
     MalformedReply,
+    NeedData,
     SynScanClientConnection,
     UnexpectedData,
     encode_command,
@@ -116,6 +117,10 @@ class SynScanWire:
         self._deadline = ReplyDeadline()
         """Bounds the read in progress, which a stop may cut short."""
         self._stops_waiting = 0
+        self._patient = False
+        """The exchange in progress is a resynchronising echo (see ``_ECHO_PATIENCE``)."""
+        self._received = self._parse_received
+        """The link's parser (one bound method for every exchange)."""
         self.last_write_at = 0.0
         """Event-loop time at which the last command started to leave (times guide pulses)."""
         self.last_answer_s = -float("inf")
@@ -374,35 +379,34 @@ class SynScanWire:
         statistics.exchanges += 1
         statistics.bytes_sent += len(data)
         deadline = self._deadline
+        loop = deadline.loop
         completed = False
         try:
-            now = self.last_write_at = deadline.loop.time()
+            now = self.last_write_at = loop.time()
             if not link.write_now(data):  # a TCP command leaves at once, without a coroutine
                 await link.write(data)
-                now = deadline.loop.time()
+                now = loop.time()
             if meanwhile is not None:
                 meanwhile()
-                now = deadline.loop.time()
+                now = loop.time()
             with self._interruptible(self.timeout_s, now):
                 # The reply, read by shape (inline rather than a coroutine of its own: this
-                # runs on every command, issue #14). Exact types, not isinstance: the events
-                # derive from an ABC, whose isinstance check runs Python code on every reply
-                # (the error events have no subclasses).
-                while True:
-                    event = codec.next_event()
-                    if event is NEED_DATA:
-                        received = await link.read()
-                        statistics.bytes_received += len(received)
-                        codec.receive_data(received)
-                    elif type(event) is UnexpectedData:
-                        self._discard_stale(event.data, patient)
-                    elif type(event) is MalformedReply:
-                        raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
-                    else:
-                        break
+                # runs on every command, issue #14): bytes already buffered first, then those
+                # the link hands to _received as they arrive, which wakes this task once, with
+                # the reply. Exact types, not isinstance: the events derive from an ABC, whose
+                # isinstance check runs Python code on every reply (the error events have no
+                # subclasses).
+                self._patient = patient
+                event = codec.next_event()  # bytes already buffered first
+                if type(event) is UnexpectedData:
+                    event = self._drop_stale(event)
+                if event is NEED_DATA:
+                    event = await link.read_event(self._received)
+                if type(event) is MalformedReply:
+                    raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
             completed = True
             self.last_answer_s = time.monotonic()
-            return cast(AnyReply, event)
+            return event  # type: ignore[return-value]  # neither an error event nor NEED_DATA
         except TimeoutError:
             if deadline.interrupted:
                 self.statistics.interrupted += 1
@@ -421,6 +425,25 @@ class SynScanWire:
             if not completed:
                 # Cancelled or failed half way: the stream is out of step until resynchronised.
                 self._needs_resync = True
+
+    def _parse_received(self, data: bytes) -> AnyReply | ClientError | NeedData:
+        """The link's parser during an exchange (called as bytes arrive): the reply, a
+        malformed one, or NEED_DATA."""
+        self.statistics.bytes_received += len(data)
+        event = self._codec.receive_and_next_event(data)
+        if type(event) is UnexpectedData:
+            return self._drop_stale(event)
+        return event
+
+    def _drop_stale(self, event: UnexpectedData) -> AnyReply | ClientError | NeedData:
+        """Stale bytes before the reply: dropped (see :meth:`_discard_stale`); the codec's next
+        event that is not."""
+        while True:
+            self._discard_stale(event.data, self._patient)
+            next_event = self._codec.next_event()
+            if type(next_event) is not UnexpectedData:
+                return next_event
+            event = next_event
 
     def _discard_stale(self, data: bytes, patient: bool) -> None:
         """Stale bytes before the reply: dropped; a ``patient`` read (a resynchronising echo)

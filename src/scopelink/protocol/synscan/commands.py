@@ -114,6 +114,7 @@ class _PositionQuery(_Precise):
     """Shared shape of the position reads: the reply is two hex angles, ``,`` between."""
 
     precise: bool = True
+    repeats_reply = True
 
     coordinates: ClassVar[Frame]
     """Which pair of coordinates the reply carries."""
@@ -123,7 +124,8 @@ class _PositionQuery(_Precise):
         return cls(precise=cls.is_precise(frame))
 
     def encode(self) -> bytes:
-        return self.sent_letter()
+        # sent_letter() inline: every poll encodes one (issue #14: CPU per command)
+        return self.letters[1:] if self.precise else self.letters[:1]
 
     def reply_shape(self) -> ReplyShape:
         width = angles.hex_width(self.precise)
@@ -286,6 +288,7 @@ class GetTrackingMode(_Letter):
     """``t``: read the tracking mode."""
 
     letter = b"t"
+    repeats_reply = True
 
     def reply_shape(self) -> ReplyShape:
         return ReplyShape((2,), "binary mode byte, '#'")
@@ -492,6 +495,7 @@ class IsAligned(_Letter):
     """``J``: is the alignment complete?"""
 
     letter = b"J"
+    repeats_reply = True
 
     def reply_shape(self) -> ReplyShape:
         return ReplyShape((2,), "binary 0x00/0x01, '#'")
@@ -509,6 +513,7 @@ class IsGotoInProgress(_Letter):
     """``L``: is a GOTO in progress?"""
 
     letter = b"L"
+    repeats_reply = True
 
     def reply_shape(self) -> ReplyShape:
         return ReplyShape((2,), "ASCII '0'/'1', '#'")
@@ -536,6 +541,7 @@ class GetPointingState(_Letter):
     """``p``: which side of the meridian the tube is on."""
 
     letter = b"p"
+    repeats_reply = True
 
     def reply_shape(self) -> ReplyShape:
         return ReplyShape((2,), "ASCII 'E'/'W', '#'")

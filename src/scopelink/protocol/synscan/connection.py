@@ -35,6 +35,12 @@ class ClientState(Enum):
     """A reply did not fit; call `reset` (and resynchronise) before sending again."""
 
 
+# The states as plain module names: looking a member up on its Enum class runs a descriptor in
+# Python 3.11 (about three times a dict look-up's cost), and a driver's every command reads and
+# sets the state three times (issue #14: CPU per command).
+_IDLE, _AWAITING_REPLY, _ERROR = ClientState.IDLE, ClientState.AWAITING_REPLY, ClientState.ERROR
+
+
 class SynScanClientConnection:
     """The PC side of a SynScan link: one command in flight, its reply read by exact length and
     shape.
@@ -45,12 +51,20 @@ class SynScanClientConnection:
     After `reset` (the driver timed out or saw a malformed reply) the connection is resynchronising:
     while the first `Echo` sent after it waits for its reply, bytes before the echoed byte + ``#``
     are reported as `UnexpectedData` instead of failing the reply, so late replies to earlier
-    commands drain."""
+    commands drain.
+
+    The last reply to each polling command (`Command.repeats_reply`) is kept with its bytes:
+    the same bytes to the same command give the same reply object again, unparsed (issue #14:
+    CPU per command)."""
 
     def __init__(self) -> None:
         self._buffer = bytearray()
         self._in_flight: AnyCommand | None = None
-        self._state = ClientState.IDLE
+        self._sent = b""
+        """The bytes of the command in flight (the key of its remembered reply)."""
+        self._last_replies: dict[bytes, tuple[bytes, AnyReply]] = {}
+        """By command bytes: the last reply to a `Command.repeats_reply` poll, with its bytes."""
+        self._state = _IDLE
         self._resynchronising = False
         self._stale = b""
 
@@ -66,7 +80,7 @@ class SynScanClientConnection:
 
     def send(self, command: AnyCommand) -> bytes:
         """The bytes to write for ``command``; it becomes the command in flight."""
-        if self._state is not ClientState.IDLE:
+        if self._state is not _IDLE:
             raise LocalProtocolError(
                 f"cannot send {command.describe()!r} while {self._state.value}"
                 + (f" ({self._in_flight.describe()!r})" if self._in_flight else "; call reset()")
@@ -76,12 +90,19 @@ class SynScanClientConnection:
             # these bytes arrived before the command was written, so they cannot be its reply
             self._stale += self._take(len(self._buffer))
         self._in_flight = command
-        self._state = ClientState.AWAITING_REPLY
+        self._sent = data
+        self._state = _AWAITING_REPLY
         return data
 
     def receive_data(self, data: bytes) -> None:
         """Append bytes read from the link."""
         self._buffer += data
+
+    def receive_and_next_event(self, data: bytes) -> AnyReply | ClientError | NeedData:
+        """`receive_data` then `next_event`, in one call (a driver's reader runs it as each
+        chunk arrives)."""
+        self._buffer += data
+        return self.next_event()
 
     def next_event(self) -> AnyReply | ClientError | NeedData:
         """The reply to the command in flight, an error event, or `NEED_DATA`."""
@@ -97,25 +118,38 @@ class SynScanClientConnection:
             skip = _bytes_before_echo(self._buffer, command.value)
             if skip:
                 return UnexpectedData(self._take(skip))
-        result = command.scan_reply(self._buffer)
+        buffer = self._buffer
+        repeats = command.repeats_reply
+        if repeats and (last := self._last_replies.get(self._sent)) is not None:
+            raw, reply = last
+            if buffer.startswith(raw):  # the same bytes as last time: the same reply
+                del buffer[: len(raw)]
+                self._in_flight = None
+                self._state = _IDLE
+                self._resynchronising = False
+                return reply
+        result = command.scan_reply(buffer)
         if result is NEED_DATA:
             return NEED_DATA
         self._in_flight = None
         if isinstance(result, Mismatch):
-            self._state = ClientState.ERROR
+            self._state = _ERROR
             return MalformedReply(
                 command, self._take(result.index + 1), result.index, result.reason
             )
-        del self._buffer[: result.length]  # the reply's bytes: parsed, not needed as bytes
-        self._state = ClientState.IDLE
+        reply = cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
+        if repeats:
+            self._last_replies[self._sent] = (bytes(buffer[: result.length]), reply)
+        del buffer[: result.length]  # the reply's bytes: parsed, not needed as bytes
+        self._state = _IDLE
         self._resynchronising = False
-        return cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
+        return reply
 
     def reset(self) -> bytes:
         """Forget the command in flight and drop buffered bytes (returned); start
         resynchronising."""
         self._in_flight = None
-        self._state = ClientState.IDLE
+        self._state = _IDLE
         self._resynchronising = True
         dropped, self._stale = self._stale + self._take(len(self._buffer)), b""
         return dropped

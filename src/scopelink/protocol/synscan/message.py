@@ -75,6 +75,11 @@ class Command(Message):
     changes_mount: ClassVar[bool] = False
     """Whether it moves the mount or changes a setting (a read-only server refuses it)."""
 
+    repeats_reply: ClassVar[bool] = False
+    """A poll whose reply has one length and means the same whenever its bytes are the same: a
+    client may reuse the reply it parsed last time from the same bytes (a tracking mount's
+    ``e`` repeats for seconds; see `SynScanClientConnection`)."""
+
     handler_name: ClassVar[str]
     """The method of a `CommandHandler` that answers it: the class name in snake case
     (`GetRaDec` -> ``get_ra_dec``)."""
