@@ -57,6 +57,7 @@ from scopelink.drivers.skytracker import SkyTrackerMount
 from scopelink.drivers.synscan import SynScanMount
 from scopelink.mount import Mount, MountError, TrackingMode
 from scopelink.mount.follow import TargetFollower
+from scopelink.mount.rates import root_mean_square
 from scopelink.servers.skytracker import SkyTrackerEmulator
 from scopelink.servers.synscan import SynScanConfig, SynScanEmulator
 from scopelink.sim import AZ_GTI, EQ6, SKY_TRACKER, SimClock, SimulatedMount
@@ -206,7 +207,7 @@ def _score(errors: list[tuple[float, float]], skip_s: float) -> tuple[float, flo
     tail = [e for t, e in errors if t >= skip_s]
     if not tail:
         return math.nan, math.nan
-    return math.sqrt(sum(e * e for e in tail) / len(tail)), max(tail)
+    return root_mean_square(tail), max(tail)
 
 
 async def follow(

@@ -260,13 +260,13 @@ async def follow(mount: Mount, args: argparse.Namespace) -> int:
                 result = await follower.run(stop=stop, duration_s=args.duration)
             except TargetError as error:
                 raise CommandError(str(error)) from None
-    errors = [e for _, e in result.errors]
-    if errors:
+    if result.errors:
         span = (result.errors[-1][0] - result.errors[0][0]).total_seconds()
-        rms = math.sqrt(sum(e * e for e in errors) / len(errors))
+        worst = max(e for _, e in result.errors)
         print(
-            f"followed {target.name} for {span:.0f} s: tracking error {rms:.1f}″ RMS, "
-            f"{max(errors):.1f}″ max; {result.reason}; rates back to zero",
+            f"followed {target.name} for {span:.0f} s: tracking error "
+            f"{result.rms_arcsec():.1f}″ RMS, {worst:.1f}″ max; {result.reason}; "
+            "rates back to zero",
             flush=True,
         )
     else:

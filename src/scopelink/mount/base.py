@@ -397,10 +397,7 @@ class Mount(PointedMount):
         """Start a rate motion with ``start`` unless the horizon guard refuses it, and have the
         guard watch it. Every way a driver offers to turn an axis at a rate goes through here."""
         # Even a mount that stops itself at the limits refuses a motion heading further out.
-        try:
-            self._guard.check_move(axis, rate_deg_s, self.state)
-        except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
-            self._guard.check_move(axis, rate_deg_s, await self.refresh())
+        await self._guard.check_move_now(axis, rate_deg_s)
         self._motion_commanded()
         async with self._guard.starting(axis, rate_deg_s):  # watched before its command leaves
             await start()

@@ -36,7 +36,7 @@ from scopelink.mount.errors import (
     SunAvoidanceError,
 )
 from scopelink.mount.follow_plan import RATE_MARGIN, FollowError, PassPlan, plan_pass
-from scopelink.mount.rates import TrackingRates
+from scopelink.mount.rates import TrackingRates, clamp_rate, root_mean_square
 from scopelink.mount.slew_wait import slew_unless_stopped
 from scopelink.mount.sun import SETTING as SUN_SETTING
 from scopelink.mount.types import MountState, SlewTarget, TrackingMode
@@ -125,8 +125,7 @@ class FollowResult:
         if not self.errors:
             return math.nan
         first = self.errors[0][0] + timedelta(seconds=skip_s)
-        tail = [e for t, e in self.errors if t >= first]
-        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
+        return root_mean_square([e for t, e in self.errors if t >= first])
 
 
 class TargetFollower:
@@ -356,7 +355,7 @@ class TargetFollower:
         limit = self.mount.capabilities.max_tracking_offset_arcsec_s
         ra = mean.ra_arcsec_per_s + GAIN * error[0] / self.interval_s
         dec = mean.dec_arcsec_per_s + GAIN * error[1] / self.interval_s
-        return max(-limit, min(limit, ra)), max(-limit, min(limit, dec))
+        return clamp_rate(ra, limit), clamp_rate(dec, limit)
 
     def _throttled(self, state: MountState, phase: str, ra_rate: float, dec_rate: float) -> None:
         last = self.last

@@ -40,7 +40,7 @@ from datetime import datetime
 from scopelink.mount.budget import Base, Reading, Unseen, base_from, blind_danger, make_base
 from scopelink.mount.danger import altitude_direction, check_move, near_limit, reading_danger
 from scopelink.mount.deadman import MotionClient, current_client
-from scopelink.mount.errors import DeviceError, MountError, NotConnectedError
+from scopelink.mount.errors import DeviceError, LimitError, MountError, NotConnectedError
 from scopelink.mount.guarded import GuardedMount, GuardSettings
 from scopelink.mount.types import MountAxis, MountState, TrackingMode
 
@@ -114,6 +114,14 @@ class HorizonGuard:
         """Refuse a rate motion that starts at or beyond a limit and heads further out, where
         the direction is known (see :func:`scopelink.mount.danger.check_move`)."""
         check_move(self._mount, self.settings, axis, rate_deg_s, state)
+
+    async def check_move_now(self, axis: MountAxis, rate_deg_s: float) -> None:
+        """:meth:`check_move` on the mount's cached state; a refusal stands only on a fresh
+        reading (the cache may be old: the mount may have moved back inside since)."""
+        try:
+            self.check_move(axis, rate_deg_s, self._mount.state)
+        except LimitError:
+            self.check_move(axis, rate_deg_s, await self._mount.refresh())
 
     def altitude_direction(
         self, axis: MountAxis, rate_deg_s: float, state: MountState

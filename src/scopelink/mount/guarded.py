@@ -54,6 +54,9 @@ class GuardedMount(Protocol):
     def states(self) -> AsyncGenerator[MountState, None]:
         """Each newly published state, the current one first; polls at full rate meanwhile."""
 
+    async def refresh(self) -> MountState:
+        """A fresh reading, published."""
+
     async def abort(self) -> None:
         """Stop every rate motion (and a slew)."""
 

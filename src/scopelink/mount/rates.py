@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Protocol, runtime_checkable
@@ -43,8 +43,10 @@ __all__ = [
     "RatesSetter",
     "TrackingRates",
     "check_tracking_rates",
+    "clamp_rate",
     "ra_rate_from_ascom",
     "ra_rate_to_ascom",
+    "root_mean_square",
     "tracking_rate_deg_s",
 ]
 
@@ -58,6 +60,17 @@ OFFSET_MODES = frozenset(
 )
 """The tracking modes custom rates are added to (equatorial tracking at a set rate; not the
 alt-az or PEC modes of a hand control, which follow the sky their own way)."""
+
+
+def clamp_rate(value: float, limit: float) -> float:
+    """``value`` limited to ±``limit`` (a rate loop's correction, a follower's rates). Not for
+    NaN, which comes out as ``+limit``: callers check for numbers first."""
+    return max(-limit, min(limit, value))
+
+
+def root_mean_square(values: Sequence[float]) -> float:
+    """The RMS of ``values`` (a tracking error's figure); NaN when there are none."""
+    return math.sqrt(sum(v * v for v in values) / len(values)) if values else math.nan
 
 
 def tracking_rate_deg_s(mode: TrackingMode) -> float:
@@ -182,8 +195,7 @@ class RateLoopStatistics:
             del self.errors_arcsec[:-ERRORS_KEPT]
 
     def rms_after(self, skip: int) -> float:
-        tail = self.errors_arcsec[skip:]
-        return math.sqrt(sum(e * e for e in tail) / len(tail)) if tail else math.nan
+        return root_mean_square(self.errors_arcsec[skip:])
 
 
 @dataclass

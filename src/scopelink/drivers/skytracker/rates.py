@@ -32,6 +32,7 @@ from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
     TrackingRates,
+    clamp_rate,
     pulse_joining_loop,
 )
 from scopelink.mount.scheduling import Priority
@@ -326,12 +327,10 @@ class SkyTrackerRates(SkyTrackerGuiding):
             corrections = {}
             for axis, error in zip((MountAxis.PRIMARY, MountAxis.SECONDARY), mean, strict=True):
                 integral = self._loop_integral.get(axis, 0.0) + error * dt
-                integral = max(
-                    -limit / LOOP_INTEGRAL_GAIN, min(limit / LOOP_INTEGRAL_GAIN, integral)
-                )
+                integral = clamp_rate(integral, limit / LOOP_INTEGRAL_GAIN)
                 self._loop_integral[axis] = integral
                 wanted = LOOP_GAIN_PER_S * error + LOOP_INTEGRAL_GAIN * integral
-                corrections[axis] = max(-limit, min(limit, wanted))
+                corrections[axis] = clamp_rate(wanted, limit)
             self._loop_corrections = corrections
         for axis, correction in self._loop_corrections.items():
             offsets[axis] += correction

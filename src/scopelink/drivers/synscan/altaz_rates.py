@@ -31,7 +31,7 @@ from scopelink.drivers.synscan.loop_pulses import SynScanLoopPulses
 from scopelink.drivers.synscan.loop_target import LoopTarget
 from scopelink.drivers.synscan.rates import LOOP_GAIN_PER_S, MAX_CORRECTION_ARCSEC_S, quantised
 from scopelink.mount import AlignmentMode, MountAxis, MountState
-from scopelink.mount.rates import TrackingRates
+from scopelink.mount.rates import TrackingRates, clamp_rate
 
 __all__ = ["FEED_FORWARD_STEP_S", "SynScanAltAzRates"]
 
@@ -93,7 +93,7 @@ class SynScanAltAzRates(SynScanLoopPulses):
         wanted: dict[MountAxis, float] = {}
         behind: list[str] = []
         for axis, rate in feed_forward.items():
-            axis_rate = rate + max(-limit, min(limit, LOOP_GAIN_PER_S * errors[axis]))
+            axis_rate = rate + clamp_rate(LOOP_GAIN_PER_S * errors[axis], limit)
             if abs(axis_rate) > MAX_SLEW_RATE_DEG_S:
                 behind.append("azimuth" if axis is MountAxis.PRIMARY else "altitude")
                 axis_rate = math.copysign(MAX_SLEW_RATE_DEG_S, axis_rate)

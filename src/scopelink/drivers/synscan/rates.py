@@ -26,7 +26,6 @@ from scopelink.drivers.synscan.identify import synscan_tracking
 from scopelink.drivers.synscan.loop_target import LoopTarget
 from scopelink.drivers.synscan.parking import SynScanParking
 from scopelink.mount import (
-    LimitError,
     MountAxis,
     MountError,
     MountState,
@@ -38,6 +37,7 @@ from scopelink.mount.rates import (
     GuideShifts,
     RateLoopStatistics,
     TrackingRates,
+    clamp_rate,
 )
 from scopelink.protocol.synscan import Ack, SetTrackingMode, VariableRateSlew
 
@@ -86,10 +86,6 @@ HAND_CONTROL_MODES = frozenset({TrackingMode.SIDEREAL, TrackingMode.PEC, Trackin
 def quantised(arcsec_per_s: float) -> float:
     """A rate (arcsec/s) rounded to the variable-rate slew's ¼″/s step."""
     return round(arcsec_per_s / QUANTUM_ARCSEC_S) * QUANTUM_ARCSEC_S
-
-
-def _clamp(value: float, limit: float) -> float:
-    return max(-limit, min(limit, value))
 
 
 class SynScanRates(SynScanParking):
@@ -175,10 +171,7 @@ class SynScanRates(SynScanParking):
             if (self._loop_rates or {}).get(axis) != rate
         }
         for axis, rate in changed.items():
-            try:
-                self._guard.check_move(axis, rate, self.state)
-            except LimitError:  # judged on the cache, maybe old: refuse only on a fresh reading
-                self._guard.check_move(axis, rate, await self.refresh())
+            await self._guard.check_move_now(axis, rate)
         if self._loop_target is None or not self._loop_still_ours():
             return  # ended meanwhile (a goto, an abort): the rates are recorded, not started
         t = self._loop_time_s()[0]  # now: a fresh reading above may have taken a while
@@ -241,10 +234,10 @@ class SynScanRates(SynScanParking):
         """Axis rates (°/s, signed as the driver's rate slews) for the rates (with the guide
         pulses running) and the errors; ``target`` is the loop's (an alt-az loop's path)."""
         hemisphere = 1.0 if self.site.latitude_deg >= 0 else -1.0
-        ra_arcsec = rates.ra_arcsec_per_s + _clamp(
+        ra_arcsec = rates.ra_arcsec_per_s + clamp_rate(
             LOOP_GAIN_PER_S * ra_error_deg * 3600.0, MAX_CORRECTION_ARCSEC_S
         )
-        dec_arcsec = rates.dec_arcsec_per_s + _clamp(
+        dec_arcsec = rates.dec_arcsec_per_s + clamp_rate(
             LOOP_GAIN_PER_S * dec_error_deg * 3600.0, MAX_CORRECTION_ARCSEC_S
         )
         # RA growing means the polar axis turns slower than the stars.
