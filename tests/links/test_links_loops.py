@@ -75,7 +75,7 @@ def test_each_choice_makes_its_loop_and_runs_our_links_on_it(
     assert told.label == f"asyncio ({EVENT_LOOP_ENV_VAR}=asyncio)"
     kind, slept = _run(serve_event_loop)
     assert kind.startswith("asyncio (")
-    assert slept >= 0.005
+    assert slept >= 0.005 - 1e-6  # its clock's resolution, 1 ns
 
 
 @pytest.mark.parametrize("setting", ["fast", "uv loop", "tokio", "asyncio,uvloop", "1"])
