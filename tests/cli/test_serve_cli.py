@@ -273,7 +273,7 @@ async def test_serve_tries_a_device_that_fails_its_first_exchanges_again(tmp_pat
         # On asyncio's own loop, as told (the timeouts and retries work on either loop).
         env = {"SCOPELINK_EVENT_LOOP": "asyncio"}
         async with serving(tmp_path, *device, "--site", "48,11", *options, env=env) as printed:
-            assert "\n  Event loop  asyncio (SCOPELINK_EVENT_LOOP=asyncio)\n" in printed
+            assert "\n  Event loop  asyncio (epoll; SCOPELINK_EVENT_LOOP=asyncio)\n" in printed
             assert "SynScan" in printed
             assert len(faults.fired) == 4  # the first attempt failed on them
             async with await open_tcp("127.0.0.1", listening(printed, "SynScan")) as link:

@@ -38,7 +38,7 @@ from scopelink.cli.serve_registry import register_serve, unregister_serve
 from scopelink.cli.site_store import SettingsSiteStore
 from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
-from scopelink.links import EventLoopChoice, LinkError
+from scopelink.links import EventLoopChoice, LinkError, describe_loop
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
 from scopelink.mount.memory import DeviceMemory
@@ -415,7 +415,8 @@ async def _serve(
             endpoints: dict[str, object] = {"device": str(command.device)}
             for line in await _start_servers(stack, mount, plan, args, endpoints):
                 print(f"  {line}", flush=True)
-            print(f"  Event loop  {loop.label}", flush=True)
+            running = describe_loop(asyncio.get_running_loop(), loop.reason)
+            print(f"  Event loop  {running}", flush=True)
             # Found by the command line, which then drives this mount (cli/serve_registry.py).
             stack.callback(unregister_serve, register_serve(endpoints))
             print("Ctrl-C stops.", flush=True)

@@ -19,7 +19,7 @@ from scopelink.links.loops import (
     EventLoopChoice,
     EventLoopChoiceError,
     choose_event_loop,
-    loop_kind,
+    describe_loop,
     serve_event_loop,
 )
 from scopelink.links.memory import MemoryLink, memory_pair
@@ -52,7 +52,7 @@ __all__ = [
     "TcpLink",
     "TcpServer",
     "choose_event_loop",
-    "loop_kind",
+    "describe_loop",
     "memory_pair",
     "open_link",
     "open_pty",

@@ -24,6 +24,7 @@ import asyncio
 import importlib
 import os
 import selectors
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Final
@@ -35,7 +36,7 @@ __all__ = [
     "EventLoopChoice",
     "EventLoopChoiceError",
     "choose_event_loop",
-    "loop_kind",
+    "describe_loop",
     "serve_event_loop",
 ]
 
@@ -54,8 +55,8 @@ class EventLoopChoiceError(ValueError):
 @dataclass(frozen=True, slots=True)
 class EventLoopChoice:
     """The loop chosen, and why: ``factory`` makes one (for ``asyncio.Runner(loop_factory=)``);
-    ``label`` says which, as ``serve`` prints it (e.g. ``uvloop 0.21.0``, or ``asyncio (uvloop
-    is not installed)``)."""
+    ``label`` says which before one runs (e.g. ``uvloop 0.21.0``, or ``asyncio (uvloop is not
+    installed)``); :func:`describe_loop` says which one runs."""
 
     name: str
     """``uvloop`` or ``asyncio``."""
@@ -112,11 +113,15 @@ def _asyncio_loop() -> asyncio.AbstractEventLoop:
     return asyncio.new_event_loop()
 
 
-def loop_kind(loop: asyncio.AbstractEventLoop) -> str:
-    """What ``loop`` is, for a report: ``uvloop`` or ``asyncio`` and its selector."""
-    if type(loop).__module__.startswith("uvloop"):
-        return "uvloop"
+def describe_loop(loop: asyncio.AbstractEventLoop, reason: str = "") -> str:
+    """What ``loop`` is, as ``serve`` prints it: ``uvloop 0.21.0``, or ``asyncio (epoll)`` with
+    ``reason`` (why not uvloop) after the selector: ``asyncio (epoll; uvloop is not installed)``."""
+    module = sys.modules.get(type(loop).__module__.partition(".")[0])
+    if module is not None and module.__name__ == "uvloop":
+        return f"uvloop {module.__version__}"
     selector = getattr(loop, "_selector", None)
     if isinstance(selector, selectors.BaseSelector):
-        return f"asyncio ({type(selector).__name__.removesuffix('Selector').lower()})"
-    return f"asyncio ({type(loop).__name__.lstrip('_')})"
+        kind = type(selector).__name__.removesuffix("Selector").lower()
+    else:
+        kind = type(loop).__name__.lstrip("_")
+    return f"asyncio ({kind}; {reason})" if reason else f"asyncio ({kind})"
