@@ -1,8 +1,8 @@
 """The event loop a long-running session runs on: uvloop where it is installed, else asyncio's.
 
-uvloop (libuv under a C event loop, the loop uvicorn runs on) spends a third of asyncio's
-default loop's instructions per command on a polled serial device (``docs/benchmarks.md``,
-"SynScan driver"), so ``scopelink serve`` runs on it. ``SCOPELINK_EVENT_LOOP`` chooses:
+uvloop (libuv under a C event loop, the loop uvicorn runs on) takes about a third less CPU per
+command than asyncio's default loop for our SynScan driver (``docs/benchmarks.md``, "SynScan
+driver"), so ``scopelink serve`` runs on it. ``SCOPELINK_EVENT_LOOP`` chooses:
 
 - ``auto`` (the default): uvloop when it can be imported, else asyncio's default loop (Windows,
   PyPy, or an install without it);
@@ -12,10 +12,10 @@ default loop's instructions per command on a polled serial device (``docs/benchm
 uvloop's timers and ``loop.time()`` count whole milliseconds (a timer may fire up to a
 millisecond before or after its time by ``time.monotonic()``); asyncio's default loop's fire up
 to a millisecond late, never early. Nothing ``serve`` runs needs finer timers (the decision and
-what was checked: ``docs/decisions.md``, "Event loop"). The emulators keep
+what was checked: ``docs/serve.md``, "Event loop"). The emulators keep
 :func:`~scopelink.links.pacing.precise_event_loop`, whose timers keep time to 0.1 ms.
 
-uvloop is imported only when a loop is made: the one-shot commands never pay for it.
+uvloop is imported only when a loop is chosen: the one-shot commands never pay for it.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import importlib
 import os
 import selectors
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
@@ -77,18 +77,8 @@ def choose_event_loop(setting: str | None = None) -> EventLoopChoice:
     """The loop ``setting`` (default: ``$SCOPELINK_EVENT_LOOP``, else ``auto``) names;
     :class:`EventLoopChoiceError` for a value not in :data:`EVENT_LOOP_CHOICES` or ``uvloop``
     where it cannot be imported."""
-    return _choose(setting, os.environ)
-
-
-def serve_event_loop() -> asyncio.AbstractEventLoop:
-    """A new loop of the kind ``scopelink serve`` runs on (:func:`choose_event_loop`), for
-    ``asyncio.Runner(loop_factory=serve_event_loop)``: what the benchmarks measure."""
-    return choose_event_loop().factory()
-
-
-def _choose(setting: str | None, environ: Mapping[str, str]) -> EventLoopChoice:
     if setting is None:
-        setting = environ.get(EVENT_LOOP_ENV_VAR, "")
+        setting = os.environ.get(EVENT_LOOP_ENV_VAR, "")
     value = setting.strip().lower() or DEFAULT_EVENT_LOOP
     if value not in EVENT_LOOP_CHOICES:
         raise EventLoopChoiceError(
@@ -106,6 +96,12 @@ def _choose(setting: str | None, environ: Mapping[str, str]) -> EventLoopChoice:
         return EventLoopChoice("asyncio", _asyncio_loop, reason="uvloop is not installed")
     factory: Callable[[], asyncio.AbstractEventLoop] = uvloop.new_event_loop
     return EventLoopChoice("uvloop", factory, version=str(uvloop.__version__))
+
+
+def serve_event_loop() -> asyncio.AbstractEventLoop:
+    """A new loop of the kind ``scopelink serve`` runs on (:func:`choose_event_loop`), for
+    ``asyncio.Runner(loop_factory=serve_event_loop)``: what the benchmarks measure."""
+    return choose_event_loop().factory()
 
 
 def _asyncio_loop() -> asyncio.AbstractEventLoop:
