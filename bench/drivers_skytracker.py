@@ -1,8 +1,12 @@
 """Sky Tracker driver benchmarks: position polls per second against the 9600-baud wire limit, and
 CPU per command over an in-memory link, each beside a bare codec client measured in the same run.
 
-Goal (issue #14 part 2), one verdict per CPU row it names: the driver within 1.2x its bare client's
-CPU; the refresh row is explained by its exchanges alone and by the astrometry of its reading.
+Driver, bare client and emulator run on the event loop ``scopelink serve`` runs on
+(``links.serve_event_loop``: uvloop where installed); the CPU rows are measured again on asyncio's
+default loop for information (what Windows gets). Goal (issue #14 part 2), one verdict per CPU row
+it names, on serve's loop: the driver within 1.2x its bare client's CPU; the refresh row is
+explained by its exchanges alone and by the astrometry of its reading. uvloop is pinned
+(``provenance.UVLOOP_PIN``).
 
 Run ``.venv/bin/python -m bench.drivers_skytracker`` (about half a minute) or with ``--quick`` (a
 few seconds, what the smoke test runs). See ``docs/benchmarks.md`` and
@@ -13,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import sys
 import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
@@ -20,11 +25,11 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from tempfile import TemporaryDirectory
 
-from bench.provenance import print_provenance
+from bench.provenance import print_provenance, serve_loop
 from scopelink.astro import Site
 from scopelink.drivers.common import Pointing
 from scopelink.drivers.skytracker import SkyTrackerMount
-from scopelink.links import Link, paced, precise_event_loop
+from scopelink.links import Link, choose_event_loop, paced, serve_event_loop
 from scopelink.mount import Priority
 from scopelink.protocol.skytracker import (
     NEED_DATA,
@@ -244,15 +249,25 @@ def astrometry_us(count: int) -> float:
     return best
 
 
-def print_cpu(rows: list[Row], astrometry: float) -> None:
+def print_cpu_table(rows: list[Row]) -> None:
     print("CPU per command, memory link, unpaced   driver µs   bare µs   driver/bare")
     print("(each figure includes the emulator, which runs in the same process)")
     for row in rows:
         print(f"{row.what:<38} {row.driver:10.0f} {row.peer:9.0f} {row.driver / row.peer:12.2f}x")
+
+
+def print_cpu(rows: list[Row], astrometry: float, information: list[Row]) -> None:
+    print_cpu_table(rows)
     print(
         f"a refresh publishes a state: alt/az and RA/Dec of date of its reading, once per poll "
         f"(no bare client does it), take {astrometry:.0f} µs alone (warm caches)"
     )
+    print()
+    print(
+        "information, no goal: the same on asyncio's default loop (Windows; "
+        "SCOPELINK_EVENT_LOOP=asyncio)"
+    )
+    print_cpu_table(information)
     print()
     for row in rows:
         if not row.goal:
@@ -264,23 +279,33 @@ def print_cpu(rows: list[Row], astrometry: float) -> None:
         )
 
 
-async def main_async(sizes: Sizes) -> None:
-    print_provenance("peer: the bare codec client below (scopelink's own protocol codec)")
-    print(f"each figure the best of {BLOCKS} alternating blocks of driver and bare client")
-    with TemporaryDirectory() as data_dir:
-        print_wire(await measure(sizes, Path(data_dir), pace=True))
-        print()
-        rows = await measure(sizes, Path(data_dir), pace=False)
-        print_cpu(rows, astrometry_us(max(1, sizes.commands // BLOCKS)))
-
-
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small counts (smoke test)")
+    parser.add_argument(
+        "--any-peer-version", action="store_true", help="run with uvloop other than its pin"
+    )
     arguments = parser.parse_args()
-    with asyncio.Runner(loop_factory=precise_event_loop) as runner:
-        runner.run(main_async(QUICK if arguments.quick else FULL))
+    sizes = QUICK if arguments.quick else FULL
+    loop_line, problem = serve_loop(arguments.any_peer_version)
+    if problem is not None:
+        print(f"bench.drivers_skytracker: {problem}", file=sys.stderr)
+        return 2
+    peer = "peer: the bare codec client below (scopelink's own protocol codec)"
+    print_provenance(peer, loop_line)
+    print(f"each figure the best of {BLOCKS} alternating blocks of driver and bare client")
+    with TemporaryDirectory() as directory:
+        data_dir = Path(directory)
+        with asyncio.Runner(loop_factory=serve_event_loop) as runner:
+            wire = runner.run(measure(sizes, data_dir, pace=True))
+            rows = runner.run(measure(sizes, data_dir, pace=False))
+        with asyncio.Runner(loop_factory=choose_event_loop("asyncio").factory) as runner:
+            information = runner.run(measure(sizes, data_dir, pace=False))
+    print_wire(wire)
+    print()
+    print_cpu(rows, astrometry_us(max(1, sizes.commands // BLOCKS)), information)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -3,10 +3,12 @@ command side by side with PyPI ``nexstar`` and a minimal blocking pyserial clien
 the emulated hand control running in a separate process (as the real one is a separate machine).
 
 Every row is the best of N rounds (interleaved: on a shared machine the slower rounds measure the
-neighbours). Goal (issue #14 part 2): our CPU per ``e`` asked through the driver's wire at most
-nexstar's in the same run (stretch: half); the report ends with its verdict. The driver's poll
-loop (``refresh()``, per command) is measured too, for information. nexstar is pinned
-(:data:`NEXSTAR_PIN`).
+neighbours). Our driver and the asyncio floor run on the event loop ``scopelink serve`` runs on
+(``links.serve_event_loop``: uvloop where installed), and again on asyncio's default loop for
+information (what Windows gets). Goal (issue #14 part 2): our CPU per ``e`` asked through the
+driver's wire, on serve's loop, at most nexstar's in the same run (stretch: half); the report
+ends with its verdict. The driver's poll loop (``refresh()``, per command) is measured too, for
+information. nexstar and uvloop are pinned (:data:`NEXSTAR_PIN`, ``provenance.UVLOOP_PIN``).
 
 Run ``.venv/bin/python -m bench.drivers_synscan`` (about a minute) or with ``--quick`` (a few
 seconds, what the smoke test runs); ``--instructions`` counts each client's user-space
@@ -36,10 +38,16 @@ from multiprocessing.connection import Connection
 
 import serial
 
-from bench.provenance import installed_version, peer_label, pin_problem, print_provenance
+from bench.provenance import (
+    installed_version,
+    peer_label,
+    pin_problem,
+    print_provenance,
+    serve_loop,
+)
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
-from scopelink.links import open_link, precise_event_loop
+from scopelink.links import choose_event_loop, open_link, precise_event_loop, serve_event_loop
 from scopelink.mount import Priority
 from scopelink.protocol.synscan import GetRaDec, Position
 from scopelink.servers.hosting import SERIAL_9600_8N1
@@ -189,6 +197,10 @@ class ClientFigures:
 
 Batch = Callable[[int], None]
 """Runs a client's command ``n`` times."""
+NewLoop = Callable[[], asyncio.AbstractEventLoop]
+"""Makes the event loop an asyncio client runs on."""
+ASYNCIO_LOOP: NewLoop = choose_event_loop("asyncio").factory
+"""asyncio's default loop (epoll on Linux): the information rows."""
 
 
 def timed_in_thread(name: str, setup: Callable[[], Batch], count: int) -> ClientFigures:
@@ -219,9 +231,10 @@ def timed_in_thread(name: str, setup: Callable[[], Batch], count: int) -> Client
     return result[0]
 
 
-def scopelink_client(url: str) -> Batch:
-    """Our driver on its own event loop, asking ``e`` through its wire (timeouts, scheduler)."""
-    loop = asyncio.new_event_loop()
+def scopelink_client(url: str, new_loop: NewLoop = serve_event_loop) -> Batch:
+    """Our driver on its own event loop (``new_loop()``: serve's by default), asking ``e``
+    through its wire (timeouts, scheduler)."""
+    loop = new_loop()
     mount = SynScanMount(url, site=SITE)
     loop.run_until_complete(mount.connect())
 
@@ -237,8 +250,8 @@ def scopelink_refresh_client(url: str) -> Batch:
     """Our driver's poll as the night runs it: ``refresh()`` cycles (``L`` and ``e``, ``t`` and
     ``p`` in one cycle of ten, the astrometry and the state published), until at least
     ``count`` commands have been exchanged: CPU per command of the poll loop. Information, not
-    the goal's row: nexstar's ``getPosition`` computes no alt/az."""
-    loop = asyncio.new_event_loop()
+    the goal's row: nexstar's ``getPosition`` computes no alt/az. On serve's loop."""
+    loop = serve_event_loop()
     mount = SynScanMount(url, site=SITE)
     loop.run_until_complete(mount.connect())
     statistics = mount.wire.statistics
@@ -251,11 +264,12 @@ def scopelink_refresh_client(url: str) -> Batch:
     return lambda count: loop.run_until_complete(cycles(count))
 
 
-def asyncio_floor_client(url: str) -> Batch:
+def asyncio_floor_client(url: str, new_loop: NewLoop = serve_event_loop) -> Batch:
     """The least an asyncio client can do (the floor under any asyncio driver): an
-    ``asyncio.Protocol`` on the same default event loop as our driver, writing ``e`` and
-    resolving a future once 18 bytes are in; no codec, timeout, scheduler or link object."""
-    loop = asyncio.new_event_loop()
+    ``asyncio.Protocol`` on the same kind of event loop as our driver (``new_loop()``), writing
+    ``e`` and resolving a future once 18 bytes are in; no codec, timeout, scheduler or link
+    object."""
+    loop = new_loop()
     host, port = url.removeprefix("tcp://").rsplit(":", 1)
 
     class Floor(asyncio.Protocol):
@@ -308,12 +322,14 @@ def pyserial_client(url: str) -> Batch:
     return batch
 
 
-OURS, NEXSTAR, FLOOR, POLL_LOOP, PYSERIAL = (
+OURS, NEXSTAR, FLOOR, POLL_LOOP, PYSERIAL, OURS_ASYNCIO, FLOOR_ASYNCIO = (
     "scopelink SynScanMount.wire",
     f"nexstar {NEXSTAR_PIN} getPosition",
     "asyncio floor (bare Protocol)",
     "scopelink refresh() per command",
     "pyserial write/read",
+    "  driver, asyncio's default loop",
+    "  floor, asyncio's default loop",
 )
 CLIENTS: list[tuple[str, Callable[[str], Batch]]] = [
     (OURS, scopelink_client),
@@ -321,8 +337,11 @@ CLIENTS: list[tuple[str, Callable[[str], Batch]]] = [
     (FLOOR, asyncio_floor_client),
     (POLL_LOOP, scopelink_refresh_client),
     (PYSERIAL, pyserial_client),
+    (OURS_ASYNCIO, functools.partial(scopelink_client, new_loop=ASYNCIO_LOOP)),
+    (FLOOR_ASYNCIO, functools.partial(asyncio_floor_client, new_loop=ASYNCIO_LOOP)),
 ]
-"""The goal's rows are ``OURS`` against ``NEXSTAR`` (see :func:`goal_line`)."""
+"""The goal's rows are ``OURS`` (on serve's loop) against ``NEXSTAR`` (see :func:`goal_line`);
+the last two, on asyncio's default loop, are information."""
 
 
 def cpu_per_command(url: str, sizes: Sizes) -> list[ClientFigures]:
@@ -380,7 +399,7 @@ def instructions_report() -> int:
     if shutil.which("valgrind") is None:
         print("bench.drivers_synscan: --instructions needs valgrind", file=sys.stderr)
         return 2
-    print_provenance("valgrind --tool=callgrind, user-space instructions")
+    print_provenance("valgrind --tool=callgrind, user-space instructions", serve_loop(True)[0])
     short, long = INSTRUCTIONS_SHORT, INSTRUCTIONS_LONG
     print(f"instructions per 'e' command ((run of {long} - run of {short}) / {long - short})")
     with emulator_process(paced_replies=False) as url:
@@ -395,21 +414,23 @@ def instructions_report() -> int:
 
 def main(sizes: Sizes, any_peer_version: bool) -> int:
     version = installed_version("nexstar")
-    problem = pin_problem("nexstar", version, NEXSTAR_PIN, any_peer_version)
+    loop_line, loop_problem = serve_loop(any_peer_version)
+    problem = pin_problem("nexstar", version, NEXSTAR_PIN, any_peer_version) or loop_problem
     if problem is not None:
         print(f"bench.drivers_synscan: {problem}", file=sys.stderr)
         return 2
-    print_provenance(f"peer {peer_label('nexstar', version, NEXSTAR_PIN)}")
+    print_provenance(f"peer {peer_label('nexstar', version, NEXSTAR_PIN)}", loop_line)
     print(
         f"scopelink SynScan driver benchmarks ({'quick' if sizes is QUICK else 'full'} run, "
         f"each row the best of {sizes.rounds} round(s))"
     )
     print()
     print("1. polls over TCP paced at 9600 8N1 both ways, emulator in another process (best round)")
+    print("   our side on serve's event loop, the emulator on links.precise_event_loop()")
     print(f"{'poll':<20} {'per s':>8} {'bytes each':>11} {'wire limit':>11} {'of limit':>9}")
     with (
         emulator_process(paced_replies=True) as url,
-        asyncio.Runner(loop_factory=precise_event_loop) as runner,
+        asyncio.Runner(loop_factory=serve_event_loop) as runner,
     ):
         rows = runner.run(wire_utilisation(url, sizes))
     for poll in rows:
@@ -424,7 +445,7 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
         f"2. CPU per 'e' command: each client in its own thread (thread CPU clock), unpaced "
         f"(best of {sizes.cpu_rounds} rounds)"
     )
-    print("   emulator on TCP in another process")
+    print("   emulator on TCP in another process; asyncio clients on serve's loop unless named")
     with emulator_process(paced_replies=False) as url:
         cpu_rows = cpu_per_command(url, sizes)
     figures = {row.name: row for row in cpu_rows}
@@ -438,10 +459,16 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
         f"our driver above the asyncio floor: {ours - floor:+.0f} us ({ours / floor:.2f}x); "
         f"the floor itself is {floor / nexstar:.2f}x nexstar's"
     )
+    ours_asyncio = figures[OURS_ASYNCIO].cpu_us
+    print(
+        f"on asyncio's default loop (Windows; SCOPELINK_EVENT_LOOP=asyncio): our driver "
+        f"{ours_asyncio / nexstar:.2f}x nexstar's, the floor "
+        f"{figures[FLOOR_ASYNCIO].cpu_us / nexstar:.2f}x (information: no goal)"
+    )
     print(f"client threads on CPU {CLIENT_CPU}, emulator on CPU {EMULATOR_CPU}" if _PLACED else "")
     print()
     print(
-        f"the goal judges {OURS!r} (a command asked through the driver); "
+        f"the goal judges {OURS!r} (a command asked through the driver, on serve's loop); "
         f"{POLL_LOOP!r} adds each poll's astrometry and state: "
         f"{figures[POLL_LOOP].cpu_us / nexstar:.2f}x nexstar's"
     )
@@ -453,7 +480,9 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m bench.drivers_synscan", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="a few seconds, smaller counts")
     parser.add_argument(
-        "--any-peer-version", action="store_true", help=f"run with nexstar other than {NEXSTAR_PIN}"
+        "--any-peer-version",
+        action="store_true",
+        help=f"run with nexstar other than {NEXSTAR_PIN} or uvloop other than its pin",
     )
     parser.add_argument(
         "--instructions",

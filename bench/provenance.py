@@ -60,3 +60,24 @@ def pin_problem(name: str, version: str, pin: str, any_version: bool) -> str | N
 def peer_label(name: str, version: str, pin: str) -> str:
     """``name version (pin P)``, marked when it is not the pinned one."""
     return f"{name} {version} (pin {pin}" + (")" if version == pin else ": NOT the pinned version)")
+
+
+UVLOOP_PIN = "0.23.0"
+"""The uvloop release the driver benchmarks measure ``serve``'s loop on (the test extra pins the
+same; the runtime dependency accepts any 0.x from 0.21)."""
+
+
+def serve_loop(any_version: bool) -> tuple[str, str | None]:
+    """The provenance line of the event loop ``scopelink serve`` runs on (``links.loops``), and
+    why it may not be measured: uvloop not at :data:`UVLOOP_PIN` (unless ``any_version``) or
+    absent. A loop chosen by ``SCOPELINK_EVENT_LOOP=asyncio`` is measured, and said."""
+    from scopelink.links import EVENT_LOOP_ENV_VAR, choose_event_loop
+
+    choice = choose_event_loop()
+    if choice.name == "asyncio" and choice.reason.startswith(EVENT_LOOP_ENV_VAR):
+        return f"serve's event loop: {choice.label}", None
+    version = installed_version("uvloop")
+    return (
+        f"serve's event loop: {peer_label('uvloop', version, UVLOOP_PIN)}",
+        pin_problem("uvloop", version, UVLOOP_PIN, any_version),
+    )

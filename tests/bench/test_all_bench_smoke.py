@@ -109,12 +109,20 @@ def test_a_run_saves_each_report_with_its_provenance(tmp_path: Path) -> None:
 
 def test_the_docs_quote_the_pins_and_goals_the_code_checks() -> None:
     """docs/benchmarks.md and the benchmarks never disagree on a peer's version or a goal."""
-    from bench import alpaca_wrk, astro, drivers_skytracker, drivers_synscan, security_flood
+    from bench import (
+        alpaca_wrk,
+        astro,
+        drivers_skytracker,
+        drivers_synscan,
+        provenance,
+        security_flood,
+    )
 
     for peer, version in (
         ("`alpaca-simulators`", alpaca_wrk.PEER_VERSION),
         ("`astropy`", astro.PEER_PIN),
         ("`nexstar`", drivers_synscan.NEXSTAR_PIN),
+        ("`uvloop`", provenance.UVLOOP_PIN),
     ):
         assert f"| PyPI {peer}" in DOCS, peer
         row = next(line for line in DOCS.splitlines() if line.strip().startswith(f"| PyPI {peer}"))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from bench.provenance import UVLOOP_PIN
 
 from tests.support.quick_bench import assert_provenance, run_quick_bench
 
@@ -15,6 +16,7 @@ def test_quick_benchmark_prints_its_tables() -> None:
     result = run_quick_bench("bench.drivers_skytracker", timeout_s=90)
     assert_provenance(result.stdout)
     lines = result.stdout.splitlines()
+    assert lines[3] == f"serve's event loop: uvloop {UVLOOP_PIN} (pin {UVLOOP_PIN})"
     wire = [line for line in lines if line.startswith("position poll") and line.endswith("%")]
     assert len(wire) == 1, result.stdout
     driver, bare, limit = (float(field) for field in wire[0].split()[-5:-2])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from bench.provenance import UVLOOP_PIN
 
 from tests.support.quick_bench import assert_provenance, run_quick_bench
 
@@ -13,6 +14,8 @@ def test_quick_driver_benchmark_prints_its_tables() -> None:
     assert_provenance(result.stdout)
     lines = result.stdout.splitlines()
     assert lines[2] == "peer nexstar 0.0.5 (pin 0.0.5)", result.stdout
+    assert lines[3] == f"serve's event loop: uvloop {UVLOOP_PIN} (pin {UVLOOP_PIN})"
+    assert any(line.startswith("  driver, asyncio's default loop") for line in lines)
     refresh = next(line for line in lines if line.startswith("refresh cycles"))
     assert refresh.endswith("%"), refresh
     assert any(line.startswith("e polls ") for line in lines), result.stdout

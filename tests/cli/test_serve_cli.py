@@ -4,6 +4,7 @@ device) behind every server, each reached by its own protocol over real sockets 
 from __future__ import annotations
 
 import asyncio
+import importlib.metadata
 import json
 import re
 import socket
@@ -34,6 +35,8 @@ from scopelink.servers.synscan import SynScanEmulator
 from scopelink.sim import EQ6, SKY_TRACKER, SimClock, SimulatedMount
 from tests.support.serve import ALL_FREE, ALL_OFF, listening, run_serve, serving
 from tests.support.synscan import ask
+
+UVLOOP_VERSION = importlib.metadata.version("uvloop")
 
 
 def http_get(url: str) -> tuple[int, str]:
@@ -70,6 +73,8 @@ def connect_alpaca(device_url: str) -> None:
 async def test_serve_puts_the_simulated_mount_behind_every_server(tmp_path: Path) -> None:
     async with serving(tmp_path, *ALL_FREE, "--synscan-pty", "--lx200-pty") as printed:
         assert printed.startswith("scopelink serve: simulated EQ6 at +51.4779°")
+        # Everything below runs on uvloop, a dependency here (docs/serve.md, "Event loop").
+        assert f"\n  Event loop  uvloop {UVLOOP_VERSION}\n" in printed
 
         # ASCOM Alpaca: a property read and the management API
         alpaca = listening(printed, "Alpaca")
@@ -235,6 +240,12 @@ def test_bad_options_fail_with_one_clear_line(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "no simulated mount called 'nonesuch'" in result.stderr
     assert "Traceback" not in result.stderr
+    result = run_serve(tmp_path, env={"SCOPELINK_EVENT_LOOP": "libuv"})
+    assert result.returncode == 1
+    assert result.stderr.splitlines() == [
+        "scopelink serve: SCOPELINK_EVENT_LOOP='libuv' is not one of auto, uvloop, asyncio",
+        "  hint: unset it, or set it to auto, uvloop, asyncio",
+    ]
 
 
 def test_a_port_in_use_is_reported_with_a_hint(tmp_path: Path) -> None:
@@ -259,7 +270,10 @@ async def test_serve_tries_a_device_that_fails_its_first_exchanges_again(tmp_pat
         host, port = await emulator.on_tcp("127.0.0.1", 0)
         options = (*ALL_OFF[:-1], "--synscan-port=0", "--dashboard-port=-1")
         device = ("--device", f"synscan:tcp://{host}:{port}", "--timeout", "0.3")
-        async with serving(tmp_path, *device, "--site", "48,11", *options) as printed:
+        # On asyncio's own loop, as told (the timeouts and retries work on either loop).
+        env = {"SCOPELINK_EVENT_LOOP": "asyncio"}
+        async with serving(tmp_path, *device, "--site", "48,11", *options, env=env) as printed:
+            assert "\n  Event loop  asyncio (epoll; SCOPELINK_EVENT_LOOP=asyncio)\n" in printed
             assert "SynScan" in printed
             assert len(faults.fired) == 4  # the first attempt failed on them
             async with await open_tcp("127.0.0.1", listening(printed, "SynScan")) as link:

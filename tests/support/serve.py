@@ -27,20 +27,26 @@ ALL_OFF = (
 ALL_FREE = tuple(option.replace("=-1", "=0") for option in ALL_OFF)
 
 
-def environment(home: Path) -> dict[str, str]:
-    """No user config and a scratch state dir: the test sees what a fresh install does."""
+def environment(home: Path, **more: str) -> dict[str, str]:
+    """No user config and a scratch state dir: the test sees what a fresh install does (the
+    event loop too: ``SCOPELINK_EVENT_LOOP`` unset, unless ``more`` sets it)."""
+    inherited = {k: v for k, v in os.environ.items() if k != "SCOPELINK_EVENT_LOOP"}
     return {
-        **os.environ,
+        **inherited,
         "PYTHONUNBUFFERED": "1",
         "SCOPELINK_CONFIG": str(home / "absent.toml"),
         "XDG_STATE_HOME": str(home / "state"),
+        **more,
     }
 
 
 @asynccontextmanager
-async def serving(home: Path, *options: str) -> AsyncIterator[str]:
-    """Run ``scopelink serve`` until the test is done; yields what it printed up to the
-    'Ctrl-C stops.' line; checks it stops cleanly on SIGTERM."""
+async def serving(
+    home: Path, *options: str, env: dict[str, str] | None = None
+) -> AsyncIterator[str]:
+    """Run ``scopelink serve`` (with the environment variables ``env`` besides a fresh
+    install's) until the test is done; yields what it printed up to the 'Ctrl-C stops.' line;
+    checks it stops cleanly on SIGTERM."""
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
@@ -49,7 +55,7 @@ async def serving(home: Path, *options: str) -> AsyncIterator[str]:
         *options,
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
-        env=environment(home),
+        env=environment(home, **(env or {})),
     )
     assert process.stdout is not None
     assert process.stderr is not None
@@ -77,12 +83,14 @@ def listening(printed: str, label: str) -> int:
     return int(found.group(1))
 
 
-def run_serve(home: Path, *options: str) -> subprocess.CompletedProcess[str]:
+def run_serve(
+    home: Path, *options: str, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "scopelink", "serve", *options],
         capture_output=True,
         text=True,
         timeout=30,
         check=False,
-        env=environment(home),
+        env=environment(home, **(env or {})),
     )

@@ -30,7 +30,13 @@ from scopelink.drivers.open import (
     open_mount,
     parse_device,
 )
-from scopelink.links import LinkError
+from scopelink.links import (
+    EVENT_LOOP_CHOICES,
+    EventLoopChoice,
+    EventLoopChoiceError,
+    LinkError,
+    choose_event_loop,
+)
 from scopelink.links.serial import PORT_BUSY
 from scopelink.links.trace import trace_logger
 from scopelink.mount import (
@@ -163,14 +169,35 @@ def mount_error(error: Exception) -> CommandError:
     return CommandError(str(error), hint)
 
 
-def run_on_mount(args: argparse.Namespace, body: Callable[[Mount], Awaitable[int]]) -> int:
-    """Open the device ``args`` name, run ``body`` on it, disconnect; the body's exit status."""
+def run_on_mount(
+    args: argparse.Namespace,
+    body: Callable[[Mount], Awaitable[int]],
+    *,
+    long_running: bool = False,
+) -> int:
+    """Open the device ``args`` name, run ``body`` on it, disconnect; the body's exit status.
+    A ``long_running`` session (``track`` following a target) runs on
+    :func:`long_session_loop`'s loop, a one-shot command on asyncio's default loop."""
     command = DeviceCommand.from_args(args)
+    loop_factory = long_session_loop().factory if long_running else None
     if args.trace or getattr(args, "verbose", 0):
         trace_logger.setLevel(logging.DEBUG)
         if not logging.getLogger().handlers:
             logging.basicConfig(format="%(asctime)s %(name)s %(message)s")
-    return asyncio.run(_run(command, body))
+    with asyncio.Runner(loop_factory=loop_factory) as runner:
+        return runner.run(_run(command, body))
+
+
+def long_session_loop() -> EventLoopChoice:
+    """The event loop of a long-running session (``serve``, ``track`` following a target):
+    uvloop where installed, unless ``SCOPELINK_EVENT_LOOP`` says otherwise (``docs/serve.md``,
+    "Event loop"); a bad value is a one-line error."""
+    try:
+        return choose_event_loop()
+    except EventLoopChoiceError as error:
+        raise CommandError(
+            str(error), f"unset it, or set it to {', '.join(EVENT_LOOP_CHOICES)}"
+        ) from None
 
 
 async def open_device(command: DeviceCommand) -> Mount:

@@ -28,6 +28,7 @@ from scopelink.cli.config import DEFAULT_SERVER_PORTS, ServersConfig, config_pat
 from scopelink.cli.errors import CommandError
 from scopelink.cli.mount_session import (
     DeviceCommand,
+    long_session_loop,
     mount_error,
     open_device,
     read_config,
@@ -37,7 +38,7 @@ from scopelink.cli.serve_registry import register_serve, unregister_serve
 from scopelink.cli.site_store import SettingsSiteStore
 from scopelink.cli.stopping import until_stopped
 from scopelink.decode import Protocol
-from scopelink.links import LinkError
+from scopelink.links import EventLoopChoice, LinkError, describe_loop
 from scopelink.links.trace import trace_logger
 from scopelink.mount import AlignmentMode, Mount, MountError
 from scopelink.mount.memory import DeviceMemory
@@ -311,9 +312,11 @@ def _or(flag: _Limit | None, configured: _Limit) -> _Limit:
 
 def run(args: argparse.Namespace) -> int:
     command, plan = plan_from(args)
+    loop = long_session_loop()
     if args.trace:
         trace_logger.setLevel(logging.DEBUG)
-    return asyncio.run(_serve(command, plan, args))
+    with asyncio.Runner(loop_factory=loop.factory) as runner:
+        return runner.run(_serve(command, plan, args, loop))
 
 
 def _listen_error(host: str, error: OSError) -> tuple[str, str]:
@@ -389,7 +392,9 @@ async def open_device_patiently(command: DeviceCommand) -> Mount:
     raise AssertionError("unreachable")
 
 
-async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespace) -> int:
+async def _serve(
+    command: DeviceCommand, plan: ServePlan, args: argparse.Namespace, loop: EventLoopChoice
+) -> int:
     mount = await open_device_patiently(command)
     if args.state_dir is not None and mount.park_keeper.state_dir is not None:
         mount.park_keeper.enable(args.state_dir)  # park records beside the Alpaca UniqueID
@@ -410,6 +415,8 @@ async def _serve(command: DeviceCommand, plan: ServePlan, args: argparse.Namespa
             endpoints: dict[str, object] = {"device": str(command.device)}
             for line in await _start_servers(stack, mount, plan, args, endpoints):
                 print(f"  {line}", flush=True)
+            running = describe_loop(asyncio.get_running_loop(), loop.reason)
+            print(f"  Event loop  {running}", flush=True)
             # Found by the command line, which then drives this mount (cli/serve_registry.py).
             stack.callback(unregister_serve, register_serve(endpoints))
             print("Ctrl-C stops.", flush=True)

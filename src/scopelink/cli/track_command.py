@@ -143,7 +143,7 @@ def run_track(args: argparse.Namespace) -> int:
     async def body(mount: Mount) -> int:
         return await follow(mount, args)
 
-    return run_on_mount(args, body)
+    return run_on_mount(args, body, long_running=True)  # hours of polls: on uvloop
 
 
 def _run_mode(args: argparse.Namespace, word: str) -> int:

@@ -12,6 +12,16 @@ from scopelink.links.base import (
     LinkOpenError,
     LinkSpecError,
 )
+from scopelink.links.loops import (
+    DEFAULT_EVENT_LOOP,
+    EVENT_LOOP_CHOICES,
+    EVENT_LOOP_ENV_VAR,
+    EventLoopChoice,
+    EventLoopChoiceError,
+    choose_event_loop,
+    describe_loop,
+    serve_event_loop,
+)
 from scopelink.links.memory import MemoryLink, memory_pair
 from scopelink.links.pacing import PacedLink, paced, precise_event_loop
 from scopelink.links.pty import LineSettings, PtyLink, open_pty
@@ -22,7 +32,12 @@ from scopelink.links.url import open_link
 
 __all__ = [
     "DEFAULT_BAUDRATE",
+    "DEFAULT_EVENT_LOOP",
+    "EVENT_LOOP_CHOICES",
+    "EVENT_LOOP_ENV_VAR",
     "ConnectionHandler",
+    "EventLoopChoice",
+    "EventLoopChoiceError",
     "LineSettings",
     "Link",
     "LinkClosedError",
@@ -36,6 +51,8 @@ __all__ = [
     "TcpClientLink",
     "TcpLink",
     "TcpServer",
+    "choose_event_loop",
+    "describe_loop",
     "memory_pair",
     "open_link",
     "open_pty",
@@ -43,5 +60,6 @@ __all__ = [
     "open_tcp",
     "paced",
     "precise_event_loop",
+    "serve_event_loop",
     "serve_tcp",
 ]

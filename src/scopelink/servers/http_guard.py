@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from typing import Any
+from typing import Any, cast
 
 from aiohttp import web
 from aiohttp.http_exceptions import BadHttpMessage, LineTooLong
@@ -132,7 +132,9 @@ class GuardedRequestHandler(RequestHandler):
     # --- admission --------------------------------------------------------------------------
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.Transport)
+        # A TCP transport: uvloop's implements asyncio.Transport's methods without deriving
+        # from it, so this is a cast, not an isinstance check (docs/serve.md, "Event loop").
+        transport = cast(asyncio.Transport, transport)
         peer = transport.get_extra_info("peername")
         admitted = self._guard.admit(str(peer[0]) if peer else None)
         if isinstance(admitted, Refusal):
