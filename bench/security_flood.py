@@ -5,12 +5,12 @@ See ``docs/reliability-security.md``.
 
 The rig is ``scopelink serve`` on a real wire: the SynScan driver polls an emulated hand control
 over TCP paced at 9600 baud 8N1, and Alpaca, LX200 and the SynScan server stand in front of the
-driver, all in this process and on the default event loop, as in serve. A second process
-(``--flood``) then opens hundreds of TCP connections across the three servers, from several
-loopback source addresses (127.0.0.2, 127.0.0.3, ...: distinct clients to the policy, while
-every packet still goes to 127.0.0.1), and on each connection admitted sends reads back to back.
-The figure is the poller's rate (``mount.poller.polls`` per second, held at full rate
-throughout: the rate a slew, the horizon guard or a reading client needs) under the flood
+driver, all in this process and on serve's event loop (``links.serve_event_loop``), as in
+serve. A second process (``--flood``) then opens hundreds of TCP connections across the three
+servers, from several loopback source addresses (127.0.0.2, 127.0.0.3, ...: distinct clients to
+the policy, while every packet still goes to 127.0.0.1), and on each connection admitted sends
+reads back to back. The figure is the poller's rate (``mount.poller.polls`` per second, held at
+full rate throughout: the rate a slew, the horizon guard or a reading client needs) under the flood
 against its unloaded rate (measured before and after the flood, averaged), with the default
 access policy and with no limits at all for comparison. Connections beyond the limits must be
 refused cleanly: Alpaca answers 503 and closes, LX200 and SynScan close without a byte.
@@ -34,6 +34,7 @@ from tempfile import TemporaryDirectory
 from bench.provenance import print_provenance
 from scopelink.astro import Site
 from scopelink.drivers.synscan import SynScanMount
+from scopelink.links import serve_event_loop
 from scopelink.servers.access import DEFAULT_POLICY, OPEN_POLICY, AccessControl, AccessPolicy
 from scopelink.servers.alpaca import AlpacaServer
 from scopelink.servers.lx200 import LX200Server
@@ -332,9 +333,9 @@ def run() -> None:
         tallies = asyncio.run(flood(ports, connections, sources, float(seconds)))
         print(json.dumps({name: vars(tally) for name, tally in tallies.items()}))
         return
-    # The default event loop, as `scopelink serve` runs (precise_event_loop's select scans every
-    # descriptor on each wake-up: wrong for a server with hundreds of connections).
-    asyncio.run(main(QUICK if args.quick else FULL))
+    # The event loop `scopelink serve` runs on (links.serve_event_loop: uvloop where installed).
+    with asyncio.Runner(loop_factory=serve_event_loop) as runner:
+        runner.run(main(QUICK if args.quick else FULL))
 
 
 if __name__ == "__main__":

@@ -153,7 +153,11 @@ def main() -> None:
     if args.flood:
         asyncio.run(flood(int(args.flood[0]), float(args.flood[1]), args.flood[2]))
         return
-    asyncio.run(measure(0.3 if args.quick else 8.0))
+    # On the event loop `scopelink serve` runs on (uvloop where installed), as the docstring says.
+    from scopelink.links import serve_event_loop
+
+    with asyncio.Runner(loop_factory=serve_event_loop) as runner:
+        runner.run(measure(0.3 if args.quick else 8.0))
 
 
 if __name__ == "__main__":
