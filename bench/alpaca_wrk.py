@@ -27,6 +27,10 @@ each: at least :data:`GOAL_RATIO` times the peer's throughput with p99 at most
 :data:`GOAL_P99_MS` at 8 connections. Rows 3 and 4 have no throughput goal: serve's access policy
 holds one address to its rate by design (``docs/reliability-security.md``).
 
+Rows 1, 2 and the peer run on asyncio's default event loop (the peer's uvicorn is installed
+without uvloop, as ``alpaca-simulators`` asks for it): servers compared on the same loop. Rows 3
+and 4 are ``serve`` itself, on the loop it chooses (uvloop where installed, ``docs/serve.md``).
+
     .venv/bin/python -m bench.alpaca_wrk [--seconds 5] [--rounds 3] [--install-peer] [--quick]
 
 See ``docs/benchmarks.md``.
