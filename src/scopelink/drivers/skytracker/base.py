@@ -16,6 +16,7 @@ from collections.abc import Callable
 from datetime import datetime
 
 from scopelink.astro import Site
+from scopelink.astro.one_position import reading_of_j2000
 from scopelink.drivers.common import LinkFactory, Pointing, Reconnection, link_factory
 from scopelink.mount import (
     AlignmentMode,
@@ -152,6 +153,12 @@ class SkyTrackerBase(Mount):
         self._mode: TrackerMode | None = None
         self._status: TrackerStatus | None = None
         self._position: Pointing | None = None
+        self._derived: tuple[Pointing | None, tuple[float, float, float, float]] = (
+            None,
+            (math.nan,) * 4,
+        )
+        """:attr:`_position` and its alt/az and RA/Dec of date (``astro.one_position``'s one
+        pass), computed once per reading: every state published until the next keeps them."""
         self._guide_speeds = (120, 120)
         """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
         self._pulse_speeds = (120, 120)
@@ -296,7 +303,11 @@ class SkyTrackerBase(Mount):
             ra = dec = ra_of_date = dec_of_date = alt = az = position_received_s = None
         else:
             ra, dec = position.ra_j2000_hours, position.dec_j2000_deg
-            alt, az, ra_of_date, dec_of_date = position.compute()
+            derived = self._derived
+            if derived[0] is not position:  # a new reading (or its site changed): once each
+                where = reading_of_j2000(ra, dec, position.read_at, position.site)
+                derived = self._derived = (position, where)
+            alt, az, ra_of_date, dec_of_date = derived[1]
             position_received_s = position.received_s
         state = MountState(
             read_at=read_at,
