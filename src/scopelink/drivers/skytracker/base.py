@@ -74,6 +74,7 @@ identity first, where a set would call ``Enum.__hash__``, Python code)."""
 
 NOTHING_PRESSED = Direction(0)
 _GOTO = TrackerMode.GOTO
+_NOT_TRACKING = TrackingMode.OFF
 """Looked up once: each look-up of an enum member costs ~80 ns (Python 3.11); every publish
 asks."""
 
@@ -284,7 +285,7 @@ class SkyTrackerBase(Mount):
         status = reply.status
         self._status = status
         self._mode = status.mode
-        self._status_at = (self.now(), time.monotonic() if received_s is None else received_s)
+        self._status_at = (self._clock(), time.monotonic() if received_s is None else received_s)
 
     def _publish_now(self) -> MountState:
         position = self._position
@@ -319,7 +320,7 @@ class SkyTrackerBase(Mount):
             alt_deg=alt,
             az_deg=az,
             slewing=self._mode is _GOTO or bool(pressed & ~pulsing),
-            tracking=self._tracking_choice if self._mode in BOX_TRACKING else TrackingMode.OFF,
+            tracking=self._tracking_choice if self._mode in BOX_TRACKING else _NOT_TRACKING,
             parked=False,
             aligned=True,
             pulse_guiding=bool(self._pulses),
