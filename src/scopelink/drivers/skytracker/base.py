@@ -30,6 +30,7 @@ from scopelink.mount import (
     MountState,
     NotConnectedError,
     NotSupportedError,
+    PierSide,
     TrackingMode,
     utc_now,
 )
@@ -52,7 +53,29 @@ from scopelink.protocol.skytracker import (
 from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, BusOptions, SkyTrackerLine
 from .motion import MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S, UTILITY_ARROW_ARCSEC_S, AxisMotion
 
-__all__ = ["SkyTrackerBase"]
+__all__ = ["STATE_FIELDS", "SkyTrackerBase"]
+
+STATE_FIELDS = (
+    "read_at",
+    "connected",
+    "ra_j2000_hours",
+    "dec_j2000_deg",
+    "ra_of_date_hours",
+    "dec_of_date_deg",
+    "alt_deg",
+    "az_deg",
+    "pier_side",
+    "slewing",
+    "tracking",
+    "parked",
+    "aligned",
+    "pulse_guiding",
+    "problems",
+    "received_s",
+    "position_received_s",
+)
+"""The order :meth:`SkyTrackerBase._publish_now` passes a state's fields in (positionally: see
+there); ``tests/drivers/test_driver_skytracker_publish.py`` holds it to ``MountState``'s."""
 
 logger = logging.getLogger(__name__)
 
@@ -75,6 +98,7 @@ identity first, where a set would call ``Enum.__hash__``, Python code)."""
 NOTHING_PRESSED = Direction(0)
 _GOTO = TrackerMode.GOTO
 _NOT_TRACKING = TrackingMode.OFF
+_PIER_SIDE_UNKNOWN = PierSide.UNKNOWN
 """Looked up once: each look-up of an enum member costs ~80 ns (Python 3.11); every publish
 asks."""
 
@@ -290,11 +314,13 @@ class SkyTrackerBase(Mount):
     def _publish_now(self) -> MountState:
         position = self._position
         status = self._status
+        pulses = self._pulses
         # The arrows as plain ints: IntFlag arithmetic costs a microsecond per operation, and
         # this runs on every poll.
         pulsing = 0
-        for direction, _ in self._pulses.values():
-            pulsing |= int(direction)
+        if pulses:
+            for direction, _ in pulses.values():
+                pulsing |= int(direction)
         if self._loop_on and not self._held:  # arrows pressed now are the loop's (or pulses)
             pulsing = ~0
         pressed = int(status.directions) if status is not None else 0
@@ -310,23 +336,27 @@ class SkyTrackerBase(Mount):
                 derived = self._derived = (position, where)
             alt, az, ra_of_date, dec_of_date = derived[1]
             position_received_s = position.received_s
+        mode = self._mode
+        # Positional, in MountState's field order (STATE_FIELDS, checked by the driver's tests):
+        # a class called with keywords builds a dict of them first (~0.5 µs a poll).
         state = MountState(
-            read_at=read_at,
-            connected=line is not None and not line.link.closed and not self._link_lost,
-            ra_j2000_hours=ra,
-            dec_j2000_deg=dec,
-            ra_of_date_hours=ra_of_date,
-            dec_of_date_deg=dec_of_date,
-            alt_deg=alt,
-            az_deg=az,
-            slewing=self._mode is _GOTO or bool(pressed & ~pulsing),
-            tracking=self._tracking_choice if self._mode in BOX_TRACKING else _NOT_TRACKING,
-            parked=False,
-            aligned=True,
-            pulse_guiding=bool(self._pulses),
-            problems=self._problems + self._loop_problems,
-            received_s=received_s,
-            position_received_s=position_received_s,
+            read_at,
+            line is not None and not line.link.closed and not self._link_lost,  # connected
+            ra,
+            dec,
+            ra_of_date,
+            dec_of_date,
+            alt,
+            az,
+            _PIER_SIDE_UNKNOWN,
+            mode is _GOTO or (pressed & ~pulsing) != 0,  # slewing
+            self._tracking_choice if mode in BOX_TRACKING else _NOT_TRACKING,
+            False,  # parked
+            True,  # aligned
+            len(pulses) != 0,  # pulse_guiding
+            self._problems + self._loop_problems,
+            received_s,
+            position_received_s,
         )
         self._publish(state)
         return state
