@@ -12,8 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
-from scopelink.drivers.skytracker.base import STATE_FIELDS
-from scopelink.mount import MountState, NotSupportedError, TrackingMode
+from scopelink.mount import MountState, NotSupportedError, PierSide, TrackingMode
 from scopelink.servers.faults import Fault, FaultKind
 from tests.support.skytracker_driver import SITE, Rig, rig, separation_deg, sky_at
 
@@ -106,11 +105,19 @@ async def test_a_reading_is_converted_once_and_every_change_reaches_the_next_sta
     next reading keeps them), and anything they depend on reaches the very next state: a site
     elsewhere (published at once), a jump of the clock, a sync on the device (a new reading),
     a sync kept on the PC and its removal."""
-    assert MountState.__match_args__ == STATE_FIELDS  # _publish_now passes them positionally
     async with rig(tmp_path, "tcp", pace=False, clock_rate=0.0) as r:
         r.point(35.0, 120.0)
         first = await r.driver.refresh()
         _assert_converted(first, SITE)
+        # Every field where it belongs (_publish_now passes them positionally).
+        assert first.connected is True
+        assert first.pier_side is PierSide.UNKNOWN
+        assert first.slewing is False
+        assert first.tracking is TrackingMode.OFF
+        assert (first.parked, first.aligned, first.pulse_guiding) == (False, True, False)
+        assert first.problems == ()
+        assert first.position_received_s == r.driver.line.last_answer_s
+        assert first.received_s < first.position_received_s
         await r.driver.set_tracking(TrackingMode.ALT_AZ)  # a command publishes again: kept
         assert r.driver.state.alt_deg == first.alt_deg
 

@@ -53,29 +53,7 @@ from scopelink.protocol.skytracker import (
 from .exchange import DEFAULT_TIMEOUT_S, BadReplyError, BusOptions, SkyTrackerLine
 from .motion import MAX_SKYTRACKER_TRACKING_OFFSET_ARCSEC_S, UTILITY_ARROW_ARCSEC_S, AxisMotion
 
-__all__ = ["STATE_FIELDS", "SkyTrackerBase"]
-
-STATE_FIELDS = (
-    "read_at",
-    "connected",
-    "ra_j2000_hours",
-    "dec_j2000_deg",
-    "ra_of_date_hours",
-    "dec_of_date_deg",
-    "alt_deg",
-    "az_deg",
-    "pier_side",
-    "slewing",
-    "tracking",
-    "parked",
-    "aligned",
-    "pulse_guiding",
-    "problems",
-    "received_s",
-    "position_received_s",
-)
-"""The order :meth:`SkyTrackerBase._publish_now` passes a state's fields in (positionally: see
-there); ``tests/drivers/test_driver_skytracker_publish.py`` holds it to ``MountState``'s."""
+__all__ = ["SkyTrackerBase"]
 
 logger = logging.getLogger(__name__)
 
@@ -337,8 +315,9 @@ class SkyTrackerBase(Mount):
             alt, az, ra_of_date, dec_of_date = derived[1]
             position_received_s = position.received_s
         mode = self._mode
-        # Positional, in MountState's field order (STATE_FIELDS, checked by the driver's tests):
-        # a class called with keywords builds a dict of them first (~0.5 µs a poll).
+        # Positional, in MountState's field order (mypy checks each argument's type, and
+        # tests/drivers/test_driver_skytracker_publish.py each field's value): a class called
+        # with keywords builds a dict of them first (~0.5 µs a poll).
         state = MountState(
             read_at,
             line is not None and not line.link.closed and not self._link_lost,  # connected
