@@ -142,3 +142,25 @@ def test_the_scalar_path_refuses_what_the_array_path_refuses() -> None:
     for ra, dec in [(math.inf, 12.0), (7.5, -math.inf), (math.nan, 12.0)]:
         assert all(math.isnan(v) for v in j2000_to_observed(ra, dec, when, SITES[0]))
         assert all(math.isnan(v) for v in j2000_to_apparent(ra, dec, when))
+
+
+def test_a_reading_in_one_pass_is_its_two_conversions() -> None:
+    """``reading_of_j2000`` (a poll's alt/az and RA/Dec of date in one pass) gives exactly what
+    the two conversions give, as the reading, the instant (a jump too), the site and the time
+    zone of the datetime change; a UTC datetime's fast path is any zero offset's."""
+    rng = np.random.default_rng(11)
+    start = datetime(2026, 11, 25, 3, 0, tzinfo=UTC)
+    steps = [0.0, 0.047, 0.094, 3.0, 11.0, 3600.0, 3600.047, -86400.0]
+    for site in SITES[:3]:
+        ra, dec = _sky(rng, 2)
+        for index, step in enumerate(steps):
+            moment = start + timedelta(seconds=step)
+            one_ra, one_dec = float(ra[index % 2]), float(dec[index % 2])
+            reading = one_position.reading_of_j2000(one_ra, one_dec, moment, site)
+            observed = j2000_to_observed(one_ra, one_dec, moment, site)
+            apparent = j2000_to_apparent(one_ra, one_dec, moment)
+            assert reading == (*observed, *apparent), (site, step)
+            zero_offset = moment.astimezone(timezone(timedelta(0)))  # not the UTC singleton
+            assert one_position.reading_of_j2000(one_ra, one_dec, zero_offset, site) == reading
+            elsewhere = moment.astimezone(timezone(timedelta(hours=5, minutes=30)))
+            assert one_position.reading_of_j2000(one_ra, one_dec, elsewhere, site) == reading

@@ -40,6 +40,7 @@ __all__ = [
     "apparent_of_j2000",
     "erfa_site",
     "observed_of_j2000",
+    "reading_of_j2000",
 ]
 
 GEOCENTRIC_REUSE_S = 1.0
@@ -171,32 +172,57 @@ def _geocentric(moment: datetime, day_jd: float, seconds: float) -> _Geocentric:
     return cached
 
 
-_last_cirs: tuple[float, float, _Geocentric, _Vector] | None = None
+@dataclass(frozen=True, slots=True)
+class _Place:
+    """One J2000 position in one geocentric context: its CIRS direction and its apparent RA/Dec
+    of date, computed together once (a poll's reading asks for both, and the same position is
+    read again and again while the mount stands still or the Sky Commander's last digit holds)."""
+
+    ra_hours: float
+    dec_deg: float
+    context: _Geocentric
+    x: float
+    y: float
+    z: float
+    ra_of_date_hours: float
+    dec_of_date_deg: float
+
+    @classmethod
+    def of(cls, ra_hours: float, dec_deg: float, context: _Geocentric) -> _Place:
+        x, y, z = context.natural.of_date(ra_hours, dec_deg)
+        across = x * x + y * y
+        ra = math.atan2(y, x) if across != 0.0 else 0.0
+        dec = math.atan2(z, math.sqrt(across)) if z != 0.0 else 0.0
+        hours = ((ra - context.equation_of_origins) / _RADIANS_PER_HOUR) % 24.0
+        ra_of_date = 0.0 if hours >= 24.0 else hours
+        return cls(ra_hours, dec_deg, context, x, y, z, ra_of_date, math.degrees(dec))
 
 
-def _cirs(ra_hours: float, dec_deg: float, context: _Geocentric) -> _Vector:
-    """The CIRS direction of a J2000 position in ``context``: computed once for a reading's
-    alt/az and RA/Dec of date (the same position in the same context)."""
-    global _last_cirs  # noqa: PLW0603 - a one-entry cache: one reading, two conversions
-    last = _last_cirs
-    if last is not None and last[2] is context and last[0] == ra_hours and last[1] == dec_deg:
-        return last[3]
-    vector = context.natural.of_date(ra_hours, dec_deg)
-    _last_cirs = (ra_hours, dec_deg, context, vector)
-    return vector
+_last_place: _Place | None = None
+
+
+def _place(ra_hours: float, dec_deg: float, context: _Geocentric) -> _Place:
+    """The position in ``context``: kept for the next call with the same position and context
+    (its alt/az and RA/Dec of date, and the next poll's while the reading holds)."""
+    global _last_place  # noqa: PLW0603 - a one-entry cache: the reading of the last poll
+    last = _last_place
+    if (
+        last is not None
+        and last.context is context
+        and last.ra_hours == ra_hours
+        and last.dec_deg == dec_deg
+    ):
+        return last
+    place = _last_place = _Place.of(ra_hours, dec_deg, context)
+    return place
 
 
 def apparent_of_j2000(ra_hours: float, dec_deg: float, moment: datetime) -> tuple[float, float]:
     """Apparent RA (hours, [0, 24)) and Dec (degrees) of date of one J2000 position at
     ``moment``: :func:`~scopelink.astro.j2000_to_apparent` in floats."""
     day_jd, seconds, _ = utc_day_seconds(moment)
-    context = _geocentric(moment, day_jd, seconds)
-    x, y, z = _cirs(ra_hours, dec_deg, context)
-    across = x * x + y * y
-    ra = math.atan2(y, x) if across != 0.0 else 0.0
-    dec = math.atan2(z, math.sqrt(across)) if z != 0.0 else 0.0
-    hours = ((ra - context.equation_of_origins) / _RADIANS_PER_HOUR) % 24.0
-    return (0.0 if hours >= 24.0 else hours), math.degrees(dec)
+    place = _place(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
+    return place.ra_of_date_hours, place.dec_of_date_deg
 
 
 # --- the observer's context: observed alt/az --------------------------------------------------
@@ -298,11 +324,32 @@ def observed_of_j2000(
     ``site``: :func:`~scopelink.astro.j2000_to_observed` in floats (``ut1_minus_utc_s`` checked
     by the caller)."""
     day_jd, seconds, _ = utc_day_seconds(moment)
-    x, y, z = _cirs(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
-    context = _observer(moment, day_jd, seconds, site, ut1_minus_utc_s)
+    place = _place(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
+    return _horizon(place, _observer(moment, day_jd, seconds, site, ut1_minus_utc_s), seconds)
+
+
+def reading_of_j2000(
+    ra_hours: float, dec_deg: float, moment: datetime, site: Site
+) -> tuple[float, float, float, float]:
+    """Observed (altitude, azimuth) in degrees and apparent RA (hours) and Dec (degrees) of date
+    of one J2000 position at ``moment`` and ``site`` (DUT1 0, as a mount's clock is UTC): what
+    a mount's poll derives from its reading, in one pass (one time conversion and one look-up
+    of each context; :func:`observed_of_j2000` and :func:`apparent_of_j2000` give the same
+    values)."""
+    day_jd, seconds, _ = utc_day_seconds(moment)
+    place = _place(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
+    observer = _observer(moment, day_jd, seconds, site, 0.0)
+    alt, az = _horizon(place, observer, seconds)
+    return alt, az, place.ra_of_date_hours, place.dec_of_date_deg
+
+
+def _horizon(place: _Place, context: _Observer, seconds: float) -> tuple[float, float]:
+    """Observed (altitude, azimuth) of ``place`` at UTC ``seconds`` of the observer context's
+    day: Earth rotation, polar motion, diurnal aberration, the horizon frame, refraction."""
     # Within one UTC day UT1 advances with UTC's seconds (utc_day_seconds): ERA is linear in it.
     era = context.local_era + _ERA_RAD_PER_UT1_S * (seconds - context.seconds)
     cos_era, sin_era = math.cos(era), math.sin(era)
+    x, y, z = place.x, place.y, place.z
     x, y = cos_era * x + sin_era * y, cos_era * y - sin_era * x  # CIRS -> (-HA, Dec)
     m = context.polar_motion
     if m is not None:

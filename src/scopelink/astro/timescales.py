@@ -145,14 +145,17 @@ def utc_day_seconds(moment: datetime) -> tuple[float, float, float]:
     last = _last_day_seconds
     if last is not None and last[0] is moment:  # a datetime is immutable: the same object
         return last[1]
-    offset = moment.utcoffset()
-    if offset is None:
-        raise ValueError(
-            f"naive datetime {moment.isoformat()} has no time zone; attach one, "
-            "e.g. datetime(..., tzinfo=timezone.utc) or "
-            "moment.replace(tzinfo=zoneinfo.ZoneInfo(...))"
-        )
-    utc = moment.astimezone(UTC) if offset else moment  # a zero offset: the fields are UTC's
+    if moment.tzinfo is UTC:  # a mount's clock (utc_now, SimClock): no offset to ask for
+        utc = moment
+    else:
+        offset = moment.utcoffset()
+        if offset is None:
+            raise ValueError(
+                f"naive datetime {moment.isoformat()} has no time zone; attach one, "
+                "e.g. datetime(..., tzinfo=timezone.utc) or "
+                "moment.replace(tzinfo=zoneinfo.ZoneInfo(...))"
+            )
+        utc = moment.astimezone(UTC) if offset else moment  # a zero offset: UTC's fields
     day_jd, day_seconds = _utc_day(utc.year, utc.month, utc.day)
     # erfa.dtf2d's own expression, term for term (the same doubles): a poll's datetime costs a
     # cached day and one division instead of three ufunc calls.

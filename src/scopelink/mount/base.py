@@ -173,15 +173,21 @@ class Mount(PointedMount):
         return self._dead_man.acting_for(token)
 
     def _publish(self, state: MountState) -> None:
+        """Correct, annotate and publish ``state``, then show it to the watchers, in one pass
+        (every poll's reading comes here: nothing is rebuilt unless something changes it)."""
         state = self._corrected(state)
         if state.parked and state.slewing:  # parked only once arrived and stopped
             state = dataclasses.replace(state, parked=False)
         if not state.connected:
             self._parking = False  # a device that reconnects says itself whether it is parked
-        super()._publish(self._meridian.annotate(self._guard.annotate(state)))
-        self._guard.observe(self.state)
-        self.park_keeper.observe(self, self.state)
-        self._meridian.observe(self.state)
+        guard, meridian = self._guard, self._meridian
+        if guard.notice or meridian.notice:  # a stop's reason, shown among the problems
+            state = meridian.annotate(guard.annotate(state))
+        super()._publish(state)
+        published = self._broadcast.state
+        guard.observe(published)
+        self.park_keeper.observe(self, published)
+        meridian.observe(published)
 
     def _publish_again(self) -> None:
         """Publish the current state again (with the guard's latest notice)."""

@@ -72,7 +72,9 @@ class StateCache(MountDevice):
 
     def _publish(self, state: MountState) -> None:
         """Make ``state`` the current one (claiming no motion while not connected)."""
-        self._broadcast.publish(without_motion_claims(state))
+        if not state.connected:
+            state = without_motion_claims(state)
+        self._broadcast.publish(state)
 
     def _report_problem(self, problem: str) -> None:
         """Publish the last good reading again, with ``problem`` saying why it is not fresh

@@ -48,6 +48,10 @@ __all__ = ["HorizonGuard", "stop_until_confirmed"]
 
 logger = logging.getLogger(__name__)
 
+_NOT_TRACKING = TrackingMode.OFF
+"""Looked up once: an enum member's look-up costs ~80 ns on Python 3.11, and every published
+state is checked against it."""
+
 
 @dataclass(frozen=True, slots=True)
 class _RateMotion:
@@ -208,7 +212,7 @@ class HorizonGuard:
         if not state.connected:
             self._motions.clear()
             return
-        if state.tracking is not TrackingMode.OFF:
+        if state.tracking is not _NOT_TRACKING:
             self._wake()
 
     def annotate(self, state: MountState) -> MountState:
@@ -218,7 +222,7 @@ class HorizonGuard:
         return state
 
     def _needed(self, state: MountState) -> bool:
-        return state.connected and (bool(self._motions) or state.tracking is not TrackingMode.OFF)
+        return state.connected and (bool(self._motions) or state.tracking is not _NOT_TRACKING)
 
     def _wake(self) -> None:
         if not self.enabled:

@@ -33,6 +33,10 @@ __all__ = ["FLIP_TIMEOUT_S", "MeridianMount", "MeridianWatch"]
 
 logger = logging.getLogger(__name__)
 
+_NOT_TRACKING = TrackingMode.OFF
+"""Looked up once: an enum member's look-up costs ~80 ns on Python 3.11, and every published
+state is checked against it."""
+
 FLIP_TIMEOUT_S = 600.0
 """Longest (real) wait for an automatic flip's slew to land before it counts as failed."""
 _CHECK_S = 0.25
@@ -129,7 +133,7 @@ class MeridianWatch:
     def _needed(self, state: MountState) -> bool:
         return (
             state.connected
-            and state.tracking is not TrackingMode.OFF
+            and state.tracking is not _NOT_TRACKING
             and applies(self._mount.capabilities)
         )
 

@@ -1,7 +1,13 @@
 """The Mount's frame: its site and limits, and the readings corrected by the syncs kept on the PC
-(:mod:`scopelink.mount.pointing`) — every published state and every driver's ``refresh`` go
-through :meth:`PointedMount._corrected`, so no front end ever sees an uncorrected position. Also
-the net frame change that syncs sent to the device have made (:mod:`scopelink.mount.syncs`).
+(:mod:`scopelink.mount.pointing`) — every published state goes through
+:meth:`PointedMount._corrected`, and every driver's ``refresh`` returns its reading corrected, so
+no front end ever sees an uncorrected position. Also the net frame change that syncs sent to the
+device have made (:mod:`scopelink.mount.syncs`).
+
+One pass per reading (issue #14): the model's frame is judged again only when the mount's
+capabilities or the site change (each an immutable object, replaced on change), and the reading a
+driver's ``refresh`` returns, published a moment before, is not corrected a second time: its
+correction is kept, with the model's generation and the site it was made under.
 
 The layer between the state cache and the checked commands of :class:`~scopelink.mount.Mount`.
 """
@@ -20,7 +26,7 @@ from scopelink.mount.memory import DeviceMemory
 from scopelink.mount.pointing import PointingCorrection
 from scopelink.mount.pointing_model import ModelFrame
 from scopelink.mount.syncs import SyncFrame
-from scopelink.mount.types import AlignmentMode, MountState
+from scopelink.mount.types import AlignmentMode, Capabilities, MountState
 
 __all__ = ["PointedMount"]
 
@@ -40,7 +46,17 @@ class PointedMount(StateCache):
 
             @functools.wraps(original)
             async def refresh(self: PointedMount) -> MountState:
-                return self._corrected(await original(self))
+                state = await original(self)
+                # The reading the driver has just published: its correction as _publish made
+                # it, unless the model or the site changed since (identity checks only).
+                last = self._last_correction
+                if (
+                    last[0] is state
+                    and last[2] == self._pointing.generation
+                    and last[3] is self._site
+                ):
+                    return last[1]
+                return self._corrected(state)
 
             setattr(cls, "refresh", refresh)  # noqa: B010 (a method, replaced on the class)
 
@@ -52,6 +68,16 @@ class PointedMount(StateCache):
         self._pointing = PointingCorrection()
         self._model_frame = ModelFrame(equatorial=False, latitude_deg=math.nan)
         """The pointing model's frame as last given (a NaN latitude: none yet)."""
+        self._frame_for: tuple[Capabilities | None, Site | None] = (None, None)
+        """The capabilities and site the frame was last judged for (identity: both immutable)."""
+        self._last_correction: tuple[MountState | None, MountState, int, Site | None] = (
+            None,
+            self.state,
+            -1,
+            None,
+        )
+        """The last reading :meth:`_corrected` was given, its answer, the model's generation
+        and the site then."""
 
     @property
     def site(self) -> Site:
@@ -85,14 +111,22 @@ class PointedMount(StateCache):
             self._publish(again)
 
     def _corrected(self, state: MountState) -> MountState:
-        equatorial = self.capabilities.alignment_mode is not AlignmentMode.ALT_AZ
-        frame = self._model_frame
-        if frame.equatorial is not equatorial or frame.latitude_deg != self._site.latitude_deg:
+        """``state`` corrected by :attr:`pointing` (which also watches it for a new alignment)."""
+        site = self._site
+        pointing = self._pointing
+        capabilities = self.capabilities
+        frame_for = self._frame_for
+        if frame_for[0] is not capabilities or frame_for[1] is not site:
             # Once per change of the mount's kind or the site (not per reading).
-            frame = self._model_frame = ModelFrame(equatorial, self._site.latitude_deg)
-        self._pointing.set_frame(frame)
-        self._pointing.observe_alignment(state)
-        return self._pointing.correct(state, self._site)
+            self._frame_for = (capabilities, site)
+            equatorial = capabilities.alignment_mode is not AlignmentMode.ALT_AZ
+            frame = self._model_frame
+            if frame.equatorial is not equatorial or frame.latitude_deg != site.latitude_deg:
+                frame = self._model_frame = ModelFrame(equatorial, site.latitude_deg)
+            pointing.set_frame(frame)
+        corrected = pointing.observe(state, site)
+        self._last_correction = (state, corrected, pointing.generation, site)
+        return corrected
 
     def observed_altaz(self, ra_j2000_hours: float, dec_j2000_deg: float) -> tuple[float, float]:
         """Observed (refracted) altitude and azimuth of a J2000 position now, at this site."""

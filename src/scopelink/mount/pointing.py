@@ -116,6 +116,9 @@ class PointingCorrection:
         """The site's latitude when the syncs were taken (alt/az pairs belong to one site)."""
         self.raw_state: MountState | None = None
         """The last reading as the device gave it (before correction)."""
+        self.generation = 0
+        """Counts the model's changes (a refit: syncs added, removed, dropped, the frame): a
+        correction made under another generation is not the current one."""
 
     # --- the syncs and the model ----------------------------------------------------------------
 
@@ -154,6 +157,7 @@ class PointingCorrection:
 
     def _refit(self) -> None:
         self._corrected_key = None  # the next reading is corrected afresh
+        self.generation += 1
         if self._frame is None or not self._syncs:
             self._model = None
             return
@@ -271,6 +275,17 @@ class PointingCorrection:
         corrected = dataclasses.replace(state, **place)
         self._corrected_key = _position(corrected)
         return corrected
+
+    def observe(self, state: MountState, site: Site) -> MountState:
+        """What every published state goes through, in one pass: :meth:`observe_alignment`, then
+        :meth:`correct` (without a model the reading passes as it is, kept as :attr:`raw_state`:
+        no key to compare, no state rebuilt)."""
+        if state.connected and state.aligned is not self._last_aligned:
+            self.observe_alignment(state)
+        if self._model is None:
+            self.raw_state = state
+            return state
+        return self.correct(state, site)
 
     def recorrected(self, current: MountState, site: Site) -> MountState | None:
         """``current`` (the published state) with the last raw reading's position corrected

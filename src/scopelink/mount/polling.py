@@ -165,10 +165,12 @@ class StateBroadcast:
     def publish(self, state: MountState) -> None:
         self.state = state
         self.version += 1
-        waiters, self._waiters = self._waiters, set()
-        for waiter in waiters:
-            if not waiter.done():
-                waiter.set_result(None)
+        waiters = self._waiters
+        if waiters:  # (no new set per poll while nobody waits)
+            self._waiters = set()
+            for waiter in waiters:
+                if not waiter.done():
+                    waiter.set_result(None)
 
     async def changed_since(self, version: int) -> None:
         """Return once a state newer than ``version`` has been published."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 
 from scopelink.astro import PierSide
+from scopelink.mount.frozen_init import fast_frozen_init
 
 __all__ = [
     "AlignmentMode",
@@ -89,6 +90,7 @@ class Capabilities:
     in :meth:`Mount.set_tracking_rates`; 0: it cannot set custom rates (docs/tracking.md)."""
 
 
+@fast_frozen_init  # one is made per poll: its fields set through their slots (frozen_init.py)
 @dataclass(frozen=True, slots=True)
 class MountState:
     """One consistent snapshot of the mount, stamped with when it was read.

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from datetime import datetime
 
 from scopelink.astro import Site
+from scopelink.astro.one_position import reading_of_j2000
 from scopelink.drivers.common import LinkFactory, Pointing, Reconnection, link_factory
 from scopelink.mount import (
     AlignmentMode,
@@ -29,6 +30,7 @@ from scopelink.mount import (
     MountState,
     NotConnectedError,
     NotSupportedError,
+    PierSide,
     TrackingMode,
     utc_now,
 )
@@ -73,6 +75,8 @@ identity first, where a set would call ``Enum.__hash__``, Python code)."""
 
 NOTHING_PRESSED = Direction(0)
 _GOTO = TrackerMode.GOTO
+_NOT_TRACKING = TrackingMode.OFF
+_PIER_SIDE_UNKNOWN = PierSide.UNKNOWN
 """Looked up once: each look-up of an enum member costs ~80 ns (Python 3.11); every publish
 asks."""
 
@@ -152,6 +156,12 @@ class SkyTrackerBase(Mount):
         self._mode: TrackerMode | None = None
         self._status: TrackerStatus | None = None
         self._position: Pointing | None = None
+        self._derived: tuple[Pointing | None, tuple[float, float, float, float]] = (
+            None,
+            (math.nan,) * 4,
+        )
+        """:attr:`_position` and its alt/az and RA/Dec of date (``astro.one_position``'s one
+        pass), computed once per reading: every state published until the next keeps them."""
         self._guide_speeds = (120, 120)
         """The box's ``K`` speeds (azimuth, elevation) as last set or read."""
         self._pulse_speeds = (120, 120)
@@ -277,16 +287,18 @@ class SkyTrackerBase(Mount):
         status = reply.status
         self._status = status
         self._mode = status.mode
-        self._status_at = (self.now(), time.monotonic() if received_s is None else received_s)
+        self._status_at = (self._clock(), time.monotonic() if received_s is None else received_s)
 
     def _publish_now(self) -> MountState:
         position = self._position
         status = self._status
+        pulses = self._pulses
         # The arrows as plain ints: IntFlag arithmetic costs a microsecond per operation, and
         # this runs on every poll.
         pulsing = 0
-        for direction, _ in self._pulses.values():
-            pulsing |= int(direction)
+        if pulses:
+            for direction, _ in pulses.values():
+                pulsing |= int(direction)
         if self._loop_on and not self._held:  # arrows pressed now are the loop's (or pulses)
             pulsing = ~0
         pressed = int(status.directions) if status is not None else 0
@@ -296,25 +308,34 @@ class SkyTrackerBase(Mount):
             ra = dec = ra_of_date = dec_of_date = alt = az = position_received_s = None
         else:
             ra, dec = position.ra_j2000_hours, position.dec_j2000_deg
-            alt, az, ra_of_date, dec_of_date = position.compute()
+            derived = self._derived
+            if derived[0] is not position:  # a new reading (or its site changed): once each
+                where = reading_of_j2000(ra, dec, position.read_at, position.site)
+                derived = self._derived = (position, where)
+            alt, az, ra_of_date, dec_of_date = derived[1]
             position_received_s = position.received_s
+        mode = self._mode
+        # Positional, in MountState's field order (mypy checks each argument's type, and
+        # tests/drivers/test_driver_skytracker_publish.py each field's value): a class called
+        # with keywords builds a dict of them first (~0.5 µs a poll).
         state = MountState(
-            read_at=read_at,
-            connected=line is not None and not line.link.closed and not self._link_lost,
-            ra_j2000_hours=ra,
-            dec_j2000_deg=dec,
-            ra_of_date_hours=ra_of_date,
-            dec_of_date_deg=dec_of_date,
-            alt_deg=alt,
-            az_deg=az,
-            slewing=self._mode is _GOTO or bool(pressed & ~pulsing),
-            tracking=self._tracking_choice if self._mode in BOX_TRACKING else TrackingMode.OFF,
-            parked=False,
-            aligned=True,
-            pulse_guiding=bool(self._pulses),
-            problems=self._problems + self._loop_problems,
-            received_s=received_s,
-            position_received_s=position_received_s,
+            read_at,
+            line is not None and not line.link.closed and not self._link_lost,  # connected
+            ra,
+            dec,
+            ra_of_date,
+            dec_of_date,
+            alt,
+            az,
+            _PIER_SIDE_UNKNOWN,
+            mode is _GOTO or (pressed & ~pulsing) != 0,  # slewing
+            self._tracking_choice if mode in BOX_TRACKING else _NOT_TRACKING,
+            False,  # parked
+            True,  # aligned
+            len(pulses) != 0,  # pulse_guiding
+            self._problems + self._loop_problems,
+            received_s,
+            position_received_s,
         )
         self._publish(state)
         return state

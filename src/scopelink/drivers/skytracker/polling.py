@@ -80,7 +80,7 @@ class SkyTrackerPolling(SkyTrackerConnection):
                     self._mode = _GOTO
                 else:
                     received_s = line.last_answer_s
-                    self._position = pointing_of(position, self.now(), self.site, received_s)
+                    self._position = pointing_of(position, self._clock(), self._site, received_s)
         except (DeviceError, NotConnectedError) as error:
             self._problems = (str(error),)
             silent_s = time.monotonic() - line.last_answer_s
