@@ -42,7 +42,8 @@ class _ClientProtocol(asyncio.Protocol):
 
     def __init__(self, name: str) -> None:
         self.name = name
-        self.inbound = InboundBuffer()
+        # The connection's loop for good; no arrival times (only paced memory links use them).
+        self.inbound = InboundBuffer(asyncio.get_running_loop(), stamp=False)
         self.transport: asyncio.Transport | None = None
         self._drained: asyncio.Future[None] | None = None
         self._paused = False
@@ -102,7 +103,12 @@ class TcpClientLink(Link):
     async def _read_some(self, max_bytes: int) -> bytes:
         return await self._inbound.read(max_bytes)
 
-    def _read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+    def read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
+        """See :meth:`Link.read_event`: the buffer's future itself, without a coroutine around
+        it (issue #14: CPU per command); the buffer marks the link closed when the stream
+        ends first, and the transport has closed itself by then."""
+        if self._closed:
+            raise LinkClosedError(f"{self.name} is closed")
         return self._inbound.read_event(parse, self)
 
     async def _write_all(self, data: bytes) -> None:
@@ -115,11 +121,24 @@ class TcpClientLink(Link):
 
     def write_now(self, data: bytes) -> bool:
         """See :meth:`Link.write_now`: below the transport's high-water mark, at once."""
+        return self._hand_over(data, trace_logger.isEnabledFor(logging.DEBUG))
+
+    def write_and_read_event(
+        self, data: bytes, parse: Callable[[bytes], E | NeedData]
+    ) -> asyncio.Future[E] | None:
+        """See :meth:`Link.write_and_read_event`: below the transport's high-water mark, at
+        once; the command and its reply traced or not as one (one look-up)."""
+        trace = trace_logger.isEnabledFor(logging.DEBUG)
+        if not self._hand_over(data, trace):
+            return None
+        return self._inbound.read_event(parse, self, trace)
+
+    def _hand_over(self, data: bytes, trace: bool) -> bool:
         transport = self._transport
         if self._closed or self._protocol._paused or transport.is_closing():
             return False
         self.bytes_written += len(data)
-        if trace_logger.isEnabledFor(logging.DEBUG):
+        if trace:
             trace_transfer("-->", self.name, data)
         transport.write(data)
         return True
