@@ -11,7 +11,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 from scopelink.links.base import Link, LinkClosedError
-from scopelink.links.prompt import PromptFuture
+from scopelink.links.prompt import fail, resolve
 from scopelink.links.trace import trace_logger, trace_transfer
 from scopelink.protocol.base import NEED_DATA, NeedData
 
@@ -60,7 +60,7 @@ class InboundBuffer:
         self._end_reason: str | None = None
         # A read_event in progress: its future, its parser, its link (counts, trace) and
         # whether the link traces (looked up once per read: issue #14).
-        self._waiter: PromptFuture[Any] | None = None
+        self._waiter: asyncio.Future[Any] | None = None
         self._parse: Callable[[bytes], Any] = _no_parser
         self._link: Link | None = None
         self._trace = False
@@ -84,7 +84,7 @@ class InboundBuffer:
                     event = self._parse(data)
                     if event is not NEED_DATA:
                         self._waiter = None
-                        waiter.resolve(event)  # the reader runs now (last: it may read again)
+                        resolve(waiter, event)  # the reader runs now (last: it may read again)
                     return
                 self._waiter = None
             self._data += data
@@ -99,22 +99,22 @@ class InboundBuffer:
             if waiter is not None and not waiter.done():
                 assert self._link is not None
                 self._link._end_seen()
-                waiter.fail(LinkClosedError(reason))
+                fail(waiter, LinkClosedError(reason))
 
     def read_event(
         self, parse: Callable[[bytes], E | NeedData], link: Link, trace: bool | None = None
-    ) -> PromptFuture[E]:
+    ) -> asyncio.Future[E]:
         """What ``parse`` makes of the bytes buffered and then of those fed, once it is other
         than ``NEED_DATA`` (see :meth:`scopelink.links.Link.read_event`; ``link`` counts and
         traces the bytes, and is marked closed when the stream ends first). The future fails
         with LinkClosedError once the stream has ended without an event; cancelling it leaves
         later bytes buffered for the next read. Its reader wakes in the producer's call
-        (:class:`~scopelink.links.prompt.PromptFuture`). ``trace``: whether the link traces
+        (:func:`scopelink.links.prompt.resolve`). ``trace``: whether the link traces
         (None: look it up)."""
         loop = self._loop
         if not self._loop_fixed and (loop is None or loop.is_closed()):
             loop = self._loop = asyncio.get_running_loop()
-        waiter: PromptFuture[E] = PromptFuture(loop=loop)
+        waiter: asyncio.Future[E] = asyncio.Future(loop=loop)
         buffered = self._data
         if buffered:
             data = bytes(buffered)
