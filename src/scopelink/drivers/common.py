@@ -164,7 +164,7 @@ class ReplyDeadline:
         if now is None:
             now = loop.time()
         self._task, self._cancelling = task, task.cancelling()
-        self._expired = self.interrupted = False
+        self.interrupted = False  # (and _expired, reset by __exit__)
         self.since = now
         if seconds is None:
             self._when = None
@@ -208,14 +208,16 @@ class ReplyDeadline:
         traceback: object,
     ) -> None:
         task, self._task = self._task, None
-        # Our cancellation becomes TimeoutError, unless another came too: that one propagates.
-        if (
-            self._expired
-            and task is not None
-            and task.uncancel() <= self._cancelling
-            and exc_type is asyncio.CancelledError
-        ):
-            raise TimeoutError from exc
+        if self._expired:
+            self._expired = False  # reset here, not in start(): it is rarely set
+            # Our cancellation becomes TimeoutError, unless another came too: that one
+            # propagates.
+            if (
+                task is not None
+                and task.uncancel() <= self._cancelling
+                and exc_type is asyncio.CancelledError
+            ):
+                raise TimeoutError from exc
 
     def _arm(self, when: float) -> None:
         loop = self._loop

@@ -43,13 +43,36 @@ else:
     every reply (issue #14)."""
 
 
-def resolve(future: asyncio.Future[T], result: T, error: BaseException | None = None) -> None:
-    """``future.set_result(result)`` (``set_exception(error)`` if an ``error`` is given), its
-    done callbacks (the awaiting task's wake-up) run now unless a task is running (then they are
-    scheduled, as ``set_result`` schedules them)."""
+def resolve(future: asyncio.Future[T], result: T) -> None:
+    """``future.set_result(result)``, its done callbacks (the awaiting task's wake-up) run now
+    unless a task is running (then they are scheduled, as ``set_result`` schedules them)."""
     callbacks = future._callbacks  # see the module's notes
+    if callbacks is None or len(callbacks) != 1 or running_task(future.get_loop()) is not None:
+        _settle(future, result, None)
+        return
+    # One callback, the awaiting task's wake-up (the case of every reply): inline.
+    ((fn, context),) = callbacks
+    future.remove_done_callback(fn)
+    future.set_result(result)  # nothing left to schedule
+    try:
+        context.run(fn, future)
+    except (SystemExit, KeyboardInterrupt):
+        raise
+    except BaseException as error:
+        _report(future, fn, error)
+
+
+def fail(future: asyncio.Future[Any], error: BaseException) -> None:
+    """``future.set_exception(error)``; the callbacks run as :func:`resolve` runs them."""
+    _settle(future, None, error)
+
+
+def _settle(future: asyncio.Future[Any], result: object, error: BaseException | None) -> None:
+    """:func:`resolve` (``error`` None) or :func:`fail`, with any number of callbacks."""
+    callbacks = future._callbacks
     if callbacks is not None and running_task(future.get_loop()) is None:
-        for fn, _context in callbacks[:]:  # a copy: a future may hand out its own list
+        callbacks = callbacks[:]  # a copy: a future may hand out its own list
+        for fn, _context in callbacks:
             future.remove_done_callback(fn)
     else:
         callbacks = []  # none, or scheduled by set_result
@@ -62,16 +85,12 @@ def resolve(future: asyncio.Future[T], result: T, error: BaseException | None = 
             context.run(fn, future)
         except (SystemExit, KeyboardInterrupt):
             raise
-        except BaseException as callback_error:  # as the loop reports a failed callback
-            future.get_loop().call_exception_handler(
-                {
-                    "message": f"Exception in callback {fn!r}",
-                    "exception": callback_error,
-                    "future": future,
-                }
-            )
+        except BaseException as callback_error:
+            _report(future, fn, callback_error)
 
 
-def fail(future: asyncio.Future[Any], error: BaseException) -> None:
-    """``future.set_exception(error)``; the callbacks run as :func:`resolve` runs them."""
-    resolve(future, None, error)
+def _report(future: asyncio.Future[Any], fn: Callable[..., object], error: BaseException) -> None:
+    """As the loop reports a failed callback."""
+    future.get_loop().call_exception_handler(
+        {"message": f"Exception in callback {fn!r}", "exception": error, "future": future}
+    )

@@ -44,6 +44,8 @@ class _ClientProtocol(asyncio.Protocol):
         self.name = name
         # The connection's loop for good; no arrival times (only paced memory links use them).
         self.inbound = InboundBuffer(asyncio.get_running_loop(), stamp=False)
+        # The transport calls the buffer's feed itself: one Python call less per segment.
+        self.data_received = self.inbound.feed  # type: ignore[method-assign]
         self.transport: asyncio.Transport | None = None
         self._drained: asyncio.Future[None] | None = None
         self._paused = False
@@ -51,7 +53,7 @@ class _ClientProtocol(asyncio.Protocol):
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self.transport = cast(asyncio.Transport, transport)
 
-    def data_received(self, data: bytes) -> None:
+    def data_received(self, data: bytes) -> None:  # pragma: no cover - replaced in __init__
         self.inbound.feed(data)
 
     def eof_received(self) -> bool:

@@ -60,8 +60,6 @@ class SynScanClientConnection:
     def __init__(self) -> None:
         self._buffer = bytearray()
         self._in_flight: AnyCommand | None = None
-        self._sent = b""
-        """The bytes of the command in flight (the key of its remembered reply)."""
         self._last_replies: dict[bytes, tuple[bytes, AnyReply]] = {}
         """By command bytes: the last reply to a `Command.repeats_reply` poll, with its bytes."""
         self._last: tuple[bytes, AnyReply] | None = None
@@ -92,7 +90,6 @@ class SynScanClientConnection:
             # these bytes arrived before the command was written, so they cannot be its reply
             self._stale += self._take(len(self._buffer))
         self._in_flight = command
-        self._sent = data
         self._state = _AWAITING_REPLY
         self._last = self._last_replies.get(data) if command.repeats_reply else None
         return data
@@ -148,8 +145,8 @@ class SynScanClientConnection:
                 command, self._take(result.index + 1), result.index, result.reason
             )
         reply = cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
-        if command.repeats_reply:
-            self._last_replies[self._sent] = (bytes(buffer[: result.length]), reply)
+        if command.repeats_reply:  # remembered by the command's bytes
+            self._last_replies[command.encode()] = (bytes(buffer[: result.length]), reply)
         del buffer[: result.length]  # the reply's bytes: parsed, not needed as bytes
         self._state = _IDLE
         self._resynchronising = False
