@@ -35,11 +35,14 @@ class ScriptedDevice:
         self.plan = ["whole"]
         self.received = bytearray()
         self.asked = asyncio.Event()
+        self.got = asyncio.Event()
+        """Set whenever a byte arrives."""
 
     async def serve(self, link: Link) -> None:
         while True:
             byte = await link.read(1)
             self.received += byte
+            self.got.set()
             if byte == b"K":  # a resynchronising echo: its byte back, and '#'
                 value = await link.read(1)
                 self.received += value
@@ -77,7 +80,8 @@ async def scripted_wire() -> AsyncIterator[tuple[SynScanWire, ScriptedDevice]]:
 def expected() -> Position:
     """REPLY as the codec reads it."""
     scanned = GetRaDec().scan_reply(REPLY)
-    assert isinstance(scanned, Complete) and isinstance(scanned.reply, Position)
+    assert isinstance(scanned, Complete)
+    assert isinstance(scanned.reply, Position)
     return scanned.reply
 
 
@@ -135,6 +139,7 @@ async def test_a_stop_cuts_a_fast_path_read_short_and_goes_out_at_once() -> None
         assert wire.statistics.interrupted == 1
         async with asyncio.timeout(2.0):
             while not device.received.endswith(CancelGoto().encode()):
-                await asyncio.sleep(0.01)
+                device.got.clear()
+                await device.got.wait()
         device.plan = ["whole"]
         assert await wire.ask(GetRaDec(), Priority.POLL) == expected()  # resynchronised first
