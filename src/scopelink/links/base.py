@@ -160,21 +160,15 @@ class Link(ABC):
             await self._release_after_end()
             raise
 
-    def write_now(self, data: bytes) -> bool:
-        """Hand non-empty ``data`` over at once if this link can without waiting (True); False
-        when it cannot, having sent nothing: then :meth:`write` it. The driver's hot path (one
-        command per exchange) saves two coroutines a command this way (issue #14). A link that
-        can (:class:`~scopelink.links.TcpClientLink`) overrides this, counting and tracing the
-        bytes as :meth:`write` does; this one never can."""
-        return False
-
     def write_and_read_event(
         self, data: bytes, parse: Callable[[bytes], E | NeedData]
     ) -> asyncio.Future[E] | None:
-        """:meth:`write_now`, then :meth:`read_event` (whose future it returns), in one call:
-        a driver's command and its reply (issue #14: CPU per command). None when the link
-        cannot write at once, having sent nothing: then :meth:`write` and :meth:`read_event`.
-        Cancel the future to give the read up before awaiting it. This one never can."""
+        """Hand non-empty ``data`` over at once and start :meth:`read_event`, whose future it
+        returns, if this link can without waiting; None when it cannot, having sent nothing:
+        then :meth:`write` and :meth:`read_event`. A driver's command and its reply in one call
+        (issue #14: CPU per command); the bytes are counted and traced as :meth:`write` does.
+        Cancel the future to give the read up before awaiting it. A link that can
+        (:class:`~scopelink.links.TcpClientLink`) overrides this; this one never can."""
         return None
 
     async def close(self) -> None:

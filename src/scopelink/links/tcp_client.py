@@ -121,29 +121,20 @@ class TcpClientLink(Link):
         if self._protocol._paused:  # above the high-water mark: wait until it drains
             await self._protocol.drained()
 
-    def write_now(self, data: bytes) -> bool:
-        """See :meth:`Link.write_now`: below the transport's high-water mark, at once."""
-        return self._hand_over(data, trace_logger.isEnabledFor(logging.DEBUG))
-
     def write_and_read_event(
         self, data: bytes, parse: Callable[[bytes], E | NeedData]
     ) -> asyncio.Future[E] | None:
         """See :meth:`Link.write_and_read_event`: below the transport's high-water mark, at
         once; the command and its reply traced or not as one (one look-up)."""
-        trace = trace_logger.isEnabledFor(logging.DEBUG)
-        if not self._hand_over(data, trace):
-            return None
-        return self._inbound.read_event(parse, self, trace)
-
-    def _hand_over(self, data: bytes, trace: bool) -> bool:
         transport = self._transport
         if self._closed or self._protocol._paused or transport.is_closing():
-            return False
+            return None
         self.bytes_written += len(data)
+        trace = trace_logger.isEnabledFor(logging.DEBUG)
         if trace:
             trace_transfer("-->", self.name, data)
         transport.write(data)
-        return True
+        return self._inbound.read_event(parse, self, trace)
 
     async def _close_transport(self) -> None:
         self._inbound.feed_end(f"{self.name} is closed")

@@ -91,7 +91,7 @@ class SynScanClientConnection:
             self._stale += self._take(len(self._buffer))
         self._in_flight = command
         self._state = _AWAITING_REPLY
-        self._last = self._last_replies.get(data) if command.repeats_reply else None
+        self._last = self._last_replies.get(data)  # only repeats_reply polls are kept
         return data
 
     def receive_data(self, data: bytes) -> None:
