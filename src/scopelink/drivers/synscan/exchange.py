@@ -71,6 +71,10 @@ bytes, takes 19 ms at 9600 baud); a reply still missing by then is not worth mor
 time: the exchange is interrupted."""
 
 
+Reply = AnyReply | ClientError
+"""What reading a reply gives: the reply, or an error event (after stale bytes were dropped)."""
+
+
 class _ExchangeError(Exception):
     """One exchange went wrong; the message says how (it becomes part of a DeviceError).
     ``interrupted``: cut short by a stop, and not to be retried."""
@@ -185,9 +189,8 @@ class SynScanWire:
                 else:
                     io.release()  # the wire stays ours for the retry: nothing slips in between
             try:
-                return await self._ask_holding_the_wire(
-                    command, meanwhile, self._failed(failure, None)
-                )
+                retry = self._failed(failure, None)  # raises if it may not be retried
+                return await self._ask_holding_the_wire(command, meanwhile, retry)
             finally:
                 scheduler.release()
         if scheduler.try_take():  # a free wire: no queue to join
@@ -390,13 +393,9 @@ class SynScanWire:
         deadline = self._deadline
         try:
             try:
-                # The command leaves and the reply's reader is set up in one call where the
-                # link can (TCP): the link hands the reply's bytes to _received as they arrive
-                # (those it holds already first; stale ones the codec kept from before the
-                # command are dropped there), which wakes this task once, with the reply.
-                reading: Awaitable[AnyReply | ClientError] | None = link.write_and_read_event(
-                    data, self._received
-                )
+                # Written, and the reader set up, in one call where the link can (TCP); the link
+                # hands the reply's bytes to _received as they arrive, which wakes us once.
+                reading: Awaitable[Reply] | None = link.write_and_read_event(data, self._received)
                 if reading is None:  # a link that writes in a coroutine (serial, paced)
                     sent_at: float | None = deadline.loop.time()
                     await link.write(data)
@@ -419,9 +418,7 @@ class SynScanWire:
                     if self._needs_resync and self._stops_waiting > 0:
                         deadline.interrupt()  # see _interruptible (a stop came meanwhile)
                     event = await reading
-                    # Exact types, not isinstance: the events derive from an ABC, whose
-                    # isinstance check runs Python code on every reply (the error events have
-                    # no subclasses).
+                    # Not isinstance: on an ABC's subclasses it runs Python code on every reply.
                     if type(event) is MalformedReply:
                         raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
                 self.last_answer_s = time.monotonic()
