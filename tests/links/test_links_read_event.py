@@ -126,6 +126,20 @@ async def test_resolve_wakes_the_task_inside_the_call_unless_a_task_resolves() -
     assert await asyncio.gather(*tasks) == [3, 3]
     assert marks == ["callback saw 3"] + ["woke with 3 in the waiter's context"] * 2
 
+    # A callback that fails is reported as the loop reports one, not raised into the producer.
+    reported: list[str] = []
+    loop.set_exception_handler(lambda _loop, context: reported.append(context["message"]))
+    try:
+        future = loop.create_future()
+        future.add_done_callback(lambda _done: 1 / 0)
+        loop.call_soon(resolve, future, 4)
+        await asyncio.sleep(0)
+        await asyncio.sleep(0)
+    finally:
+        loop.set_exception_handler(None)
+    assert len(reported) == 1
+    assert reported[0].startswith("Exception in callback")
+
     # A failure reaches the task; a cancelled task stops waiting.
     future = loop.create_future()
     task = asyncio.ensure_future(waiter(future))

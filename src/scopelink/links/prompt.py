@@ -26,6 +26,7 @@ from __future__ import annotations
 import asyncio
 import sys
 from collections.abc import Callable
+from contextvars import Context
 from typing import Any, TypeVar
 
 __all__ = ["fail", "resolve", "running_task"]
@@ -54,12 +55,7 @@ def resolve(future: asyncio.Future[T], result: T) -> None:
     ((fn, context),) = callbacks
     future.remove_done_callback(fn)
     future.set_result(result)  # nothing left to schedule
-    try:
-        context.run(fn, future)
-    except (SystemExit, KeyboardInterrupt):
-        raise
-    except BaseException as error:
-        _report(future, fn, error)
+    _run(future, fn, context)
 
 
 def fail(future: asyncio.Future[Any], error: BaseException) -> None:
@@ -81,16 +77,17 @@ def _settle(future: asyncio.Future[Any], result: object, error: BaseException | 
     else:
         future.set_exception(error)
     for fn, context in callbacks:
-        try:
-            context.run(fn, future)
-        except (SystemExit, KeyboardInterrupt):
-            raise
-        except BaseException as callback_error:
-            _report(future, fn, callback_error)
+        _run(future, fn, context)
 
 
-def _report(future: asyncio.Future[Any], fn: Callable[..., object], error: BaseException) -> None:
-    """As the loop reports a failed callback."""
-    future.get_loop().call_exception_handler(
-        {"message": f"Exception in callback {fn!r}", "exception": error, "future": future}
-    )
+def _run(future: asyncio.Future[Any], fn: Callable[[Any], object], context: Context) -> None:
+    """Run one done callback now in its context; a failure is reported as the loop reports a
+    failed callback, not raised into the producer (a transport's callback)."""
+    try:
+        context.run(fn, future)
+    except (SystemExit, KeyboardInterrupt):
+        raise
+    except BaseException as error:
+        future.get_loop().call_exception_handler(
+            {"message": f"Exception in callback {fn!r}", "exception": error, "future": future}
+        )
