@@ -1,5 +1,6 @@
 """``Link.read_event``: a parser fed as bytes arrive, its reader woken once with the result, in
-the producer's call when no task runs (``PromptFuture``), over memory, TCP and paced links."""
+the producer's call when no task runs (``links.prompt.resolve``), over memory, TCP and paced
+links."""
 
 import asyncio
 import contextvars
@@ -7,7 +8,7 @@ import contextvars
 import pytest
 
 from scopelink.links import Link, LinkClosedError, memory_pair, open_link, paced, serve_tcp
-from scopelink.links.prompt import PromptFuture
+from scopelink.links.prompt import fail, resolve
 from scopelink.protocol.base import NEED_DATA, NeedData
 
 
@@ -80,25 +81,25 @@ async def test_over_tcp_and_a_paced_link_the_reader_gets_whole_replies() -> None
             await link.close()
 
 
-async def test_a_prompt_future_wakes_its_task_inside_resolve_unless_a_task_resolves_it() -> None:
+async def test_resolve_wakes_the_task_inside_the_call_unless_a_task_resolves() -> None:
     loop = asyncio.get_running_loop()
     marks: list[str] = []
     variable = contextvars.ContextVar("variable", default="unset")
 
-    async def waiter(future: PromptFuture[int]) -> int:
+    async def waiter(future: asyncio.Future[int]) -> int:
         variable.set("the waiter's")
         value = await future
         marks.append(f"woke with {value} in {variable.get()} context")
         return value
 
     # From a plain callback (a transport's data_received): the task runs inside resolve().
-    future: PromptFuture[int] = PromptFuture(loop=loop)
+    future: asyncio.Future[int] = loop.create_future()
     task = asyncio.ensure_future(waiter(future))
     await asyncio.sleep(0)
 
     def resolve_from_callback() -> None:
         marks.append("resolving")
-        future.resolve(1)
+        resolve(future, 1)
         marks.append("resolved")
 
     loop.call_soon(resolve_from_callback)
@@ -107,22 +108,46 @@ async def test_a_prompt_future_wakes_its_task_inside_resolve_unless_a_task_resol
 
     # From inside a task (a memory link fed by its peer's write): scheduled, as set_result.
     marks.clear()
-    future = PromptFuture(loop=loop)
+    future = loop.create_future()
     task = asyncio.ensure_future(waiter(future))
     await asyncio.sleep(0)
-    future.resolve(2)
+    resolve(future, 2)
     marks.append("resolved")
     assert await task == 2
     assert marks == ["resolved", "woke with 2 in the waiter's context"]
 
+    # Several callbacks (two tasks and a plain one): each runs once, in the order added.
+    marks.clear()
+    future = loop.create_future()
+    future.add_done_callback(lambda done: marks.append(f"callback saw {done.result()}"))
+    tasks = [asyncio.ensure_future(waiter(future)) for _ in range(2)]
+    await asyncio.sleep(0)
+    loop.call_soon(resolve, future, 3)
+    assert await asyncio.gather(*tasks) == [3, 3]
+    assert marks == ["callback saw 3"] + ["woke with 3 in the waiter's context"] * 2
+
+    # A callback that fails is reported as the loop reports one, not raised into the producer.
+    reported: list[str] = []
+    loop.set_exception_handler(lambda _loop, context: reported.append(context["message"]))
+    try:
+        future = loop.create_future()
+        future.add_done_callback(lambda _done: 1 / 0)
+        loop.call_soon(resolve, future, 4)
+        await asyncio.sleep(0)
+        await asyncio.sleep(0)
+    finally:
+        loop.set_exception_handler(None)
+    assert len(reported) == 1
+    assert reported[0].startswith("Exception in callback")
+
     # A failure reaches the task; a cancelled task stops waiting.
-    future = PromptFuture(loop=loop)
+    future = loop.create_future()
     task = asyncio.ensure_future(waiter(future))
     await asyncio.sleep(0)
-    loop.call_soon(future.fail, LinkClosedError("gone"))
+    loop.call_soon(fail, future, LinkClosedError("gone"))
     with pytest.raises(LinkClosedError, match="gone"):
         await task
-    future = PromptFuture(loop=loop)
+    future = loop.create_future()
     task = asyncio.ensure_future(waiter(future))
     await asyncio.sleep(0)
     task.cancel()

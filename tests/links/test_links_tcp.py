@@ -6,6 +6,7 @@ import socket
 import pytest
 
 from scopelink.links import Link, LinkClosedError, LinkOpenError, TcpServer, open_tcp, serve_tcp
+from scopelink.protocol.base import NEED_DATA
 
 
 async def shout_back(link: Link) -> None:
@@ -136,10 +137,11 @@ async def test_listening_on_a_busy_port_says_so() -> None:
             await serve_tcp(shout_back, port=server.port)
 
 
-async def test_client_write_now_sends_at_once_then_waits_under_back_pressure() -> None:
-    """``write_now`` hands a command over without a coroutine; when the peer stops reading and
-    the kernel's buffers fill, it sends nothing and says so, ``write`` waits for the drain, and
-    every byte arrives in order once the peer reads again (nothing lost, nothing doubled)."""
+async def test_client_write_and_read_event_sends_at_once_then_waits_under_back_pressure() -> None:
+    """``write_and_read_event`` hands a command over without a coroutine; when the peer stops
+    reading and the kernel's buffers fill, it sends nothing and says so (None), ``write`` waits
+    for the drain, and every byte arrives in order once the peer reads again (nothing lost,
+    nothing doubled)."""
     reading = asyncio.Event()
     received = bytearray()
     arrived = asyncio.Event()
@@ -150,14 +152,22 @@ async def test_client_write_now_sends_at_once_then_waits_under_back_pressure() -
             received.extend(await link.read())
             arrived.set()
 
+    def write_now(client: Link, data: bytes) -> bool:
+        """Hand ``data`` over if the link can at once; the read it starts is given up."""
+        read: asyncio.Future[None] | None = client.write_and_read_event(data, lambda _: NEED_DATA)
+        if read is None:
+            return False
+        read.cancel()
+        return True
+
     async with await serve_tcp(slow_reader) as server:
         async with await open_tcp("127.0.0.1", server.port) as client:
-            assert client.write_now(b"e")
+            assert write_now(client, b"e")
             chunk = bytes(range(256)) * 256
             sent = 1
-            while client.write_now(chunk):  # the transport takes it until its buffer is high
+            while write_now(client, chunk):  # the transport takes it until its buffer is high
                 sent += len(chunk)
-                assert sent < 200_000_000, "write_now never reported back-pressure"
+                assert sent < 200_000_000, "write_and_read_event never reported back-pressure"
             pending = asyncio.create_task(client.write(chunk))
             await asyncio.sleep(0.05)
             assert not pending.done(), "write did not wait for the buffer to drain"
@@ -171,4 +181,4 @@ async def test_client_write_now_sends_at_once_then_waits_under_back_pressure() -
                     await arrived.wait()
             assert received[:1] == b"e"
             assert bytes(received[1:]) == chunk * ((sent - 1) // len(chunk))
-        assert not client.write_now(b"e")  # closed: nothing sent, the caller's write raises
+        assert not write_now(client, b"e")  # closed: nothing sent, the caller's write raises

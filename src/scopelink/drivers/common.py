@@ -28,6 +28,7 @@ from datetime import datetime
 
 from scopelink.astro import Site, j2000_to_apparent, j2000_to_observed
 from scopelink.links import DEFAULT_BAUDRATE, Link, open_link
+from scopelink.links.prompt import running_task
 
 __all__ = [
     "LinkFactory",
@@ -108,7 +109,6 @@ class ReplyDeadline:
     __slots__ = (
         "_cancelling",
         "_expired",
-        "_generation",
         "_handle",
         "_handle_at",
         "_loop",
@@ -128,7 +128,6 @@ class ReplyDeadline:
         self._handle: asyncio.TimerHandle | None = None
         self._handle_at = float("inf")
         self._expired = False
-        self._generation = 0
         self.interrupted = False
         """The last read was cut short by :meth:`interrupt` (not by its timeout)."""
         self.since = 0.0
@@ -150,22 +149,29 @@ class ReplyDeadline:
 
     def start(self, seconds: float | None, now: float | None = None) -> ReplyDeadline:
         """Begin a read that times out after ``seconds`` (None: never) from ``now`` (loop time;
-        default: the clock now, looked up); use as ``with``."""
-        assert self._task is None, "one read at a time"
+        default: the clock now, looked up); use as ``with``. One read at a time."""
+        # The task is looked up on the loop used last (a C look-up: this runs on every
+        # exchange, issue #14); none there means a first read or a new loop: look both up.
         loop = self._loop
-        if loop is None or loop.is_closed():  # inline: this runs on every exchange (issue #14)
-            loop = self.loop
-        task = asyncio.current_task(loop)
-        assert task is not None
+        if loop is None or (task := running_task(loop)) is None:
+            running = asyncio.get_running_loop()
+            if running is not loop:
+                self._loop = running
+                self._handle, self._handle_at = None, float("inf")
+            loop = running
+            task = running_task(loop)
+            assert task is not None, "a read runs in a task"
         if now is None:
             now = loop.time()
         self._task, self._cancelling = task, task.cancelling()
-        self._expired = self.interrupted = False
+        self.interrupted = False  # (and _expired, reset by __exit__)
         self.since = now
-        self._generation += 1
-        self._when = None if seconds is None else now + seconds
-        if self._when is not None and self._handle_at > self._when:
-            self._arm(self._when)
+        if seconds is None:
+            self._when = None
+        else:
+            when = self._when = now + seconds
+            if self._handle_at > when:
+                self._arm(when)
         return self
 
     def reschedule(self, when: float) -> None:
@@ -181,7 +187,7 @@ class ReplyDeadline:
         self.interrupted = True
         # From the loop, as asyncio.timeout's reschedule does: a read that completes without
         # waiting (its bytes were there) is left alone rather than cancelled after it ended.
-        self._loop.call_soon(self._expire, self._generation)
+        self._loop.call_soon(self._expire_interrupted)
 
     def close(self) -> None:
         """Drop the timer (the wire is closing) unless a read still needs it; a later read arms
@@ -202,14 +208,16 @@ class ReplyDeadline:
         traceback: object,
     ) -> None:
         task, self._task = self._task, None
-        # Our cancellation becomes TimeoutError, unless another came too: that one propagates.
-        if (
-            self._expired
-            and task is not None
-            and task.uncancel() <= self._cancelling
-            and exc_type is asyncio.CancelledError
-        ):
-            raise TimeoutError from exc
+        if self._expired:
+            self._expired = False  # reset here, not in start(): it is rarely set
+            # Our cancellation becomes TimeoutError, unless another came too: that one
+            # propagates.
+            if (
+                task is not None
+                and task.uncancel() <= self._cancelling
+                and exc_type is asyncio.CancelledError
+            ):
+                raise TimeoutError from exc
 
     def _arm(self, when: float) -> None:
         loop = self._loop
@@ -225,13 +233,17 @@ class ReplyDeadline:
         if self._task is None or when is None or self._loop is None:
             return  # no read in progress: the next one arms a timer of its own
         if self._loop.time() >= when:
-            self._expire(self._generation)
+            self._expire()
         else:
             self._arm(when)
 
-    def _expire(self, generation: int) -> None:
+    def _expire_interrupted(self) -> None:
+        if self.interrupted:  # else the interrupted read ended and another started meanwhile
+            self._expire()
+
+    def _expire(self) -> None:
         task = self._task
-        if task is None or self._expired or generation != self._generation:
+        if task is None or self._expired:
             return  # that read ended meanwhile
         self._expired = True
         task.cancel()

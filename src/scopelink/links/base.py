@@ -95,7 +95,7 @@ class Link(ABC):
             trace_transfer("<--", self._name, data)
         return data
 
-    async def read_event(self, parse: Callable[[bytes], E | NeedData]) -> E:
+    def read_event(self, parse: Callable[[bytes], E | NeedData]) -> Awaitable[E]:
         """Wait until ``parse``, given the bytes received from now on (each byte once, in order,
         in chunks as they come), returns something other than ``NEED_DATA``; return that.
 
@@ -103,8 +103,13 @@ class Link(ABC):
         right there, so the reader wakes once per reply, with the reply, rather than once per
         chunk (issue #14: CPU per command). ``parse`` must not raise. Cancellation-safe: the
         bytes ``parse`` took are the caller's (in its parser); later ones wait for the next
-        read. Raises :class:`LinkClosedError` as :meth:`read` does.
+        read. Raises :class:`LinkClosedError` as :meth:`read` does. Not a coroutine function,
+        so that a link can hand its future over directly (:class:`~scopelink.links.TcpClientLink`);
+        await what it returns.
         """
+        return self._read_event_checked(parse)
+
+    async def _read_event_checked(self, parse: Callable[[bytes], E | NeedData]) -> E:
         if self._closed:
             raise LinkClosedError(f"{self._name} is closed")
         try:
@@ -155,13 +160,16 @@ class Link(ABC):
             await self._release_after_end()
             raise
 
-    def write_now(self, data: bytes) -> bool:
-        """Hand non-empty ``data`` over at once if this link can without waiting (True); False
-        when it cannot, having sent nothing: then :meth:`write` it. The driver's hot path (one
-        command per exchange) saves two coroutines a command this way (issue #14). A link that
-        can (:class:`~scopelink.links.TcpClientLink`) overrides this, counting and tracing the
-        bytes as :meth:`write` does; this one never can."""
-        return False
+    def write_and_read_event(
+        self, data: bytes, parse: Callable[[bytes], E | NeedData]
+    ) -> asyncio.Future[E] | None:
+        """Hand non-empty ``data`` over at once and start :meth:`read_event`, whose future it
+        returns, if this link can without waiting; None when it cannot, having sent nothing:
+        then :meth:`write` and :meth:`read_event`. A driver's command and its reply in one call
+        (issue #14: CPU per command); the bytes are counted and traced as :meth:`write` does.
+        Cancel the future to give the read up before awaiting it. A link that can
+        (:class:`~scopelink.links.TcpClientLink`) overrides this; this one never can."""
+        return None
 
     async def close(self) -> None:
         """Release the link (idempotent); pending and later reads and writes then raise."""
@@ -214,6 +222,12 @@ class Link(ABC):
     def __repr__(self) -> str:
         state = "closed" if self._closed else "open"
         return f"<{type(self).__name__} {self._name!r} {state}>"
+
+    def _end_seen(self) -> None:
+        """A reader fed by a callback met the end of the stream: the link reads as closed from
+        now on, as after :meth:`read` raised (its transport releases itself at the end, or
+        :meth:`close` does)."""
+        self._closed = True
 
     async def _release_after_end(self) -> None:
         """The stream ended under us: nothing more can pass, so free the resources now."""

@@ -27,14 +27,13 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import AsyncIterator, Callable, Sequence
+from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
 from contextlib import asynccontextmanager
 
 from scopelink.drivers.common import LinkFactory, LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkClosedError, LinkError
 from scopelink.mount import DeviceError, Priority, WireScheduler
 from scopelink.protocol.synscan import (
-    NEED_DATA,
     AnyCommand,
     AnyReply,
     ClientError,
@@ -70,6 +69,10 @@ STOP_GRACE_S = 0.1
 """A stop waits this long for an exchange in flight on a stream in step (the longest reply, 18
 bytes, takes 19 ms at 9600 baud); a reply still missing by then is not worth more of the stop's
 time: the exchange is interrupted."""
+
+
+Reply = AnyReply | ClientError
+"""What reading a reply gives: the reply, or an error event (after stale bytes were dropped)."""
 
 
 class _ExchangeError(Exception):
@@ -166,21 +169,32 @@ class SynScanWire:
         ``meanwhile`` runs right after the command has been written (again if it is re-sent): CPU
         work that then overlaps the device's answer instead of leaving the wire idle.
         """
-        scheduler = self.scheduler
-        if scheduler.try_take():  # a free wire: no queue to join (the common case)
+        scheduler, io, link = self.scheduler, self._io, self._link
+        if (
+            not self._needs_resync
+            and link is not None
+            and not link.closed
+            and scheduler.try_take_with(io)  # the wire free, and the link (unless a stop has it)
+        ):
+            # In step, open, free, nobody waiting: the first attempt right here, without the
+            # recovery loop's coroutine (issue #14: CPU per command).
+            failure = None
             try:
-                link, io = self._link, self._io
-                in_step = not self._needs_resync and link is not None and not link.closed
-                if in_step and io.try_take():
-                    # In step, open, the link free: the first attempt right here, without the
-                    # recovery loop's coroutine (issue #14: CPU per command).
-                    try:
-                        return await self._exchange(command, meanwhile)
-                    except _ExchangeError as error:
-                        failure = self._failed(error, None)
-                    finally:
-                        io.release()
-                    return await self._ask_holding_the_wire(command, meanwhile, failure)
+                return await self._exchange(command, meanwhile)
+            except _ExchangeError as error:
+                failure = error
+            finally:
+                if failure is None:
+                    scheduler.release_with(io)
+                else:
+                    io.release()  # the wire stays ours for the retry: nothing slips in between
+            try:
+                retry = self._failed(failure, None)  # raises if it may not be retried
+                return await self._ask_holding_the_wire(command, meanwhile, retry)
+            finally:
+                scheduler.release()
+        if scheduler.try_take():  # a free wire: no queue to join
+            try:
                 return await self._ask_holding_the_wire(command, meanwhile)
             finally:
                 scheduler.release()
@@ -337,7 +351,8 @@ class SynScanWire:
         self._discard(dropped)
         value = self._echo_value()
         try:
-            reply = await self._exchange(Echo(value), patient=True)
+            self._patient = True
+            reply = await self._exchange(Echo(value))
         except _ExchangeError as error:
             if error.interrupted:
                 raise DeviceError(f"{why}; resynchronising: {error}") from None
@@ -345,6 +360,8 @@ class SynScanWire:
                 f"{why}; resynchronising failed: {error} — is the hand control switched on and "
                 "connected?"
             ) from None
+        finally:
+            self._patient = False
         if reply != EchoReply(value):  # pragma: no cover - the codec only returns this shape
             raise DeviceError(f"{why}; resynchronising got {reply.describe()!r}")
         self._needs_resync = False
@@ -358,73 +375,72 @@ class SynScanWire:
         return _ECHO_VALUES[self._next_echo % len(_ECHO_VALUES)]  # everything avoided: any will do
 
     async def _exchange(
-        self,
-        command: AnyCommand,
-        meanwhile: Callable[[], object] | None = None,
-        *,
-        patient: bool = False,
+        self, command: AnyCommand, meanwhile: Callable[[], object] | None = None
     ) -> AnyReply:
-        """One command and its reply within ``timeout_s``; ``patient``: the timeout restarts
-        whenever stale bytes are discarded (see ``_ECHO_PATIENCE``)."""
+        """One command and its reply within ``timeout_s``; while ``_patient`` (a resynchronising
+        echo) the timeout restarts whenever stale bytes are discarded (see ``_ECHO_PATIENCE``)."""
         link = self._link
-        if link is None or link.closed:
+        if link is None:
             raise _ExchangeError(f"{self.name} is closed")
         if self._stops_waiting:
             raise _ExchangeError(
                 f"{command.describe()!r} not sent: a stop goes first", interrupted=True, sent=False
             )
-        codec = self._codec
-        data = codec.send(command)
+        data = self._codec.send(command)
         statistics = self.statistics
         statistics.exchanges += 1
         statistics.bytes_sent += len(data)
         deadline = self._deadline
-        loop = deadline.loop
-        completed = False
         try:
-            now = self.last_write_at = loop.time()
-            if not link.write_now(data):  # a TCP command leaves at once, without a coroutine
-                await link.write(data)
-                now = loop.time()
-            if meanwhile is not None:
-                meanwhile()
-                now = loop.time()
-            with self._interruptible(self.timeout_s, now):
-                # The reply, read by shape (inline rather than a coroutine of its own: this
-                # runs on every command, issue #14): bytes already buffered first, then those
-                # the link hands to _received as they arrive, which wakes this task once, with
-                # the reply. Exact types, not isinstance: the events derive from an ABC, whose
-                # isinstance check runs Python code on every reply (the error events have no
-                # subclasses).
-                self._patient = patient
-                event = codec.next_event()  # bytes already buffered first
-                if type(event) is UnexpectedData:
-                    event = self._drop_stale(event)
-                if event is NEED_DATA:
-                    event = await link.read_event(self._received)
-                if type(event) is MalformedReply:
-                    raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
-            completed = True
-            self.last_answer_s = time.monotonic()
-            return event  # type: ignore[return-value]  # neither an error event nor NEED_DATA
-        except TimeoutError:
-            if deadline.interrupted:
-                self.statistics.interrupted += 1
+            try:
+                # Written, and the reader set up, in one call where the link can (TCP); the link
+                # hands the reply's bytes to _received as they arrive, which wakes us once.
+                reading: Awaitable[Reply] | None = link.write_and_read_event(data, self._received)
+                if reading is None:  # a link that writes in a coroutine (serial, paced)
+                    sent_at: float | None = deadline.loop.time()
+                    await link.write(data)
+                    if meanwhile is not None:
+                        meanwhile()
+                    reading = link.read_event(self._received)
+                elif meanwhile is None:
+                    sent_at = None  # just now: the deadline's start looks the time up
+                else:
+                    sent_at = deadline.loop.time()
+                    try:
+                        meanwhile()
+                    except BaseException:
+                        assert isinstance(reading, asyncio.Future)
+                        reading.cancel()  # nobody will read it: later bytes stay buffered
+                        raise
+                # The timeout counts from here (after the write and ``meanwhile``).
+                with deadline.start(self.timeout_s):
+                    self.last_write_at = deadline.since if sent_at is None else sent_at
+                    if self._needs_resync and self._stops_waiting > 0:
+                        deadline.interrupt()  # see _interruptible (a stop came meanwhile)
+                    event = await reading
+                    # Not isinstance: on an ABC's subclasses it runs Python code on every reply.
+                    if type(event) is MalformedReply:
+                        raise _ExchangeError(f"malformed reply on {self.name}: {event.describe()}")
+                self.last_answer_s = time.monotonic()
+                return event  # type: ignore[return-value]  # not an error event
+            except TimeoutError:
+                if deadline.interrupted:
+                    self.statistics.interrupted += 1
+                    raise _ExchangeError(
+                        f"the reply to {command.describe()!r} was abandoned: a stop went first",
+                        interrupted=True,
+                    ) from None
                 raise _ExchangeError(
-                    f"the reply to {command.describe()!r} was abandoned: a stop went first",
-                    interrupted=True,
+                    f"no reply to {command.describe()!r} within {self.timeout_s:g} s on {self.name}"
                 ) from None
-            raise _ExchangeError(
-                f"no reply to {command.describe()!r} within {self.timeout_s:g} s on {self.name}"
-            ) from None
-        except LinkClosedError as error:
-            await self.close()
-            message = f"{self.name} closed during {command.describe()!r}: {error}"
-            raise _ExchangeError(message) from None
-        finally:
-            if not completed:
-                # Cancelled or failed half way: the stream is out of step until resynchronised.
-                self._needs_resync = True
+            except LinkClosedError as error:
+                await self.close()
+                message = f"{self.name} closed during {command.describe()!r}: {error}"
+                raise _ExchangeError(message) from None
+        except BaseException:
+            # Cancelled or failed half way: the stream is out of step until resynchronised.
+            self._needs_resync = True
+            raise
 
     def _parse_received(self, data: bytes) -> AnyReply | ClientError | NeedData:
         """The link's parser during an exchange (called as bytes arrive): the reply, a

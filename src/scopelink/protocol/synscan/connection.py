@@ -60,10 +60,10 @@ class SynScanClientConnection:
     def __init__(self) -> None:
         self._buffer = bytearray()
         self._in_flight: AnyCommand | None = None
-        self._sent = b""
-        """The bytes of the command in flight (the key of its remembered reply)."""
         self._last_replies: dict[bytes, tuple[bytes, AnyReply]] = {}
         """By command bytes: the last reply to a `Command.repeats_reply` poll, with its bytes."""
+        self._last: tuple[bytes, AnyReply] | None = None
+        """The remembered reply to the command in flight, if any (looked up once, by `send`)."""
         self._state = _IDLE
         self._resynchronising = False
         self._stale = b""
@@ -90,8 +90,8 @@ class SynScanClientConnection:
             # these bytes arrived before the command was written, so they cannot be its reply
             self._stale += self._take(len(self._buffer))
         self._in_flight = command
-        self._sent = data
         self._state = _AWAITING_REPLY
+        self._last = self._last_replies.get(data)  # only repeats_reply polls are kept
         return data
 
     def receive_data(self, data: bytes) -> None:
@@ -101,6 +101,14 @@ class SynScanClientConnection:
     def receive_and_next_event(self, data: bytes) -> AnyReply | ClientError | NeedData:
         """`receive_data` then `next_event`, in one call (a driver's reader runs it as each
         chunk arrives)."""
+        last = self._last
+        if last is not None and data == last[0] and not self._buffer and not self._stale:
+            # The common case of a poll, first: the whole reply in this chunk, the same bytes
+            # as last time, so the same reply, without buffering or scanning (issue #14).
+            self._in_flight = self._last = None
+            self._state = _IDLE
+            self._resynchronising = False
+            return last[1]
         self._buffer += data
         return self.next_event()
 
@@ -119,27 +127,26 @@ class SynScanClientConnection:
             if skip:
                 return UnexpectedData(self._take(skip))
         buffer = self._buffer
-        repeats = command.repeats_reply
-        if repeats and (last := self._last_replies.get(self._sent)) is not None:
+        if (last := self._last) is not None:
             raw, reply = last
             if buffer.startswith(raw):  # the same bytes as last time: the same reply
                 del buffer[: len(raw)]
-                self._in_flight = None
+                self._in_flight = self._last = None
                 self._state = _IDLE
                 self._resynchronising = False
                 return reply
         result = command.scan_reply(buffer)
         if result is NEED_DATA:
             return NEED_DATA
-        self._in_flight = None
+        self._in_flight = self._last = None
         if isinstance(result, Mismatch):
             self._state = _ERROR
             return MalformedReply(
                 command, self._take(result.index + 1), result.index, result.reason
             )
         reply = cast(AnyReply, result.reply)  # every Reply class is in AnyReply (tests check)
-        if repeats:
-            self._last_replies[self._sent] = (bytes(buffer[: result.length]), reply)
+        if command.repeats_reply:  # remembered by the command's bytes
+            self._last_replies[command.encode()] = (bytes(buffer[: result.length]), reply)
         del buffer[: result.length]  # the reply's bytes: parsed, not needed as bytes
         self._state = _IDLE
         self._resynchronising = False
@@ -148,7 +155,7 @@ class SynScanClientConnection:
     def reset(self) -> bytes:
         """Forget the command in flight and drop buffered bytes (returned); start
         resynchronising."""
-        self._in_flight = None
+        self._in_flight = self._last = None
         self._state = _IDLE
         self._resynchronising = True
         dropped, self._stale = self._stale + self._take(len(self._buffer)), b""
