@@ -277,6 +277,10 @@ def serve_emulators_process(pipe: Connection) -> None:
         runner.run(serve())
 
 
+CLIENT_WORK_TIMEOUT_S = 300.0
+"""Far above one block (500 refreshes over TCP take well under a second)."""
+
+
 class ClientThread:
     """An event loop (``new_loop()``) running in a thread of its own, placed on the clients' CPU:
     what :meth:`run` hands it runs there, so ``time.thread_time()`` inside counts this client's
@@ -293,7 +297,10 @@ class ClientThread:
         self.loop.run_forever()
 
     def run(self, work: Coroutine[object, object, T]) -> T:
-        return asyncio.run_coroutine_threadsafe(work, self.loop).result()
+        """Run ``work`` on this thread's loop and return its result; a hang (the emulators'
+        process gone) is an error after :data:`CLIENT_WORK_TIMEOUT_S`, not a bench that never
+        ends."""
+        return asyncio.run_coroutine_threadsafe(work, self.loop).result(CLIENT_WORK_TIMEOUT_S)
 
     def close(self) -> None:
         self.loop.call_soon_threadsafe(self.loop.stop)
