@@ -11,7 +11,7 @@ clock) and the bare client each run in a thread of their own on an event loop of
 with ``time.thread_time()``, the best of :data:`BLOCKS` interleaved rounds. Until 2026-11-25 the
 CPU rows ran everything in one process, so each side's figure carried its emulator's CPU (about
 half of it) and every ratio was pulled towards 1 (the refresh read ~1.2-1.3x; its client's side
-alone reads ~1.45x).
+alone reads ~1.35-1.45x).
 
 The client loops are the one ``scopelink serve`` runs on (``links.serve_event_loop``: uvloop where
 installed); the CPU rows are measured again on asyncio's default loop for information (what
@@ -19,7 +19,7 @@ Windows gets). Goal (issue #14 part 2), one verdict per CPU row it names, on ser
 driver within 1.2x its bare client's CPU; the refresh row is explained by its exchanges alone and
 by the astrometry of its reading. uvloop is pinned (``provenance.UVLOOP_PIN``).
 
-Run ``.venv/bin/python -m bench.drivers_skytracker`` (about two minutes) or with ``--quick`` (a
+Run ``.venv/bin/python -m bench.drivers_skytracker`` (about a minute) or with ``--quick`` (a
 few seconds, what the smoke test runs). See ``docs/benchmarks.md`` and
 ``docs/drivers-skytracker.md``.
 """
