@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import functools
-import multiprocessing
 import os
 import re
 import shutil
@@ -30,14 +29,21 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from multiprocessing.connection import Connection
 
 import serial
 
+from bench.emulator_process import (
+    CLIENT_CPU,
+    EMULATOR_CPU,
+    PLACED,
+    announce_and_serve,
+    emulator_process,
+    place_client_thread,
+)
 from bench.provenance import (
     installed_version,
     peer_label,
@@ -88,49 +94,17 @@ def new_sim() -> SimulatedMount:
 
 
 def serve_emulator_process(pipe: Connection, paced_replies: bool) -> None:
-    """Child process: an emulated hand control on a free TCP port until the parent says stop.
-
-    A separate process, as the real hand control is a separate machine: its CPU time then overlaps
-    the driver's instead of adding to it in one event loop."""
+    """Child process (:func:`bench.emulator_process.emulator_process`): an emulated hand control
+    on a free TCP port until the parent says stop."""
 
     async def serve() -> None:
         sim = new_sim()
         wire = SERIAL_9600_8N1 if paced_replies else None
         async with SynScanEmulator(sim, wire=wire) as emulator:
-            host, port = await emulator.on_tcp("127.0.0.1", 0)
-            pipe.send(f"tcp://{host}:{port}")
-            await asyncio.get_running_loop().run_in_executor(None, pipe.recv)
+            await announce_and_serve(pipe, await emulator.on_tcp("127.0.0.1", 0))
 
     with asyncio.Runner(loop_factory=precise_event_loop) as runner:
         runner.run(serve())
-
-
-_PLACED = hasattr(os, "sched_setaffinity") and len(os.sched_getaffinity(0)) >= 2
-"""Whether the emulator and the clients are placed on CPUs of their own (Linux, two or more)."""
-CLIENT_CPU, EMULATOR_CPU = sorted(os.sched_getaffinity(0))[:2] if _PLACED else (0, 0)
-"""Every client thread runs on the first allowed CPU, the emulator process on the second: the
-same placement for each client (a reply always wakes a thread on the other core). Unplaced, the
-scheduler's choices moved the figures by 20-30 % from run to run."""
-
-
-@contextmanager
-def emulator_process(*, paced_replies: bool) -> Iterator[str]:
-    """Start :func:`serve_emulator_process`; yields its ``tcp://`` address."""
-    context = multiprocessing.get_context("spawn")
-    parent, child = context.Pipe()
-    process = context.Process(target=serve_emulator_process, args=(child, paced_replies))
-    process.start()
-    if _PLACED and process.pid is not None:
-        os.sched_setaffinity(process.pid, {EMULATOR_CPU})
-    try:
-        if not parent.poll(60.0):
-            raise RuntimeError("the emulator process did not start")
-        yield str(parent.recv())
-    finally:
-        parent.send("stop")
-        process.join(10.0)
-        if process.is_alive():
-            process.kill()
 
 
 @dataclass(frozen=True, slots=True)
@@ -212,8 +186,7 @@ def timed_in_thread(name: str, setup: Callable[[], Batch], count: int) -> Client
 
     def run() -> None:
         try:
-            if _PLACED:
-                os.sched_setaffinity(0, {CLIENT_CPU})  # this thread only
+            place_client_thread()
             batch = setup()
             batch(10)  # warm up (imports, caches)
             cpu, wall = time.thread_time(), time.perf_counter()
@@ -402,8 +375,9 @@ def instructions_report() -> int:
     print_provenance("valgrind --tool=callgrind, user-space instructions", serve_loop(True)[0])
     short, long = INSTRUCTIONS_SHORT, INSTRUCTIONS_LONG
     print(f"instructions per 'e' command ((run of {long} - run of {short}) / {long - short})")
-    with emulator_process(paced_replies=False) as url:
+    with emulator_process(serve_emulator_process, False) as served:
         for name, _make in CLIENTS:
+            url = served.urls[0]
             per = (instructions(name, url, long) - instructions(name, url, short)) / (long - short)
             print(f"{name:<34} {per / 1000:>8.1f} k")
     return 0
@@ -429,10 +403,10 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
     print("   our side on serve's event loop, the emulator on links.precise_event_loop()")
     print(f"{'poll':<20} {'per s':>8} {'bytes each':>11} {'wire limit':>11} {'of limit':>9}")
     with (
-        emulator_process(paced_replies=True) as url,
+        emulator_process(serve_emulator_process, True) as served,
         asyncio.Runner(loop_factory=serve_event_loop) as runner,
     ):
-        rows = runner.run(wire_utilisation(url, sizes))
+        rows = runner.run(wire_utilisation(served.urls[0], sizes))
     for poll in rows:
         share = poll.per_s / poll.limit_per_s
         print(
@@ -446,8 +420,8 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
         f"(best of {sizes.cpu_rounds} rounds)"
     )
     print("   emulator on TCP in another process; asyncio clients on serve's loop unless named")
-    with emulator_process(paced_replies=False) as url:
-        cpu_rows = cpu_per_command(url, sizes)
+    with emulator_process(serve_emulator_process, False) as served:
+        cpu_rows = cpu_per_command(served.urls[0], sizes)
     figures = {row.name: row for row in cpu_rows}
     baseline = figures[PYSERIAL].cpu_us
     print(f"{'client':<32} {'cpu us':>8} {'wall us':>8} {'cpu vs pyserial':>16}")
@@ -465,7 +439,7 @@ def main(sizes: Sizes, any_peer_version: bool) -> int:
         f"{ours_asyncio / nexstar:.2f}x nexstar's, the floor "
         f"{figures[FLOOR_ASYNCIO].cpu_us / nexstar:.2f}x (information: no goal)"
     )
-    print(f"client threads on CPU {CLIENT_CPU}, emulator on CPU {EMULATOR_CPU}" if _PLACED else "")
+    print(f"client threads on CPU {CLIENT_CPU}, emulator on CPU {EMULATOR_CPU}" if PLACED else "")
     print()
     print(
         f"the goal judges {OURS!r} (a command asked through the driver, on serve's loop); "
