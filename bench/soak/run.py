@@ -75,6 +75,7 @@ async def run_soak(config: SoakConfig) -> SoakReport:
                     config, night, chance=chance, session=session, ports=ports, emulator=emulator
                 )
             night.wire_commands = await emulator.commands()
+            night.device_meridian = await emulator.meridian()
             await asyncio.sleep(2.0)  # closed connections are reaped
             final_files = open_files(serve.pid)
             sampler.cancel()
