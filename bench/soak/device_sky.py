@@ -16,7 +16,7 @@ from __future__ import annotations
 import asyncio
 from dataclasses import dataclass
 
-from scopelink.mount.meridian import SIDE_NAMES, limit_of, past_meridian_deg
+from scopelink.mount.meridian import SIDE_NAMES, limit_of
 from scopelink.sim import SimulatedMount
 
 SAMPLE_S = 0.05
@@ -48,17 +48,15 @@ def sample(mount: SimulatedMount, record: DeviceMeridian) -> None:
         c - a.counter_offset_deg for c, a in zip(counters, mount.axes, strict=True)
     )
     side = mount.geometry.pier_side(primary, secondary)
-    ha_hours, _ = mount.geometry.to_hadec(primary, secondary)
-    past = past_meridian_deg(ha_hours, side)
+    # The physics' own measure: (the limit of that side) minus (degrees past the meridian)
+    margin = mount.geometry.meridian_margin_deg(primary, secondary, mount.limits)
     record.samples += 1
-    if past is None:
-        return
-    limit = limit_of(mount.limits, side)
-    if past - limit > record.worst_excess_deg:
-        record.worst_excess_deg = past - limit
+    if -margin > record.worst_excess_deg:
+        limit = limit_of(mount.limits, side)
+        record.worst_excess_deg = -margin
         record.worst = (
-            f"{past:.2f}° past the meridian on the {SIDE_NAMES[side]} side (limit {limit:g}°) "
-            f"at {t / 3600:.2f} h of the device's sky"
+            f"{limit - margin:.2f}° past the meridian on the {SIDE_NAMES[side]} side (limit "
+            f"{limit:g}°) at {t / 3600:.2f} h of the device's sky"
         )
 
 
