@@ -64,6 +64,8 @@ class Night:
     """(time, RSS KiB, fds) of the serve process, every second."""
     last_problems: list[str] = field(default_factory=list)
     reconnects: Counter[str] = field(default_factory=Counter)
+    first_page_s: float = math.nan
+    """serve's first dashboard page, before the night: seconds to its hello (cold)."""
     guard_stops: list[float] = field(default_factory=list)
     """When serve's horizon guard stopped the mount."""
     meridian_stops: list[float] = field(default_factory=list)

@@ -287,8 +287,10 @@ def print_report(report: SoakReport) -> None:
     )
     print(
         f"horizon guard stops {len(night.guard_stops)}, {after_motion} of them within 3 s of a "
-        "motion command"
+        f"motion command; serve's meridian stops {len(night.meridian_stops)} (its clock, not the "
+        "device's sky)"
     )
+    print(f"serve's first dashboard page (cold, before the night): {night.first_page_s:.2f} s")
     print(
         f"serve log lines {len(night.serve_log)}"
         + "".join(f"\n  {line}" for line in night.serve_log[-5:])
