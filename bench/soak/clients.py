@@ -208,6 +208,14 @@ async def dashboard_observer(session: aiohttp.ClientSession, port: int, night: N
     night.broken.append(f"dashboard page closed by the server at {night.now():.1f} s")
 
 
+async def first_page(session: aiohttp.ClientSession, port: int) -> float:
+    """Seconds from opening a dashboard page to its hello (serve's first page is cold)."""
+    start = asyncio.get_running_loop().time()
+    async with session.ws_connect(f"http://127.0.0.1:{port}/ws") as ws:
+        await ws.receive()
+        return asyncio.get_running_loop().time() - start
+
+
 async def dashboard_churn(session: aiohttp.ClientSession, port: int, night: Night) -> None:
     """A page opened and closed again: a hello and a few updates, then 3 s away."""
     async with session.ws_connect(f"http://127.0.0.1:{port}/ws") as ws:

@@ -50,6 +50,9 @@ quarter may be at most the larger of 1 MiB (allocator noise) and 2 MiB per real 
 them. The leak the soak found (~13 MiB/h under this load) failed it in a 30-hour night."""
 FD_GROWTH_BOUND = 2
 """Most fds of the last quarter minus most of the first quarter (clients reconnect meanwhile)."""
+DEVICE_MERIDIAN_TOLERANCE_DEG = 0.001
+"""The emulated tube, at rest or tracking, may stand this far past its meridian limit in its own
+sky: rounding only (its physics stops tracking and manual motion exactly at the limit)."""
 FINAL_LANDING_BOUND_DEG = 1.0
 """After the faults, a last slew lands within this of its target (the state recovered)."""
 

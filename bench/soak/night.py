@@ -64,8 +64,15 @@ class Night:
     """(time, RSS KiB, fds) of the serve process, every second."""
     last_problems: list[str] = field(default_factory=list)
     reconnects: Counter[str] = field(default_factory=Counter)
+    first_page_s: float = math.nan
+    """serve's first dashboard page, before the night: seconds to its hello (cold)."""
     guard_stops: list[float] = field(default_factory=list)
     """When serve's horizon guard stopped the mount."""
+    meridian_stops: list[float] = field(default_factory=list)
+    """When serve's meridian watch stopped tracking (judged on serve's clock, not the device's
+    sky: see :mod:`bench.soak.device_sky`)."""
+    device_meridian: tuple[int, float, str] = (0, -math.inf, "not asked")
+    """The emulated tube in its own sky: (samples, worst degrees past its meridian limit, where)."""
     final_landing: tuple[float | None, float] = (None, math.inf)
     """The last slew's duration (None: stuck) and its distance from the target in degrees."""
 

@@ -8,6 +8,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from bench.soak.config import (
+    DEVICE_MERIDIAN_TOLERANCE_DEG,
     FD_GROWTH_BOUND,
     FINAL_LANDING_BOUND_DEG,
     POLL_GAP_BOUND_S,
@@ -21,6 +22,7 @@ from bench.soak.config import (
     SoakConfig,
 )
 from bench.soak.night import Night
+from bench.soak.stack import MERIDIAN_STOP
 
 
 @dataclass
@@ -152,8 +154,13 @@ def judge(report: SoakReport) -> list[Check]:
     rss_bound_mib = max(RSS_GROWTH_FLOOR_MIB, RSS_GROWTH_MIB_PER_HOUR * quarters_apart_h)
     fd_growth = max(fds_last) - max(fds_first)
     took, miss = night.final_landing
-    # The horizon guard's notice is a problem shown on purpose, not a failure to recover
-    failures_after = [p for p in night.last_problems if "was stopped at" not in p]
+    # The horizon guard's notice is a problem shown on purpose, not a failure to recover; so is
+    # serve's meridian stop, judged on serve's clock while the device's sky runs `rate` times
+    # faster (bench/soak/device_sky.py): the meridian limit is checked in the device's sky below.
+    failures_after = [
+        p for p in night.last_problems if "was stopped at" not in p and MERIDIAN_STOP not in p
+    ]
+    samples, excess_deg, worst = night.device_meridian
     kinds = {spec.split(":")[1] for spec in config.fault_specs()}
     if config.faults:
         kinds |= {spec.split(":")[1] for _, spec in config.scripted}
@@ -205,6 +212,13 @@ def judge(report: SoakReport) -> list[Check]:
             took is not None and miss <= FINAL_LANDING_BOUND_DEG and not failures_after,
             f"{'stuck' if took is None else f'{took:.1f} s'}, {miss:.3f}° from its target "
             f"<= {FINAL_LANDING_BOUND_DEG:g}°; problems after it: {night.last_problems or 'none'}",
+        ),
+        Check(
+            "tube within its meridian limit (device's sky)",
+            samples > 0 and excess_deg <= DEVICE_MERIDIAN_TOLERANCE_DEG,
+            f"worst {excess_deg:+.3f}° past the limit <= {DEVICE_MERIDIAN_TOLERANCE_DEG:g}° "
+            f"({worst}; {samples} samples of the axes at rest or tracking); serve's meridian "
+            f"stops (its clock): {len(night.meridian_stops)}",
         ),
         Check(
             "Stellarium stream steady",
@@ -273,8 +287,10 @@ def print_report(report: SoakReport) -> None:
     )
     print(
         f"horizon guard stops {len(night.guard_stops)}, {after_motion} of them within 3 s of a "
-        "motion command"
+        f"motion command; serve's meridian stops {len(night.meridian_stops)} (its clock, not the "
+        "device's sky)"
     )
+    print(f"serve's first dashboard page (cold, before the night): {night.first_page_s:.2f} s")
     print(
         f"serve log lines {len(night.serve_log)}"
         + "".join(f"\n  {line}" for line in night.serve_log[-5:])

@@ -14,6 +14,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from bench.processes import environment, start_scopelink, stop
+from bench.soak import device_sky
 from bench.soak.config import SITE, SoakConfig
 from bench.soak.night import Night
 from scopelink.servers.faults import Fault, FaultInjector
@@ -43,8 +44,9 @@ async def emulate(rate: float, seed: int) -> None:
     """The ``--emulator`` role: what ``scopelink emulate synscan --tcp 127.0.0.1:0 --clock-rate
     RATE`` runs (EQ6, 9600 baud pacing, Greenwich), with its faults switched by lines on stdin:
     ``add SPEC`` (a ``--fault`` spec), ``clear`` (remove every rule, end a stall or halt),
-    ``resume`` (end a stall or halt), ``count`` (prints ``commands N``). Fired faults are logged
-    as ``scopelink emulate`` logs them."""
+    ``resume`` (end a stall or halt), ``count`` (prints ``commands N``), ``meridian`` (prints the
+    tube's worst standing against its meridian limit in the device's own sky,
+    :mod:`bench.soak.device_sky`). Fired faults are logged as ``scopelink emulate`` logs them."""
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(name)s %(message)s")
     logging.getLogger("scopelink.servers.faults").setLevel(logging.INFO)
     faults = CountingInjector(seed=seed)
@@ -53,6 +55,8 @@ async def emulate(rate: float, seed: int) -> None:
     loop = asyncio.get_running_loop()
     stdin = asyncio.StreamReader()
     await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(stdin), sys.stdin)
+    meridian = device_sky.DeviceMeridian()
+    watcher = asyncio.create_task(device_sky.watch(mount, meridian))
     async with SynScanEmulator(mount, config, faults=faults, wire=SERIAL_9600_8N1) as device:
         await device.on_tcp("127.0.0.1", 0)
         print(f"synscan emulator listening on {device.address}", flush=True)
@@ -68,6 +72,9 @@ async def emulate(rate: float, seed: int) -> None:
                     faults.resume()
                 case "count":
                     print(f"commands {faults.commands}", flush=True)
+                case "meridian":
+                    print(meridian.line(), flush=True)
+    watcher.cancel()
 
 
 class Emulator:
@@ -82,11 +89,17 @@ class Emulator:
         await self.process.stdin.drain()
 
     async def commands(self) -> int:
-        await self.say("count")
+        return int((await self._ask("count")).split()[1])
+
+    async def meridian(self) -> tuple[int, float, str]:
+        """(samples, worst excess in degrees, where): see :mod:`bench.soak.device_sky`."""
+        return device_sky.parse(await self._ask("meridian"))
+
+    async def _ask(self, line: str) -> str:
+        await self.say(line)
         assert self.process.stdout is not None
         async with asyncio.timeout(5):
-            line = (await self.process.stdout.readline()).decode()
-        return int(line.split()[1])
+            return (await self.process.stdout.readline()).decode()
 
 
 async def start_emulator(config: SoakConfig, home: Path) -> tuple[Emulator, int]:
@@ -110,6 +123,10 @@ async def start_emulator(config: SoakConfig, home: Path) -> tuple[Emulator, int]
     assert found is not None
     return Emulator(process), int(found.group(1))
 
+
+MERIDIAN_STOP = "past the meridian on the"
+"""In serve's notice of a meridian stop ("tracking was stopped N° past the meridian on the west
+side of the pier: ..."), judged on serve's clock: see :mod:`bench.soak.device_sky`."""
 
 # --- the processes -------------------------------------------------------------------------------
 
@@ -147,6 +164,8 @@ async def watch_serve_log(process: asyncio.subprocess.Process, night: Night) -> 
         night.serve_log.append(f"{night.now():7.1f} s {line.rstrip()}")
         if "was stopped at" in line:
             night.guard_stops.append(night.now())
+        if MERIDIAN_STOP in line:
+            night.meridian_stops.append(night.now())
 
 
 def listening_port(printed: str, label: str) -> int:

@@ -27,6 +27,7 @@ CHECKS = (
     "poller never stops",
     "recovers after faults",
     "final slew lands",
+    "tube within its meridian limit (device's sky)",
     "Stellarium stream steady",
     "memory flat",
     "fds flat, back to baseline",
