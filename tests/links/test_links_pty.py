@@ -3,6 +3,7 @@
 import asyncio
 import contextlib
 import os
+import random
 import shutil
 import threading
 import time
@@ -91,16 +92,23 @@ async def test_back_to_back_exchanges_are_never_taken_for_a_hang_up() -> None:
     path = os.ttyname(slave)
 
     def device() -> None:
+        # The client's next read starts before the reply is in; the reply lands anywhere in
+        # the next 0.2 ms, so some land between an empty read and the readiness check after it
+        # (a reply there was taken for a hang-up: CI, 2026-11-25). Busy-waited: a sleep is too
+        # coarse to reach that window.
+        jitter = random.Random(1)
         with contextlib.suppress(OSError):  # EIO once the client has closed: done
             while command := os.read(master, 16):
-                time.sleep(0.0003)  # the client's next read starts before the reply is in
+                answer_at = time.perf_counter() + jitter.uniform(0.0, 0.0002)
+                while time.perf_counter() < answer_at:
+                    pass
                 os.write(master, command)
 
     answering = threading.Thread(target=device, daemon=True)
     answering.start()
     try:
         async with await open_serial(path) as client:
-            for index in range(300):
+            for index in range(3000):
                 command = bytes([0x41 + index % 26])
                 await client.write(command)
                 async with asyncio.timeout(2.0):  # in this task, as a driver reads
