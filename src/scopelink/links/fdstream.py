@@ -40,6 +40,7 @@ class FdStream:
     async def read(self, max_bytes: int) -> bytes:
         """Wait for 1..max_bytes bytes; LinkClosedError on EOF, hang-up or close."""
         waited = False
+        empty_reads = 0
         while True:
             self._raise_if_closed()
             try:
@@ -54,12 +55,21 @@ class FdStream:
                 await self._wait_readable()
                 waited = True
                 continue
-            if self._empty_read_may_mean_no_data and not _readable_now(self._fd):
+            empty_reads += 1
+            if (
+                self._empty_read_may_mean_no_data
+                and empty_reads <= _EMPTY_READS_BEFORE_GONE
+                and not _hung_up(self._fd)
+            ):
                 # A readiness report gone stale (the watch outlives each read, so a report
-                # queued before the last read took its bytes can wake the next one): wait again.
+                # queued before the last read took its bytes can wake the next one), or bytes
+                # that arrived just after the empty read: read again, waiting if need be.
+                # Only the hang-up flag ends the stream: "readable" alone was once the reply
+                # landing between the two calls, taken for a hang-up.
                 await self._wait_readable()
                 continue
-            # Empty although the descriptor said it was readable: the other end hung up.
+            # Empty and hung up, readable and empty again and again (no tty does that with
+            # data or without a hang-up: not worth spinning on), or not a tty.
             raise LinkClosedError(f"{self._name}: end of stream")
 
     async def write(self, data: bytes) -> None:
@@ -143,11 +153,20 @@ class FdStream:
         return LinkClosedError(f"{self._name}: I/O error ({exc})")
 
 
-def _readable_now(fd: int) -> bool:
-    """Whether ``fd`` reads as readable (data or a hang-up) right now, without waiting."""
+_GONE_EVENTS = select.POLLHUP | select.POLLERR | select.POLLNVAL
+
+_EMPTY_READS_BEFORE_GONE = 100
+"""Empty reads of a tty that says it is readable, in a row within one read, before the stream
+counts as ended although no hang-up is reported (a stale report or a reply racing the check
+takes one or two)."""
+
+
+def _hung_up(fd: int) -> bool:
+    """Whether ``fd`` reports a hang-up or an error right now, without waiting (``poll``
+    reports these whatever events are asked for)."""
     poller = select.poll()  # not select.select: any descriptor number, even above 1023
     poller.register(fd, select.POLLIN)
-    return bool(poller.poll(0))
+    return any(events & _GONE_EVENTS for _, events in poller.poll(0))
 
 
 def _resolve(waiter: asyncio.Future[None]) -> None:
