@@ -321,6 +321,10 @@ async def test_a_target_that_becomes_faster_than_the_mount_ends_following_not_tr
         ended = sim.now()
     finally:
         await sim.disconnect()
-    assert re.search(r"Streak needs 5760″/s in Dec now; this mount's", result.reason), result.reason
+    # The rate is measured over the update's own interval, so its figure depends on where the
+    # update fell (5760″/s once the streak is at full speed; 5738″/s seen under load in CI):
+    # what matters is that it is beyond the mount's 3600″/s, and said.
+    needed = re.search(r"Streak needs (\d+)″/s in Dec now; this mount's", result.reason)
+    assert needed is not None and int(needed.group(1)) > 3600, result.reason
     assert ended - t0 < timedelta(seconds=200), f"trailed until {ended:%H:%M:%S}"
     assert sim.tracking_rates.zero
