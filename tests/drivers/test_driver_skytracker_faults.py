@@ -183,3 +183,29 @@ async def test_a_garbled_status_byte_is_read_again_not_believed(
         await assert_position_matches_sim(r)
         assert r.emulator.faults.fired
         assert tracking_of(r.driver) is TrackingMode.ALT_AZ
+
+
+async def test_a_sky_commander_silent_once_at_a_reconnection_is_read_again(
+    tmp_path: Path,
+) -> None:
+    """Seen in bench.reconnect (2026-11-25): the link came back, the Sky Commander's first
+    position replies after it were lost (stale bytes of the old connection in their way), and the
+    driver concluded "no Sky Commander on the bus" for good: no position poll again, every
+    position refused as stale while the link read as connected. A Sky Commander seen before
+    is a fault to report and retry, not gone."""
+    async with rig(tmp_path, "tcp") as r:
+        r.point(40.0, 120.0)
+        await assert_position_matches_sim(r)
+        assert r.driver.commander_present is True
+        await r.driver.line.link.close()  # the link is lost
+        # The first position requests after it (the exchange, its retry, the catch-up): lost.
+        r.emulator.commander_faults.add(Fault(FaultKind.DROP, "CR", times=3))
+        for _ in range(3):  # reconnects, detects (the reply lost), then polls again
+            try:
+                await r.driver.refresh()
+            except MountError:
+                pass  # the lost replies: a clear error, then the next refresh
+        assert r.emulator.commander_faults.fired
+        assert r.driver.commander_present is not False
+        await assert_position_matches_sim(r)
+        r.driver.fresh_state()  # the position is served again
