@@ -139,6 +139,13 @@ class SkyTrackerConnection(SkyTrackerBase):
         try:
             await self._read_position(line, Priority.COMMAND, retry=False)
         except ReplyTimeoutError as error:
+            if self._commander_present:
+                # Seen on this mount before the line was lost (a reconnection): a Sky Commander
+                # that does not answer yet is a fault the position polls report and retry, not
+                # gone for good (that left every position refused as stale while connected).
+                logger.warning("the Sky Commander does not answer yet: %s", error)
+                self._commander_present = None
+                return
             logger.warning("no Sky Commander on the bus: %s", error)
             self._commander_present = False
             return

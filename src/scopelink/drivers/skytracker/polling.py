@@ -81,6 +81,8 @@ class SkyTrackerPolling(SkyTrackerConnection):
                 else:
                     received_s = line.last_answer_s
                     self._position = pointing_of(position, self._clock(), self._site, received_s)
+                    if self._commander_present is None:  # answering again after a fault
+                        self._commander_present = True
         except (DeviceError, NotConnectedError) as error:
             self._problems = (str(error),)
             silent_s = time.monotonic() - line.last_answer_s
