@@ -71,14 +71,8 @@ class WireScheduler:
 
     def release_with(self, inner: WireScheduler) -> None:
         """Pass ``inner`` on, then this wire (after :meth:`try_take_with`)."""
-        if inner._waiting:
-            inner._release()
-        else:
-            inner._busy = False
-        if self._waiting:
-            self._release()
-        else:
-            self._busy = False
+        inner.release()
+        self.release()
 
     async def take(self, priority: Priority) -> None:
         """Wait for the wire (then :meth:`release` it); a cancelled wait leaves the queue."""
