@@ -20,7 +20,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Sequence
+from collections.abc import Awaitable, Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -28,6 +28,7 @@ from scopelink.drivers.common import LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkError
 from scopelink.mount import DeviceError, NotConnectedError
 from scopelink.mount.scheduling import Priority, WireScheduler
+from scopelink.protocol.base import NeedData
 from scopelink.protocol.skytracker import (
     NEED_DATA,
     PAUSED,
@@ -156,6 +157,8 @@ class SkyTrackerLine:
         (first come, first served: every writer takes it at ``Priority.COMMAND``). A scheduler
         rather than an ``asyncio.Lock``: its free case takes no coroutine (issue #14)."""
         self._deadline = ReplyDeadline()
+        self._parse = self._parse_reply
+        """The reply parser, bound once (each exchange hands it to the link)."""
         """Bounds the reply being waited for, which a stop may abandon."""
         self._stops = 0
         """Stops written at once so far; a turn that began before the last one ends."""
@@ -346,33 +349,24 @@ class SkyTrackerLine:
         data = self._client.send(command)
         deadline = self._deadline
         deadline.interrupted = False
+        link = self.link
         try:
-            # The write turn taken and released by hand: ``async with`` adds coroutines to every
-            # exchange (issue #14).
-            writing = self._writing
-            if not writing.try_take():
-                await writing.take(Priority.COMMAND)
-            try:
-                await self.link.write(data)
-            finally:
-                writing.release()
-            self.statistics.commands_sent += 1
             if command.reply is None:
+                await self._write(data)
                 return None
+            # Written, and the reply's reader set up, in one call where the link can (TCP) and
+            # no stop is being written: the link hands the reply's bytes to _parse_reply as they
+            # arrive and wakes this task once, with the reply (issue #14: CPU per command).
+            reading: Awaitable[Reply | BadReply] | None = (
+                None if self._writing.busy else link.write_and_read_event(data, self._parse)
+            )
+            if reading is None:  # a link that writes in a coroutine (serial, paced), or a stop
+                await self._write(data)
+                reading = link.read_event(self._parse)
+            else:
+                self.statistics.commands_sent += 1
             with deadline.start(reply_within_s):
-                # The reply, read inline (not a coroutine of its own: every exchange runs
-                # this, issue #14). Exact types, not isinstance: the events derive from an ABC,
-                # whose isinstance check runs Python code (they have no subclasses).
-                client = self._client
-                while True:
-                    event = client.next_event()
-                    if event is NEED_DATA:
-                        client.receive_data(await self.link.read())
-                    elif type(event) is StrayByte:
-                        self._note_stray(event)
-                    else:
-                        assert event is not PAUSED  # a client never pauses
-                        break
+                event = await reading
         except TimeoutError:
             self._client.abandon_reply()
             if deadline.interrupted:
@@ -402,6 +396,33 @@ class SkyTrackerLine:
         if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
         return cast(Reply, event)
+
+    async def _write(self, data: bytes) -> None:
+        """Write one command's bytes in the write turn (a stop never lands inside them)."""
+        # The write turn taken and released by hand: ``async with`` adds coroutines to every
+        # exchange (issue #14).
+        writing = self._writing
+        if not writing.try_take():
+            await writing.take(Priority.COMMAND)
+        try:
+            await self.link.write(data)
+        finally:
+            writing.release()
+        self.statistics.commands_sent += 1
+
+    def _parse_reply(self, data: bytes) -> Reply | BadReply | NeedData:
+        """The reader the link feeds a reply's bytes to (in the transport's call): the reply once
+        complete (or BadReply), NEED_DATA until then; stray bytes before it are noted and
+        dropped. Never raises (the link's rule for a parser)."""
+        client = self._client
+        client.receive_data(data)
+        while True:
+            event = client.next_event()
+            if type(event) is StrayByte:  # exact: the events derive from an ABC
+                self._note_stray(event)
+                continue
+            assert event is not PAUSED  # a client never pauses
+            return cast("Reply | BadReply | NeedData", event)
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:
