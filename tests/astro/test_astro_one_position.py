@@ -164,3 +164,21 @@ def test_a_reading_in_one_pass_is_its_two_conversions() -> None:
             assert one_position.reading_of_j2000(one_ra, one_dec, zero_offset, site) == reading
             elsewhere = moment.astimezone(timezone(timedelta(hours=5, minutes=30)))
             assert one_position.reading_of_j2000(one_ra, one_dec, elsewhere, site) == reading
+
+
+def test_a_reading_polled_again_and_again_is_its_two_conversions_each_time() -> None:
+    """The poll's common case (the same reading, instants 21 ms apart: ``reading_of_j2000``'s
+    inline path) gives exactly what the two conversions give at every instant, through the
+    contexts' renewal every 10 s, UTC midnight, a whole day's jump and a change of site."""
+    for start in (
+        datetime(2026, 11, 25, 3, 0, tzinfo=UTC),
+        datetime(2026, 11, 25, 23, 59, 55, tzinfo=UTC),  # across midnight
+    ):
+        for site in SITES[:2]:
+            # 12.6 s, then the same time of day on the next day and on the one before
+            for seconds in [*(0.021 * step for step in range(600)), 86400.0, -86400.0]:
+                moment = start + timedelta(seconds=seconds)
+                reading = one_position.reading_of_j2000(5.5, 20.0, moment, site)
+                observed = j2000_to_observed(5.5, 20.0, moment, site)
+                apparent = j2000_to_apparent(5.5, 20.0, moment)
+                assert reading == (*observed, *apparent), (start, site, seconds)

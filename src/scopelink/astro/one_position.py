@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Any
 
 import erfa
@@ -32,7 +32,7 @@ import numpy as np
 
 from scopelink.astro.refraction import RefractionModel
 from scopelink.astro.site import Site
-from scopelink.astro.timescales import tt_pair, utc_day_seconds
+from scopelink.astro.timescales import seconds_of_utc_day, tt_pair, utc_day_seconds
 
 __all__ = [
     "GEOCENTRIC_REUSE_S",
@@ -249,6 +249,8 @@ def erfa_site(site: Site) -> tuple[float, ...]:
 class _Observer:
     site: Site
     ut1_minus_utc_s: float
+    utc_date: tuple[int, int, int]
+    """The UTC day (year, month, day) of ``day_jd``."""
     day_jd: float
     seconds: float
     local_era: float
@@ -264,6 +266,7 @@ class _Observer:
     @classmethod
     def at(cls, moment: datetime, site: Site, ut1_minus_utc_s: float) -> _Observer:
         day_jd, seconds, day_seconds = utc_day_seconds(moment)
+        utc = moment.astimezone(UTC)
         astrom = erfa.apio13(day_jd, seconds / day_seconds, ut1_minus_utc_s, *erfa_site(site))
         xpl, ypl = float(astrom["xpl"]), float(astrom["ypl"])
         sin_x, cos_x, sin_y, cos_y = math.sin(xpl), math.cos(xpl), math.sin(ypl), math.cos(ypl)
@@ -285,6 +288,7 @@ class _Observer:
         return cls(
             site,
             ut1_minus_utc_s,
+            (utc.year, utc.month, utc.day),
             day_jd,
             seconds,
             float(astrom["eral"]),
@@ -336,6 +340,30 @@ def reading_of_j2000(
     a mount's poll derives from its reading, in one pass (one time conversion and one look-up
     of each context; :func:`observed_of_j2000` and :func:`apparent_of_j2000` give the same
     values)."""
+    # The common case of a poll, inline: the reading of the last call (a mount standing still,
+    # or tracking: the Sky Commander's last digit holds) on the same UTC day, both contexts
+    # still serving: the contexts and place the look-ups below would find, so the same doubles,
+    # ~90 bytecodes fewer per poll (issue #14).
+    place, observer = _last_place, _last_observer
+    if (
+        place is not None
+        and observer is not None
+        and moment.tzinfo is UTC
+        and place.ra_hours == ra_hours
+        and place.dec_deg == dec_deg
+        and place.context is _last_geocentric
+        and observer.site is site
+        and observer.ut1_minus_utc_s == 0.0
+        and observer.utc_date == (moment.year, moment.month, moment.day)
+        and place.context.day_jd == observer.day_jd
+    ):
+        seconds = seconds_of_utc_day(moment)
+        if (
+            abs(seconds - observer.seconds) <= OBSERVER_REUSE_S
+            and abs(seconds - place.context.seconds) <= OBSERVER_REUSE_S
+        ):
+            alt, az = _horizon(place, observer, seconds)
+            return alt, az, place.ra_of_date_hours, place.dec_of_date_deg
     day_jd, seconds, _ = utc_day_seconds(moment)
     place = _place(ra_hours, dec_deg, _geocentric(moment, day_jd, seconds))
     observer = _observer(moment, day_jd, seconds, site, 0.0)

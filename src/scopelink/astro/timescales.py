@@ -157,14 +157,19 @@ def utc_day_seconds(moment: datetime) -> tuple[float, float, float]:
             )
         utc = moment.astimezone(UTC) if offset else moment  # a zero offset: UTC's fields
     day_jd, day_seconds = _utc_day(utc.year, utc.month, utc.day)
-    # erfa.dtf2d's own expression, term for term (the same doubles): a poll's datetime costs a
-    # cached day and one division instead of three ufunc calls.
-    seconds = 60.0 * float(60 * utc.hour + utc.minute) + (utc.second + utc.microsecond * 1e-6)
+    seconds = seconds_of_utc_day(utc)
     _last_day_seconds = (moment, (day_jd, seconds, day_seconds))
     return day_jd, seconds, day_seconds
 
 
 _last_day_seconds: tuple[datetime, tuple[float, float, float]] | None = None
+
+
+def seconds_of_utc_day(utc: datetime) -> float:
+    """UTC seconds since 0h of ``utc``'s day (a UTC datetime), as :func:`utc_day_seconds` gives
+    them: ``erfa.dtf2d``'s own expression, term for term (the same doubles), so a poll's
+    datetime costs a cached day and one division instead of three ufunc calls."""
+    return 60.0 * float(60 * utc.hour + utc.minute) + (utc.second + utc.microsecond * 1e-6)
 
 
 @functools.lru_cache(maxsize=16)
