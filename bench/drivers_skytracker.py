@@ -8,7 +8,7 @@ issue #14 asks (a real Sky Tracker is another machine): the emulators (unpaced) 
 process on TCP 127.0.0.1, pinned to another CPU (``bench.emulator_process``, shared with
 ``bench.drivers_synscan``); the driver (``SkyTrackerMount`` over ``open_link``, its production
 clock) and the bare client each run in a thread of their own on an event loop of their own, timed
-with ``time.thread_time()``, the best of :data:`BLOCKS` interleaved rounds. Until 2026-11-25 the
+with ``time.thread_time()``, the best of :data:`CPU_ROUNDS` interleaved rounds. Until 2026-11-25 the
 CPU rows ran everything in one process, so each side's figure carried its emulator's CPU (about
 half of it) and every ratio was pulled towards 1 (the refresh read ~1.2-1.3x; its client's side
 alone reads ~1.35-1.45x).
@@ -97,7 +97,7 @@ class Sizes:
     commands: int
 
 
-FULL = Sizes(polls=250, commands=2500)
+FULL = Sizes(polls=250, commands=4500)
 QUICK = Sizes(polls=15, commands=100)
 
 
@@ -163,6 +163,10 @@ BLOCKS = 5
 block then its bare block); each figure is the best block (the least CPU, the most polls: the
 slower blocks measure the neighbours on a shared machine), and a burst of load from other
 processes hits both sides alike."""
+CPU_ROUNDS = 9
+"""Rounds of the CPU section (each a block of every row's driver then its bare client): nine
+blocks of 500 calls a side, the best of each; with five, a burst on a shared machine moved a
+ratio by ~0.1 from run to run (2026-11-25)."""
 GOAL_CPU_OF_BARE = 1.2
 """Issue #14 part 2: the driver's CPU per command within 1.2x its bare codec client's."""
 
@@ -322,7 +326,7 @@ async def open_peer(url: str) -> BareClient:
 def measure_cpu(sizes: Sizes, served: Served, new_loop: NewLoop) -> list[Row]:
     """CPU per command of the driver and of the bare client, each in its own thread on its own
     ``new_loop()``, against the emulators in ``served`` (another process): for each of
-    :data:`BLOCKS` rounds, every row's driver block then its bare block; each figure the best
+    :data:`CPU_ROUNDS` rounds, every row's driver block then its bare block; each figure the best
     (least CPU) round."""
     driver_url, peer_url = served.urls
     driver_thread = ClientThread("sky tracker driver", new_loop)
@@ -331,7 +335,7 @@ def measure_cpu(sizes: Sizes, served: Served, new_loop: NewLoop) -> list[Row]:
         mount = driver_thread.run(open_driver(driver_url))
         peer = peer_thread.run(open_peer(peer_url))
         sides = Sides(mount, peer)
-        block = max(1, sizes.commands // BLOCKS)
+        block = max(1, sizes.commands // CPU_ROUNDS)
         table = [
             (what, driver_action, peer_action)
             for what, driver_action, peer_action, _bits in sides.pairs()
@@ -340,7 +344,7 @@ def measure_cpu(sizes: Sizes, served: Served, new_loop: NewLoop) -> list[Row]:
         # driver's line, to tell the line's cost from the state's (astrometry).
         table.insert(2, (REFRESH_EXCHANGES, sides.driver_refresh_exchanges, sides.peer_refresh))
         figures: list[tuple[list[float], list[float]]] = [([], []) for _ in table]
-        for _ in range(BLOCKS):
+        for _ in range(CPU_ROUNDS):
             for (_what, driver_action, peer_action), (driver, bare) in zip(
                 table, figures, strict=True
             ):
@@ -444,7 +448,10 @@ def main() -> int:
         return 2
     peer = "peer: the bare codec client below (scopelink's own protocol codec)"
     print_provenance(peer, loop_line)
-    print(f"each figure the best of {BLOCKS} alternating blocks of driver and bare client")
+    print(
+        f"each figure the best of {BLOCKS} (wire) or {CPU_ROUNDS} (CPU) alternating blocks of "
+        "driver and bare client"
+    )
     with (
         TemporaryDirectory() as directory,
         asyncio.Runner(loop_factory=serve_event_loop) as runner,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import functools
 import logging
 import math
 from collections.abc import Awaitable, Callable
@@ -68,9 +69,9 @@ MAX_PULSE_GUIDE_MS = 60_000
 """Longest guide pulse accepted; a longer one is almost surely a unit mistake (s for ms)."""
 
 
-def utc_now() -> datetime:
-    """The PC's clock in UTC: the default time source of a real mount."""
-    return datetime.now(UTC)
+utc_now: Callable[[], datetime] = functools.partial(datetime.now, UTC)
+"""The PC's clock in UTC: the default time source of a real mount. A partial, not a function:
+it is called twice a poll, and calling it runs no Python frame (issue #14)."""
 
 
 def _check_ra_dec(ra_hours: float, dec_deg: float) -> None:

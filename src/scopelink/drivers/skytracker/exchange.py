@@ -22,7 +22,6 @@ import logging
 import time
 from collections.abc import Awaitable, Sequence
 from dataclasses import dataclass
-from typing import cast
 
 from scopelink.drivers.common import LinkStatistics, ReplyDeadline
 from scopelink.links import Link, LinkError
@@ -395,7 +394,7 @@ class SkyTrackerLine:
             raise BadReplyError(f"bad reply on {self.link.name}: {event.describe()}")
         if self._sync_marker is None and isinstance(event, VersionReply):
             self._sync_marker = event.encode()
-        return cast(Reply, event)
+        return event  # type: ignore[return-value]  # a reply: not NEED_DATA, not BadReply
 
     async def _write(self, data: bytes) -> None:
         """Write one command's bytes in the write turn (a stop never lands inside them)."""
@@ -422,7 +421,7 @@ class SkyTrackerLine:
                 self._note_stray(event)
                 continue
             assert event is not PAUSED  # a client never pauses
-            return cast("Reply | BadReply | NeedData", event)
+            return event  # type: ignore[return-value]  # not a StrayByte, not PAUSED
 
     def _flush_strays(self) -> None:
         while (event := self._client.next_event()) is not NEED_DATA:
