@@ -102,7 +102,8 @@ def test_move_for_a_time_turns_the_axis_then_stops(
     assert "moving the primary axis at +2.0000°/s for 0.5 s" in out
     # An alt-az mount starts level pointing north: 0.5 s at 2°/s (with ramps) leaves it east of 0.
     azimuth = degrees_in(out.split("stopped at")[1], "Az")
-    assert 0.2 < azimuth < 1.5
+    # 1.0° at most on time; a loaded machine may stop it late, but 3° would be --for ignored.
+    assert 0.2 < azimuth < 3.0
 
 
 def test_track_on_picks_the_mode_the_geometry_needs(

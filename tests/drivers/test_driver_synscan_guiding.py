@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import dataclasses
 import math
 import time
@@ -44,7 +43,7 @@ async def test_pulse_guides_are_timed_on_the_pc(transport: str) -> None:
             start = await r.mount.refresh()
             await r.mount.pulse_guide(direction, 1000)
             assert r.mount.state.pulse_guiding
-            await asyncio.sleep(1.3)
+            await r.mount.wait_for(lambda s: not s.pulse_guiding, timeout_s=5.0)
             end = await r.mount.refresh()
             assert not end.pulse_guiding
             assert end.tracking is TrackingMode.SIDEREAL  # tracking resumed after the pulse
@@ -54,7 +53,7 @@ async def test_pulse_guides_are_timed_on_the_pc(transport: str) -> None:
             assert [type(c) for _, c in rates] == [VariableRateSlew, FixedRateSlew]
             # Never early; late only by event-loop lateness (this process also runs the emulator
             # and its simulator, and CI shares two cores).
-            assert 0.98 <= rates[1][0] - rates[0][0] <= 1.25
+            assert 0.98 <= rates[1][0] - rates[0][0] <= 1.5
             assert isinstance(rates[0][1], VariableRateSlew)
             assert rates[0][1].axis is Axis.ALT_DEC
             assert rates[0][1].positive is (sign > 0)
@@ -69,7 +68,7 @@ async def test_pulse_guides_are_timed_on_the_pc(transport: str) -> None:
         for direction, sign in ((GuideDirection.WEST, -1.0), (GuideDirection.EAST, 1.0)):
             start = await r.mount.refresh()
             await r.mount.pulse_guide(direction, 1000)
-            await asyncio.sleep(1.3)
+            await r.mount.wait_for(lambda s: not s.pulse_guiding, timeout_s=5.0)
             end = await r.mount.refresh()
             assert end.tracking is TrackingMode.SIDEREAL
             assert start.ra_j2000_hours is not None

@@ -78,7 +78,9 @@ async def test_drain_input_discards_until_quiet() -> None:
 
     talker = asyncio.create_task(chatter())
     await asyncio.sleep(0.005)
-    discarded = await b.drain_input(quiet_seconds=0.05)
+    # Quiet means 0.3 s without a byte, far above the talker's 10 ms: a stall of a loaded
+    # machine fires both timers at once and must not end the drain before the talk ends.
+    discarded = await b.drain_input(quiet_seconds=0.3)
     await talker
     assert discarded == b"##" * 5
     await a.write(b"fresh")
@@ -100,8 +102,8 @@ async def test_drain_input_gives_up_on_a_line_that_never_falls_silent() -> None:
         elapsed = asyncio.get_running_loop().time() - started
     finally:
         babbler.cancel()
-    assert 0.2 <= elapsed < 0.5
-    assert len(discarded) >= 10
+    assert 0.2 <= elapsed < 1.0  # gave up at max_seconds (a stall may add to it)
+    assert len(discarded) >= 5  # ~40 on a quiet machine
     assert set(discarded) == {0}
 
 

@@ -40,6 +40,22 @@ async def polls_in(driver: object, seconds: float) -> int:
     return int(poller.polls - before)
 
 
+async def polls_come(driver: object, count: int, within_s: float) -> None:
+    """Return once ``count`` more polls have been made; fail if that takes ``within_s``. Full
+    rate makes them in a fraction of it (an instant device: ~40 a second); the idle rate
+    (one a second) cannot. Waiting for them, not counting them in a fixed window, keeps a
+    loaded machine's stall from failing the test."""
+    poller = driver.poller  # type: ignore[attr-defined]
+    target = poller.polls + count
+    loop = asyncio.get_running_loop()
+    ends = loop.time() + within_s
+    while poller.polls < target and loop.time() < ends:  # noqa: ASYNC110 (looked at: a wait
+        await asyncio.sleep(0.01)  # on the state would add demand of its own)
+    if poller.polls >= target:
+        return
+    raise AssertionError(f"{count} polls not made within {within_s} s")
+
+
 async def test_a_10_hz_reader_gets_readings_no_older_than_its_period() -> None:
     async with synscan_driver() as driver, driver.watching():
         await asyncio.sleep(0.3)
@@ -49,7 +65,12 @@ async def test_a_10_hz_reader_gets_readings_no_older_than_its_period() -> None:
             await asyncio.sleep(0.1)
         # The first read may find an idle-rate reading (within stale_after_s); it wakes the poller.
         assert ages[0] <= driver.stale_after_s
-        assert max(ages[1:]) <= 0.1, ages
+        # At full rate a reading is ~10 ms old when read (20 ms at most); at the idle rate (the
+        # defect) ages climb towards 1 s between polls. The median holds the promise of one
+        # poll period; the worst leaves room for a stall of a loaded machine.
+        later = sorted(ages[1:])
+        assert later[len(later) // 2] <= 0.1, ages
+        assert later[-1] <= 0.5, ages
         # The reader stops: back to the idle rate once demand_hold_s has passed.
         await asyncio.sleep(DEFAULT_DEMAND_HOLD_S + 0.2)
         assert await polls_in(driver, 1.0) <= 2
@@ -64,16 +85,17 @@ async def test_an_idle_mount_is_never_stale_even_with_a_short_stale_after() -> N
         while loop.time() < ends:  # looks at the cache without reading (no demand)
             worst = max(worst, driver.state.position_age_s())
             await asyncio.sleep(0.02)
-        assert 0.1 < worst <= 0.4, worst
+        # The idle period is half of stale_after_s (0.2 s): the worst age ~0.2-0.3 s, never
+        # the default period's 1 s. (0.7, not 0.4: a stall of a loaded machine adds to it.)
+        assert 0.1 < worst <= 0.7, worst
 
 
 async def test_a_goto_is_polled_at_full_rate_with_nobody_reading() -> None:
     async with synscan_driver() as driver, driver.watching():
         await asyncio.sleep(0.3)
         await driver.goto_horizontal(60.0, 120.0)
-        slewing_polls = await polls_in(driver, 0.5)
+        await polls_come(driver, 10, within_s=3.0)  # idle: 3 at most
         assert driver.state.slewing
-        assert slewing_polls >= 10, slewing_polls  # idle would be 0 or 1
         await driver.abort()
 
 
@@ -82,10 +104,10 @@ async def test_a_states_consumer_holds_the_full_rate() -> None:
         await asyncio.sleep(0.3)
         readings = 0
         loop = asyncio.get_running_loop()
-        ends = loop.time() + 0.5
+        ends = loop.time() + 3.0  # ten readings at the idle rate would take 10 s
         async for state in driver.states():  # what the horizon guard does near a limit
             readings += 1
-            if loop.time() > ends or not state.connected:
+            if readings >= 10 or loop.time() > ends or not state.connected:
                 break
         assert readings >= 10, readings
 
@@ -94,10 +116,9 @@ async def test_a_rate_motion_started_while_idle_is_seen_at_once_and_polled_at_fu
     async with synscan_driver() as driver, driver.watching():
         await asyncio.sleep(0.3)
         await driver.move_axis(MountAxis.PRIMARY, 1.0)
-        before = driver.poller.polls
-        await asyncio.sleep(0.1)
-        assert driver.poller.polls - before >= 2, "the idle period was waited out"
-        assert await polls_in(driver, 0.5) >= 10
+        # Two polls well within the idle period (1 s): it was not waited out.
+        await polls_come(driver, 2, within_s=0.7)
+        await polls_come(driver, 10, within_s=3.0)
         await driver.move_axis(MountAxis.PRIMARY, 0.0)
 
 
@@ -204,8 +225,7 @@ async def test_an_open_dashboard_page_raises_the_rate_and_its_departure_lowers_i
     async with synscan_driver() as driver, Dashboard(driver, port=0) as dashboard:
         async with aiohttp.ClientSession() as http, http.ws_connect(f"{dashboard.url}ws") as ws:
             await ws.receive()  # the hello: the page's updates start
-            await asyncio.sleep(0.5)
-            assert await polls_in(driver, 0.5) >= 10
+            await polls_come(driver, 10, within_s=3.0)
         await asyncio.sleep(DEFAULT_DEMAND_HOLD_S + 0.3)  # the page has gone
         assert driver.poller.watchers == 0 or await polls_in(driver, 1.0) <= 2
 

@@ -606,6 +606,7 @@ async def run_matrix(
     return [list(await asyncio.gather(*row_tasks)) for row_tasks in tasks]
 
 
+@pytest.mark.solo  # 40 cells at once on one loop: beside another worker, "within" could turn late
 async def test_fault_matrix(tmp_path: Path) -> None:
     """Every cell of the matrix; the failures name their cells."""
     outcomes = await run_matrix(ROWS, tmp_path)

@@ -193,10 +193,10 @@ async def test_unsupported_members_are_not_implemented(tmp_path: Path) -> None:
 
 
 class SlowWireMount(SimulatedMount):
-    """The simulator behind a slow link: every refresh costs 0.3 s, as a busy serial line."""
+    """The simulator behind a slow link: every refresh costs 1 s, as a busy serial line."""
 
     async def refresh(self) -> MountState:
-        await asyncio.sleep(0.3)
+        await asyncio.sleep(1.0)
         return await super().refresh()
 
 
@@ -204,13 +204,18 @@ async def test_reads_come_from_the_cache_within_a_tenth_of_a_second(tmp_path: Pa
     mount = SlowWireMount(site=SITE)
     async with session_for(mount, tmp_path=tmp_path) as (session, _):
         await _connect(session)
-        worst = 0.0
+        times = []
         for _ in range(20):
             started = time.perf_counter()
             async with session.get(f"{API}/rightascension") as response:
                 assert (await _json(response))["ErrorNumber"] == 0
-            worst = max(worst, time.perf_counter() - started)
-        assert worst < 0.1
+            times.append(time.perf_counter() - started)
+        # A read waiting for the wire takes a refresh, 1 s; from the cache a few ms. The
+        # median holds the tenth of a second; the worst leaves room for a loaded machine's
+        # stall without letting one wait for the wire through.
+        times.sort()
+        assert times[len(times) // 2] < 0.1, times
+        assert times[-1] < 0.5, times
 
 
 async def test_slew_settle_time_and_dates(tmp_path: Path) -> None:

@@ -91,7 +91,7 @@ async def test_closing_does_not_wait_for_idle_keep_alive_clients(tmp_path: Path)
     assert await blocking(lambda: telescope.Name) == "scopelink telescope"
     started = time.monotonic()
     await server.close()
-    assert time.monotonic() - started < 0.5
+    assert time.monotonic() - started < 0.9  # waiting for the client would take the 1 s grace
 
 
 class _Receiver(asyncio.DatagramProtocol):

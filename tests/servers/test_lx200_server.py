@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
+import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from datetime import UTC, datetime
@@ -261,11 +262,12 @@ async def test_abort_stops_a_goto() -> None:
 async def test_pulse_guide() -> None:
     mount = simulated_mount(rate=1.0)
     async with serving(mount) as (_, client):
-        await client.send(b":Mgn0400#")
+        started = time.monotonic()
+        await client.send(b":Mgn2000#")
         await asyncio.sleep(0.1)
         assert mount.snapshot().pulse_guiding
-        await asyncio.sleep(0.5)
-        assert not mount.snapshot().pulse_guiding
+        await mount.wait_for(lambda s: not s.pulse_guiding, timeout_s=5.0)
+        assert time.monotonic() - started >= 1.9  # the pulse's 2 s, not cut short
 
 
 async def test_site_time_and_date() -> None:

@@ -32,7 +32,10 @@ window.fakePad = {
 window.fakePadPlugged = false;
 Object.defineProperty(Navigator.prototype, "getGamepads", {
   configurable: true,
-  value: () => [window.fakePadPlugged ? window.fakePad : null, null, null, null],
+  value: () => {
+    window.fakePadReads = (window.fakePadReads || 0) + 1;  // the page's polls, counted
+    return [window.fakePadPlugged ? window.fakePad : null, null, null, null];
+  },
 });
 """
 
@@ -40,6 +43,17 @@ HIDE = """Object.defineProperty(document, "hidden", { configurable: true, get: (
 document.dispatchEvent(new Event("visibilitychange"))"""
 SHOW = """Object.defineProperty(document, "hidden", { configurable: true, get: () => false });
 document.dispatchEvent(new Event("visibilitychange"))"""
+
+
+async def pad_polled(page: Page) -> None:
+    """Return once the page has read the pad twice more (it polls every 50 ms): what the test
+    changed has been seen, however slowly the browser runs."""
+    reads = await page.evaluate("window.fakePadReads || 0")
+
+    async def read_twice() -> bool:
+        return bool(await page.evaluate(f"(window.fakePadReads || 0) >= {reads + 2}"))
+
+    await until(read_twice, "the page reads the pad")
 
 
 async def until(check: Callable[[], Awaitable[bool]], what: str, timeout_s: float = 8.0) -> None:
@@ -145,7 +159,7 @@ async def test_desktop_controls_keys_gamepad_progress_and_feedback(browser: Brow
         await asyncio.sleep(0.4)
         assert not await slewing(s)  # the stick is still held: nothing until it centres
         await pad(page, "fakePad.buttons[0].pressed = false; fakePad.axes[0] = 0")
-        await asyncio.sleep(0.2)  # the centred stick is seen: the latch lets go
+        await pad_polled(page)  # the centred stick is seen: the latch lets go
 
         # The page hidden (a phone's screen locked, with no blur) stops the stick and the keys;
         # the held stick does not start again while hidden, nor on return until it centres.
@@ -170,7 +184,7 @@ async def test_desktop_controls_keys_gamepad_progress_and_feedback(browser: Brow
             assert rates[-1] == 0, rates
             await end()
             await until(lambda: _not(slewing(s)), "the mount stops")
-            await asyncio.sleep(0.2)  # the centred stick is seen
+            await pad_polled(page)  # the centred stick is seen
 
         # Go by name: the list closes, progress shows, then the arrival; the almanac follows.
         await page.locator("#goto-name").press_sequentially("Capel", delay=20)
