@@ -156,9 +156,9 @@ class SkyTrackerLine:
         (first come, first served: every writer takes it at ``Priority.COMMAND``). A scheduler
         rather than an ``asyncio.Lock``: its free case takes no coroutine (issue #14)."""
         self._deadline = ReplyDeadline()
+        """Bounds the reply being waited for, which a stop may abandon."""
         self._parse = self._parse_reply
         """The reply parser, bound once (each exchange hands it to the link)."""
-        """Bounds the reply being waited for, which a stop may abandon."""
         self._stops = 0
         """Stops written at once so far; a turn that began before the last one ends."""
         self._turn_stops = 0
@@ -411,8 +411,9 @@ class SkyTrackerLine:
 
     def _parse_reply(self, data: bytes) -> Reply | BadReply | NeedData:
         """The reader the link feeds a reply's bytes to (in the transport's call): the reply once
-        complete (or BadReply), NEED_DATA until then; stray bytes before it are noted and
-        dropped. Never raises (the link's rule for a parser)."""
+        complete (or BadReply), NEED_DATA until then. Never raises (the link's rule for a
+        parser). While a reply is awaited the codec takes every byte as the reply's, so the
+        stray-byte branch is a guard, not a path: strays are flushed before each command."""
         client = self._client
         client.receive_data(data)
         while True:
