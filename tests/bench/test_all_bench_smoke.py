@@ -135,5 +135,8 @@ def test_the_docs_quote_the_pins_and_goals_the_code_checks() -> None:
         f"{alpaca_wrk.GOAL_P99_MS:g} ms**"
     ) in text
     assert f"within **{drivers_skytracker.GOAL_CPU_OF_BARE:g}x**" in text
+    assert f"Each of {drivers_skytracker.CPU_ROUNDS} rounds runs every row's driver block" in text
+    rounds, commands = drivers_synscan.FULL.cpu_rounds, drivers_synscan.FULL.commands
+    assert f"alternate for {rounds} rounds of {commands} commands" in text
     assert f"poller keeps **>= {100 * security_flood.GOAL_RATIO:.0f} %**" in text
     assert f"the best of {security_flood.FULL.rounds} rounds" in text
