@@ -272,5 +272,6 @@ async def test_polls_during_a_goto_do_not_flood_the_line(tmp_path: Path, transpo
         async with r.driver.watching():
             await asyncio.sleep(0.5)
             polls = r.driver.poller.polls
-        assert 3 <= polls <= 0.5 / 0.05 + 2  # one status byte every 50 ms, not hundreds
+        # One status byte every 50 ms (~10), not hundreds; at least one however loaded the machine.
+        assert 1 <= polls <= 0.5 / 0.05 + 2
         assert r.driver.state.slewing

@@ -173,6 +173,9 @@ async def test_lx200generic_motion_site_and_time(transport: str, tmp_path: Path)
         await driver.set_switch(
             "TELESCOPE_MOTION_NS", {"MOTION_NORTH": False, "MOTION_SOUTH": True}
         )
+        # From when the motion has reached the mount (the driver's command may take a while on
+        # a loaded machine), not from when it was asked.
+        await mount.wait_for(lambda s: s.slewing, timeout_s=5)
         await asyncio.sleep(0.6)
         await driver.set_switch(
             "TELESCOPE_MOTION_NS", {"MOTION_NORTH": False, "MOTION_SOUTH": False}
